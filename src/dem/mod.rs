@@ -3,4 +3,7 @@
 //! Knows nothing of studies, manifests or files: it takes particles, walls, a
 //! contact-law choice and a time step, and steps. All quantities are SI.
 
+pub mod contact;
+pub mod material;
+pub mod timestep;
 pub mod vec3;

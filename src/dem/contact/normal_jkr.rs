@@ -1,0 +1,184 @@
+//! JKR adhesive normal force in the EDEM "Hertz-Mindlin with JKR" form:
+//! `F = 4E*a³/(3R*) − 4√(πΓE*) a^{3/2}` with the contact radius a given by
+//! `δ = a²/R* − √(4πΓa/E*)`, Γ the surface energy per surface (work of adhesion
+//! 2Γ). Positive F is repulsive. Under force control the pair separates at the
+//! pull-off force 3πΓR*.
+//!
+//! Attraction acts only on contacts that have touched (δ > 0 once) and lasts
+//! until the overlap falls to the separation overlap `δ_c = −3a_c²/R*`, the
+//! minimum of δ(a), reached at `a_c = (cR*/4)^{2/3}` with `c = √(4πΓ/E*)`;
+//! there the contact breaks and its history is reset. Two approaching bodies
+//! that have not touched feel nothing.
+//!
+//! a(δ) is the largest root of the convex function `f(a) = a²/R* − c√a − δ` on
+//! `a ≥ a_c`; Newton's method started right of the root converges monotonically
+//! (f is convex and increasing there). The history keeps a, which warm-starts
+//! the next step.
+
+use super::{NormalModel, NormalResponse, PairCoefficients};
+use std::f64::consts::PI;
+
+/// The JKR normal model; its history is the contact radius a (m), 0 before the
+/// first touch.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Jkr;
+
+/// Critical contact radius a_c (m) where δ(a) is minimal, for c = √(4πΓ/E*).
+#[inline(always)]
+fn critical_radius(c: f64, r_star: f64) -> f64 {
+    (c * r_star / 4.0).powf(2.0 / 3.0)
+}
+
+/// Separation overlap δ_c (m, ≤ 0) at which a JKR contact of effective radius
+/// `r_star_m` breaks under displacement control.
+pub fn separation_overlap_m(coef: &PairCoefficients, r_star_m: f64) -> f64 {
+    let c = adhesion_constant(coef);
+    let ac = critical_radius(c, r_star_m);
+    -3.0 * ac * ac / r_star_m
+}
+
+/// Pull-off force 3πΓR*, N: the largest tensile force a JKR contact sustains.
+pub fn pull_off_force_n(coef: &PairCoefficients, r_star_m: f64) -> f64 {
+    3.0 * PI * coef.surface_energy_j_m2 * r_star_m
+}
+
+#[inline(always)]
+fn adhesion_constant(coef: &PairCoefficients) -> f64 {
+    (4.0 * PI * coef.surface_energy_j_m2 / coef.e_star).sqrt()
+}
+
+/// Contact radius a (m) for overlap δ ≥ δ_c, starting Newton from `guess`.
+fn contact_radius(c: f64, r_star: f64, overlap: f64, ac: f64, guess: f64) -> f64 {
+    // 4a_c + √(R*δ⁺) is always right of the root (see the module docs); a
+    // previous radius comfortably above a_c is a better start.
+    let safe = 4.0 * ac + (r_star * overlap.max(0.0)).sqrt();
+    let mut a = if guess > 1.01 * ac && guess < safe {
+        guess
+    } else {
+        safe
+    };
+    for _ in 0..100 {
+        let sa = a.sqrt();
+        let f = a * a / r_star - c * sa - overlap;
+        let df = 2.0 * a / r_star - 0.5 * c / sa;
+        if df <= 0.0 {
+            break;
+        }
+        let next = (a - f / df).max(ac);
+        let done = (next - a).abs() <= 1e-14 * a;
+        a = next;
+        if done {
+            break;
+        }
+    }
+    a
+}
+
+impl NormalModel for Jkr {
+    type History = f64;
+    const NAME: &'static str = "jkr";
+
+    fn reach_m(coef: &PairCoefficients, r_star_m: f64) -> f64 {
+        -separation_overlap_m(coef, r_star_m)
+    }
+
+    #[inline(always)]
+    fn normal(
+        coef: &PairCoefficients,
+        r_star: f64,
+        overlap: f64,
+        radius: &mut f64,
+    ) -> Option<NormalResponse> {
+        let c = adhesion_constant(coef);
+        let ac = critical_radius(c, r_star);
+        let touched = *radius > 0.0;
+        if (!touched && overlap <= 0.0) || (touched && overlap <= -3.0 * ac * ac / r_star) {
+            *radius = 0.0;
+            return None;
+        }
+        let a = contact_radius(c, r_star, overlap, ac, *radius);
+        *radius = a;
+        let elastic = 4.0 * coef.e_star * a * a * a / (3.0 * r_star)
+            - 4.0 * (PI * coef.surface_energy_j_m2 * coef.e_star).sqrt() * a * a.sqrt();
+        Some(NormalResponse {
+            elastic_force_n: elastic,
+            contact_radius_m: a,
+            pull_off_force_n: pull_off_force_n(coef, r_star),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::contact::normal_hertz::Hertz;
+    use crate::dem::contact::test_support::coefficients;
+
+    #[test]
+    fn contact_radius_solves_the_jkr_relation() {
+        let coef = coefficients(0.5, 0.5, 0.0, 0.05);
+        let r = 5e-4;
+        let c = adhesion_constant(&coef);
+        let dc = separation_overlap_m(&coef, r);
+        for k in 0..50 {
+            let delta = dc + (k as f64 + 0.5) * (1e-5 - dc) / 50.0;
+            let mut h = 1e-9; // touched
+            Jkr::normal(&coef, r, delta, &mut h).unwrap();
+            let back = h * h / r - (c * c * h).sqrt();
+            assert!(
+                (back - delta).abs() < 1e-12 * r,
+                "δ = {delta}: a = {h}, δ(a) = {back}"
+            );
+        }
+    }
+
+    #[test]
+    fn zero_surface_energy_reduces_to_hertz() {
+        let coef = coefficients(0.5, 0.5, 0.0, 0.0);
+        let mut h = 0.0;
+        let j = Jkr::normal(&coef, 5e-4, 2e-6, &mut h).unwrap();
+        let hz = Hertz::normal(&coef, 5e-4, 2e-6, &mut ()).unwrap();
+        assert!((j.elastic_force_n / hz.elastic_force_n - 1.0).abs() < 1e-12);
+        assert_eq!(j.pull_off_force_n, 0.0);
+        assert_eq!(Jkr::reach_m(&coef, 5e-4), 0.0);
+    }
+
+    #[test]
+    fn untouched_pairs_do_not_attract_and_touched_pairs_break_at_delta_c() {
+        let coef = coefficients(0.5, 0.5, 0.0, 0.05);
+        let r = 5e-4;
+        let dc = separation_overlap_m(&coef, r);
+        let mut h = 0.0;
+        assert!(Jkr::normal(&coef, r, 0.5 * dc, &mut h).is_none());
+        assert!(Jkr::normal(&coef, r, 1e-7, &mut h).is_some());
+        // Now touched: still attracting in the neck.
+        let f = Jkr::normal(&coef, r, 0.5 * dc, &mut h)
+            .unwrap()
+            .elastic_force_n;
+        assert!(f < 0.0);
+        assert!(Jkr::normal(&coef, r, 1.0001 * dc, &mut h).is_none());
+        assert_eq!(h, 0.0);
+    }
+
+    #[test]
+    fn largest_tension_is_the_pull_off_force() {
+        // JKR theory (Johnson, Kendall & Roberts 1971): the tensile force is
+        // maximal, 3πΓR* (= 1.5 π w R* with w = 2Γ), at a = (9πΓR*²/(4E*))^{1/3}... scan δ.
+        let coef = coefficients(0.5, 0.5, 0.0, 0.05);
+        let r = 5e-4;
+        let dc = separation_overlap_m(&coef, r);
+        let mut h = 1e-9;
+        let mut min_f = f64::MAX;
+        for k in 0..20000 {
+            let delta = 1e-6 - (k as f64) * (1e-6 - dc) / 20000.0;
+            if let Some(nr) = Jkr::normal(&coef, r, delta, &mut h) {
+                min_f = min_f.min(nr.elastic_force_n);
+            }
+        }
+        let pull_off = 3.0 * PI * 0.05 * r;
+        assert!(
+            (-min_f / pull_off - 1.0).abs() < 1e-4,
+            "{min_f} vs {pull_off}"
+        );
+    }
+}
