@@ -167,7 +167,7 @@ mod tests {
             density_kg_m3: 2500.0,
             material,
             rayleigh_fraction: 0.2,
-            design_speed_m_s: 0.5,
+            design_speed_m_s: 0.2,
             stiffest: StiffestContact {
                 e_star_pa: 5e6 / (1.0 - 0.09),
                 r_star_m: 1e-3,
