@@ -1,0 +1,779 @@
+//! The simulation: a [`World`] plus a kernel monomorphised for exactly the
+//! effects the scene asked for.
+//!
+//! [`Simulation::new`] matches the effect choice once and builds a
+//! [`Stepper`] generic over the normal model, the rolling model, the body
+//! force and the boundary (2 × 3 × 2 × 2 kernels); nothing in the loops asks
+//! which effects are on. A step runs named stages in order (rapier's
+//! pipeline): kick and drift, neighbours, pair forces, gather (walls, body
+//! force, kick), health.
+//!
+//! Determinism: pair forces go to a per-pair buffer (no accumulation races),
+//! and each particle sums its pairs in the neighbour list's fixed order;
+//! reductions are either exact (max, counts) or summed serially. The result is
+//! bit-identical on any number of threads.
+
+use crate::dem::contact::normal_hertz::Hertz;
+use crate::dem::contact::normal_jkr::Jkr;
+use crate::dem::contact::rolling_cdt::ConstantDirectionalTorque;
+use crate::dem::contact::rolling_epsd::ElasticPlasticSpring;
+use crate::dem::contact::rolling_none::NoRolling;
+use crate::dem::contact::{
+    evaluate, ContactGeometry, ContactHistory, NormalModel, PairCoefficients, PairParameters, ParameterError,
+    RelativeMotion, RollingModel,
+};
+use crate::dem::domain::Domain;
+use crate::dem::effects::{BodyForce, Boundary, Gravity, NoGravity, Open, Periodic};
+use crate::dem::health::{HealthCause, HealthError, HealthLimits, ENERGY_CHECK_INTERVAL};
+use crate::dem::material::{harmonic, ElasticMaterial};
+use crate::dem::neighbor::{NeighborError, NeighborList};
+use crate::dem::particles::{ParticleInit, Particles};
+use crate::dem::vec3::Vec3;
+use crate::dem::walls::{PlacedWall, Wall};
+use rayon::prelude::*;
+
+/// Everything the engine simulates: particles, walls, the domain and the clock.
+#[derive(Clone, Debug)]
+pub struct World {
+    /// The spheres.
+    pub particles: Particles,
+    /// Analytic walls.
+    pub walls: Vec<Wall>,
+    /// The simulation box (periodic axes, and where particles may go).
+    pub domain: Domain,
+    /// Simulated time, s.
+    pub time_s: f64,
+    /// Steps taken.
+    pub step: u64,
+}
+
+/// Normal-force slot choice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NormalChoice {
+    /// Hertz, no adhesion.
+    Hertz,
+    /// JKR adhesion (the cohesion effect).
+    Jkr,
+}
+
+/// Rolling-resistance slot choice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RollingChoice {
+    /// No rolling resistance.
+    None,
+    /// Constant directional torque (type A).
+    Cdt,
+    /// Elastic–plastic spring (type C, yan2015 Eq. 8–10).
+    Epsd,
+}
+
+/// Contact physics: law slots, materials and parameters.
+#[derive(Clone, Debug)]
+pub struct ContactSetup {
+    /// Normal slot.
+    pub normal: NormalChoice,
+    /// Rolling slot.
+    pub rolling: RollingChoice,
+    /// Floor the damped normal force at the elastic force (see
+    /// [`PairCoefficients::clip_tensile`]).
+    pub clip_tensile: bool,
+    /// The particles' material.
+    pub particle_material: ElasticMaterial,
+    /// Particle–particle parameters.
+    pub particle_particle: PairParameters,
+    /// Per wall material (indexed by [`Wall`]'s material index): its elastic
+    /// properties and the particle–wall parameters.
+    pub wall_materials: Vec<(ElasticMaterial, PairParameters)>,
+}
+
+/// Everything besides the world that a simulation needs.
+#[derive(Clone, Debug)]
+pub struct SimulationSetup {
+    /// Contact physics.
+    pub contact: ContactSetup,
+    /// Particle density, kg/m³ (used for inserted particles).
+    pub density_kg_m3: f64,
+    /// Gravity, m/s²; `None` switches the effect off.
+    pub gravity_m_s2: Option<Vec3>,
+    /// Time step, s (see [`crate::dem::timestep`]).
+    pub dt_s: f64,
+    /// Verlet skin, m.
+    pub skin_m: f64,
+    /// Health thresholds.
+    pub health: HealthLimits,
+}
+
+/// Why a simulation could not be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum SetupError {
+    /// A contact parameter is invalid.
+    #[error("{context}.{source}")]
+    Parameter {
+        /// Which pair type (`particle_particle`, `particle_wall[k]`).
+        context: String,
+        /// The parameter error.
+        source: ParameterError,
+    },
+    /// A wall refers to a material index with no parameters.
+    #[error("wall {wall} uses material index {material}, but only {count} wall materials are defined")]
+    WallMaterial {
+        /// Wall index.
+        wall: usize,
+        /// Its material index.
+        material: usize,
+        /// Number of defined wall materials.
+        count: usize,
+    },
+    /// A scalar setting is invalid.
+    #[error("{name} = {value}: {allowed}")]
+    Setting {
+        /// Setting name.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What is allowed.
+        allowed: &'static str,
+    },
+    /// The neighbour search rejected the particles or the domain.
+    #[error("neighbour search: {0}")]
+    Neighbor(NeighborError),
+    /// The initial state is already unhealthy (e.g. overlapping particles).
+    #[error(transparent)]
+    Health(HealthError),
+}
+
+/// Per-step statistics of the last force evaluation.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepStats {
+    /// Particle–particle contacts carrying force.
+    pub contacts: usize,
+    /// Particle–wall contacts carrying force.
+    pub wall_contacts: usize,
+    /// Largest overlap / smaller radius over all contacts.
+    pub max_overlap_ratio: f64,
+    /// Neighbour-list rebuilds so far.
+    pub rebuilds: u64,
+}
+
+/// The force a pair exerts, stored per pair and gathered per particle.
+#[derive(Clone, Copy, Debug, Default)]
+struct PairForce {
+    force_on_first: Vec3,
+    torque_first: Vec3,
+    torque_second: Vec3,
+}
+
+/// The monomorphised kernel behind a [`Simulation`].
+trait Kernel: Send {
+    fn advance(&mut self, world: &mut World, steps: u64) -> Result<(), HealthError>;
+    fn name(&self) -> String;
+    fn stats(&self) -> StepStats;
+    /// Particles were added (appended) or removed (`kept` mask of the old indices).
+    fn particles_changed(&mut self, world: &mut World, kept: Option<&[bool]>) -> Result<(), HealthError>;
+}
+
+/// A DEM simulation: the world and its kernel.
+pub struct Simulation {
+    world: World,
+    kernel: Box<dyn Kernel>,
+    density_kg_m3: f64,
+}
+
+impl std::fmt::Debug for Simulation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Simulation")
+            .field("kernel", &self.kernel.name())
+            .field("particles", &self.world.particles.len())
+            .field("time_s", &self.world.time_s)
+            .finish()
+    }
+}
+
+impl Simulation {
+    /// Builds the kernel for `setup`'s effects and evaluates the initial forces.
+    pub fn new(mut world: World, setup: &SimulationSetup) -> Result<Self, SetupError> {
+        for (name, value, ok) in [
+            ("dt_s", setup.dt_s, setup.dt_s > 0.0),
+            ("skin_m", setup.skin_m, setup.skin_m >= 0.0),
+            ("density_kg_m3", setup.density_kg_m3, setup.density_kg_m3 > 0.0),
+        ] {
+            if !(ok && value.is_finite()) {
+                return Err(SetupError::Setting {
+                    name,
+                    value,
+                    allowed: "must be finite and positive",
+                });
+            }
+        }
+        let kernel = match setup.contact.normal {
+            NormalChoice::Hertz => with_normal::<Hertz>(&mut world, setup)?,
+            NormalChoice::Jkr => with_normal::<Jkr>(&mut world, setup)?,
+        };
+        Ok(Self {
+            world,
+            kernel,
+            density_kg_m3: setup.density_kg_m3,
+        })
+    }
+
+    /// Advances `steps` steps, stopping at the first health failure.
+    pub fn advance(&mut self, steps: u64) -> Result<(), HealthError> {
+        self.kernel.advance(&mut self.world, steps)
+    }
+
+    /// The current state.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// Prescribes particle kinematics between steps (e.g. a held or pulled
+    /// particle). Do not add or remove particles here; use [`Simulation::insert`]
+    /// and [`Simulation::retain`].
+    pub fn particles_mut(&mut self) -> &mut Particles {
+        &mut self.world.particles
+    }
+
+    /// The kernel's name, e.g. `hertz+mindlin+cdt+gravity+open`, for results.
+    pub fn kernel_name(&self) -> String {
+        self.kernel.name()
+    }
+
+    /// Statistics of the last force evaluation.
+    pub fn stats(&self) -> StepStats {
+        self.kernel.stats()
+    }
+
+    /// Adds particles (the caller guarantees they do not overlap); returns their ids.
+    pub fn insert(&mut self, new: &[ParticleInit]) -> Result<Vec<u32>, HealthError> {
+        let ids = new
+            .iter()
+            .map(|p| self.world.particles.push(p, self.density_kg_m3))
+            .collect();
+        self.kernel.particles_changed(&mut self.world, None)?;
+        Ok(ids)
+    }
+
+    /// Removes the particles for which `keep` is false (e.g. discharged ones).
+    pub fn retain(&mut self, keep: impl Fn(&Particles, usize) -> bool) -> Result<usize, HealthError> {
+        let p = &self.world.particles;
+        let mask: Vec<bool> = (0..p.len()).map(|i| keep(p, i)).collect();
+        let removed = mask.iter().filter(|k| !**k).count();
+        if removed > 0 {
+            self.world.particles.retain_indices(&mask);
+            self.kernel.particles_changed(&mut self.world, Some(&mask))?;
+        }
+        Ok(removed)
+    }
+}
+
+fn with_normal<N: NormalModel>(world: &mut World, setup: &SimulationSetup) -> Result<Box<dyn Kernel>, SetupError> {
+    match setup.contact.rolling {
+        RollingChoice::None => with_rolling::<N, NoRolling>(world, setup),
+        RollingChoice::Cdt => with_rolling::<N, ConstantDirectionalTorque>(world, setup),
+        RollingChoice::Epsd => with_rolling::<N, ElasticPlasticSpring>(world, setup),
+    }
+}
+
+fn with_rolling<N: NormalModel, R: RollingModel>(
+    world: &mut World,
+    setup: &SimulationSetup,
+) -> Result<Box<dyn Kernel>, SetupError> {
+    match setup.gravity_m_s2 {
+        Some(g) => with_body_force::<N, R, Gravity>(world, setup, Gravity(g)),
+        None => with_body_force::<N, R, NoGravity>(world, setup, NoGravity),
+    }
+}
+
+fn with_body_force<N: NormalModel, R: RollingModel, G: BodyForce>(
+    world: &mut World,
+    setup: &SimulationSetup,
+    body: G,
+) -> Result<Box<dyn Kernel>, SetupError> {
+    if world.domain.any_periodic() {
+        Ok(Box::new(Stepper::<N, R, G, Periodic>::new(world, setup, body)?))
+    } else {
+        Ok(Box::new(Stepper::<N, R, G, Open>::new(world, setup, body)?))
+    }
+}
+
+/// One kernel: state and scratch of a simulation with fixed effects.
+struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> {
+    particle_particle: PairCoefficients,
+    /// Coefficients per wall (not per wall material: looked up once here).
+    wall_coefficients: Vec<PairCoefficients>,
+    /// Extra contact range of particle pairs, m (non-zero only for JKR).
+    pair_reach: f64,
+    /// Extra contact range per wall, m (non-zero only for JKR).
+    wall_reach: Vec<f64>,
+    dt: f64,
+    body: G,
+    neighbors: NeighborList<ContactHistory<N, R>>,
+    pair_forces: Vec<PairForce>,
+    /// Contact history per (particle, wall): index `p * wall_slots + w`.
+    wall_history: Vec<ContactHistory<N, R>>,
+    /// `max(walls, 1)`, so per-particle chunks are never empty.
+    wall_slots: usize,
+    placed: Vec<PlacedWall>,
+    stats: StepStats,
+    limits: HealthLimits,
+    /// Energy check enabled (closed, undriven, non-cohesive) and its reference, J.
+    energy_reference: Option<f64>,
+    energy_check: bool,
+    rebuilds_since_sort: u32,
+    _boundary: std::marker::PhantomData<B>,
+}
+
+/// Re-sort particles by cell every this many neighbour rebuilds.
+const SORT_EVERY_REBUILDS: u32 = 8;
+/// Pairs or particles per parallel task (fixed, so work splitting never
+/// depends on the thread count).
+const PAR_MIN_LEN: usize = 1024;
+
+impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G, B> {
+    fn new(world: &mut World, setup: &SimulationSetup, body: G) -> Result<Self, SetupError> {
+        let c = &setup.contact;
+        let particle_particle = PairCoefficients::new(
+            &c.particle_material,
+            &c.particle_material,
+            &c.particle_particle,
+            c.clip_tensile,
+        )
+        .map_err(|source| SetupError::Parameter {
+            context: "particle_particle".into(),
+            source,
+        })?;
+        let by_material = c
+            .wall_materials
+            .iter()
+            .enumerate()
+            .map(|(k, (m, p))| {
+                PairCoefficients::new(&c.particle_material, m, p, c.clip_tensile).map_err(|source| {
+                    SetupError::Parameter {
+                        context: format!("particle_wall[{k}]"),
+                        source,
+                    }
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut wall_coefficients = Vec::with_capacity(world.walls.len());
+        for (w, wall) in world.walls.iter().enumerate() {
+            let coef = by_material.get(wall.material).ok_or(SetupError::WallMaterial {
+                wall: w,
+                material: wall.material,
+                count: by_material.len(),
+            })?;
+            wall_coefficients.push(*coef);
+        }
+        let r_max = world.particles.radius.iter().cloned().fold(0.0, f64::max);
+        // JKR reach grows with R*; use a generous radius bound so particles
+        // inserted later (up to twice the current largest) stay covered.
+        let r_bound = if r_max > 0.0 { 2.0 * r_max } else { 1.0 };
+        let pair_reach = N::reach_m(&particle_particle, 0.5 * r_bound);
+        let wall_reach: Vec<f64> = wall_coefficients.iter().map(|w| N::reach_m(w, r_bound)).collect();
+        let cohesive = std::iter::once(&particle_particle)
+            .chain(&wall_coefficients)
+            .any(|c| c.surface_energy_j_m2 > 0.0);
+        let neighbors = NeighborList::new(setup.skin_m, pair_reach).map_err(SetupError::Neighbor)?;
+        let driven = world.walls.iter().any(|w| !w.motion().is_static());
+        let wall_slots = world.walls.len().max(1);
+        let mut stepper = Self {
+            particle_particle,
+            wall_coefficients,
+            pair_reach,
+            wall_reach,
+            dt: setup.dt_s,
+            body,
+            neighbors,
+            pair_forces: Vec::new(),
+            wall_history: vec![ContactHistory::default(); world.particles.len() * wall_slots],
+            wall_slots,
+            placed: Vec::new(),
+            stats: StepStats::default(),
+            limits: setup.health,
+            energy_reference: None,
+            energy_check: !driven && !(cohesive && N::NAME == Jkr::NAME),
+            rebuilds_since_sort: 0,
+            _boundary: std::marker::PhantomData,
+        };
+        stepper.sort_and_rebuild(world).map_err(SetupError::Neighbor)?;
+        stepper.forces(world).map_err(SetupError::Health)?;
+        Ok(stepper)
+    }
+
+    /// One velocity-Verlet step: half kick and drift, forces at the new
+    /// positions (damping sees the half-step velocities, as in LAMMPS), half kick.
+    fn step(&mut self, world: &mut World) -> Result<(), HealthError> {
+        self.kick_and_drift(world)?;
+        world.time_s += self.dt;
+        world.step += 1;
+        if self.neighbors.needs_rebuild(&world.particles.position) {
+            self.rebuild(world)?;
+        }
+        self.forces(world)?;
+        if self.energy_check && world.step % ENERGY_CHECK_INTERVAL == 0 {
+            self.check_energy(world)?;
+        }
+        Ok(())
+    }
+
+    fn kick_and_drift(&mut self, world: &mut World) -> Result<(), HealthError> {
+        let dt = self.dt;
+        let domain = world.domain;
+        let p = &mut world.particles;
+        let left = p
+            .position
+            .par_iter_mut()
+            .zip(p.velocity.par_iter_mut())
+            .zip(p.angular_velocity.par_iter_mut())
+            .zip(p.force.par_iter())
+            .zip(p.torque.par_iter())
+            .zip(p.mass.par_iter().zip(p.radius.par_iter()))
+            .enumerate()
+            .with_min_len(PAR_MIN_LEN)
+            .filter_map(|(i, (((((x, v), w), f), t), (m, r)))| {
+                *v += f * (0.5 * dt / m);
+                *w += t * (0.5 * dt / (0.4 * m * r * r));
+                *x = B::wrap(&domain, *x + *v * dt);
+                (!domain.contains(*x)).then_some(i)
+            })
+            .min();
+        match left {
+            Some(i) => Err(self.health(world, i, HealthCause::LeftDomain {
+                position: world.particles.position[i],
+            })),
+            None => Ok(()),
+        }
+    }
+
+    fn health(&self, world: &World, index: usize, cause: HealthCause) -> HealthError {
+        HealthError {
+            particle_id: world.particles.id[index],
+            step: world.step,
+            time_s: world.time_s,
+            cause,
+        }
+    }
+
+    fn rebuild(&mut self, world: &mut World) -> Result<(), HealthError> {
+        self.rebuilds_since_sort += 1;
+        let result = if self.rebuilds_since_sort >= SORT_EVERY_REBUILDS {
+            self.sort_and_rebuild(world)
+        } else {
+            let p = &world.particles;
+            self.neighbors.rebuild(&p.position, &p.radius, &p.id, &world.domain)
+        };
+        result.map_err(|e| self.neighbor_failure(world, e))
+    }
+
+    fn neighbor_failure(&self, world: &World, e: NeighborError) -> HealthError {
+        let index = match e {
+            NeighborError::InvalidRadius { index, .. } | NeighborError::NonFinitePosition { index } => index,
+            _ => 0,
+        };
+        HealthError {
+            particle_id: world.particles.id.get(index).copied().unwrap_or(0),
+            step: world.step,
+            time_s: world.time_s,
+            cause: HealthCause::NeighborSearch(e.to_string()),
+        }
+    }
+
+    /// Re-sorts particles by cell (locality) and rebuilds the neighbour list.
+    fn sort_and_rebuild(&mut self, world: &mut World) -> Result<(), NeighborError> {
+        self.rebuilds_since_sort = 0;
+        let p = &mut world.particles;
+        let order = self.neighbors.cell_order(&p.position, &p.radius, &world.domain)?;
+        p.permute(&order);
+        let slots = self.wall_slots;
+        let old = std::mem::take(&mut self.wall_history);
+        self.wall_history = order
+            .iter()
+            .flat_map(|&o| old[o as usize * slots..(o as usize + 1) * slots].iter().copied())
+            .collect();
+        self.neighbors.rebuild(&p.position, &p.radius, &p.id, &world.domain)
+    }
+
+    /// Pair forces into the per-pair buffer, then per particle: gather, walls,
+    /// body force, second half kick, finiteness check.
+    fn forces(&mut self, world: &mut World) -> Result<(), HealthError> {
+        let (contacts, worst_pair) = self.pair_forces(world);
+        let (wall_contacts, worst_wall, non_finite) = self.gather(world);
+        self.stats = StepStats {
+            contacts,
+            wall_contacts,
+            max_overlap_ratio: worst_pair.0.max(worst_wall.0),
+            rebuilds: self.neighbors.rebuild_count(),
+        };
+        if let Some(i) = non_finite {
+            return Err(self.health(world, i, HealthCause::NonFinite));
+        }
+        if self.stats.max_overlap_ratio > self.limits.max_overlap_ratio {
+            let (ratio, index, partner) = if worst_pair.0 >= worst_wall.0 {
+                let [i, j] = self.neighbors.pairs()[worst_pair.1];
+                (worst_pair.0, i as usize, format!("particle {}", world.particles.id[j as usize]))
+            } else {
+                (worst_wall.0, worst_wall.1 / self.wall_slots, format!("wall {}", worst_wall.1 % self.wall_slots))
+            };
+            return Err(self.health(world, index, HealthCause::Overlap {
+                ratio,
+                limit: self.limits.max_overlap_ratio,
+                partner,
+            }));
+        }
+        Ok(())
+    }
+
+    /// Returns the number of force-carrying contacts and (worst overlap ratio, pair index).
+    fn pair_forces(&mut self, world: &World) -> (usize, (f64, usize)) {
+        let p = &world.particles;
+        let domain = world.domain;
+        let coef = self.particle_particle;
+        let dt = self.dt;
+        let (pairs, history) = self.neighbors.pairs_and_history_mut();
+        self.pair_forces.resize(pairs.len(), PairForce::default());
+        let reach = self.pair_reach;
+        pairs
+            .par_iter()
+            .zip(history.par_iter_mut())
+            .zip(self.pair_forces.par_iter_mut())
+            .enumerate()
+            .with_min_len(PAR_MIN_LEN)
+            .map(|(k, ((&[i, j], h), out))| {
+                let (i, j) = (i as usize, j as usize);
+                let (ri, rj) = (p.radius[i], p.radius[j]);
+                let d = B::separation(&domain, p.position[i] - p.position[j]);
+                let dist_sq = d.norm_squared();
+                let touch = ri + rj;
+                let r_star = harmonic(ri, rj);
+                let limit = touch + reach;
+                if dist_sq >= limit * limit {
+                    *h = ContactHistory::default();
+                    *out = PairForce::default();
+                    return (0, (0.0, k));
+                }
+                let dist = dist_sq.sqrt();
+                let n = d / dist;
+                let overlap = touch - dist;
+                let arm_i = ri - 0.5 * overlap;
+                let arm_j = rj - 0.5 * overlap;
+                let (wi, wj) = (p.angular_velocity[i], p.angular_velocity[j]);
+                let motion = RelativeMotion {
+                    velocity: p.velocity[i] - p.velocity[j] - (wi * arm_i + wj * arm_j).cross(&n),
+                    angular_velocity: wi - wj,
+                };
+                let geometry = ContactGeometry {
+                    normal: n,
+                    overlap_m: overlap,
+                    r_star_m: r_star,
+                    m_star_kg: harmonic(p.mass[i], p.mass[j]),
+                };
+                match evaluate::<N, R>(&coef, &geometry, &motion, dt, h) {
+                    Some(c) => {
+                        let lever = n.cross(&c.tangential_force);
+                        *out = PairForce {
+                            force_on_first: c.force,
+                            torque_first: c.rolling_torque - lever * arm_i,
+                            torque_second: -c.rolling_torque - lever * arm_j,
+                        };
+                        (1, (overlap.max(0.0) / ri.min(rj), k))
+                    }
+                    None => {
+                        *out = PairForce::default();
+                        (0, (0.0, k))
+                    }
+                }
+            })
+            .reduce(|| (0, (0.0, usize::MAX)), |a, b| (a.0 + b.0, worse(a.1, b.1)))
+    }
+
+    /// Returns wall contacts, (worst wall overlap ratio, particle*slots+wall),
+    /// and the lowest index of a particle with non-finite state.
+    fn gather(&mut self, world: &mut World) -> (usize, (f64, usize), Option<usize>) {
+        let t = world.time_s;
+        self.placed.clear();
+        self.placed.extend(world.walls.iter().map(|w| w.placed_at(t)));
+        let dt = self.dt;
+        let slots = self.wall_slots;
+        let g = self.body.acceleration();
+        let placed = &self.placed;
+        let wall_coef = &self.wall_coefficients;
+        let wall_reach = &self.wall_reach;
+        let buffer = &self.pair_forces;
+        let neighbors = &self.neighbors;
+        let p = &mut world.particles;
+        p.force
+            .par_iter_mut()
+            .zip(p.torque.par_iter_mut())
+            .zip(p.velocity.par_iter_mut())
+            .zip(p.angular_velocity.par_iter_mut())
+            .zip(self.wall_history.par_chunks_mut(slots))
+            .zip(p.position.par_iter().zip(p.radius.par_iter().zip(p.mass.par_iter())))
+            .enumerate()
+            .with_min_len(PAR_MIN_LEN)
+            .map(|(i, (((((f, t), v), w), hist), (x, (&r, &m))))| {
+                let mut force = g * m;
+                let mut torque = Vec3::zeros();
+                for e in neighbors.incident(i) {
+                    let pf = &buffer[e.pair()];
+                    if e.is_first() {
+                        force += pf.force_on_first;
+                        torque += pf.torque_first;
+                    } else {
+                        force -= pf.force_on_first;
+                        torque += pf.torque_second;
+                    }
+                }
+                let mut contacts = 0;
+                let mut worst = (0.0, usize::MAX);
+                for (k, wall) in placed.iter().enumerate() {
+                    let Some(wc) = wall.contact(*x, r, wall_reach[k]) else {
+                        hist[k] = ContactHistory::default();
+                        continue;
+                    };
+                    let n = wc.normal;
+                    let arm = r - 0.5 * wc.overlap_m;
+                    let motion = RelativeMotion {
+                        velocity: *v - (*w * arm).cross(&n) - wc.velocity,
+                        angular_velocity: *w,
+                    };
+                    let geometry = ContactGeometry {
+                        normal: n,
+                        overlap_m: wc.overlap_m,
+                        r_star_m: r,
+                        m_star_kg: m,
+                    };
+                    if let Some(c) = evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k]) {
+                        force += c.force;
+                        torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
+                        contacts += 1;
+                        worst = worse(worst, (wc.overlap_m.max(0.0) / r, i * slots + k));
+                    }
+                }
+                *f = force;
+                *t = torque;
+                *v += force * (0.5 * dt / m);
+                *w += torque * (0.5 * dt / (0.4 * m * r * r));
+                let finite = x.iter().chain(v.iter()).chain(w.iter()).all(|c| c.is_finite());
+                (contacts, worst, (!finite).then_some(i))
+            })
+            .reduce(
+                || (0, (0.0, usize::MAX), None),
+                |a, b| (a.0 + b.0, worse(a.1, b.1), min_option(a.2, b.2)),
+            )
+    }
+
+    /// Kinetic + gravitational (measured from the domain corner lowest along
+    /// gravity, so it is never negative) + Hertz elastic energy, J, summed serially.
+    fn mechanical_energy(&self, world: &World) -> f64 {
+        let p = &world.particles;
+        let g = self.body.acceleration();
+        let (lo, hi) = (world.domain.lo(), world.domain.hi());
+        let floor = Vec3::new(
+            if g.x < 0.0 { lo.x } else { hi.x },
+            if g.y < 0.0 { lo.y } else { hi.y },
+            if g.z < 0.0 { lo.z } else { hi.z },
+        );
+        let potential: f64 = (0..p.len()).map(|i| -p.mass[i] * g.dot(&(p.position[i] - floor))).sum();
+        let coef = &self.particle_particle;
+        let elastic: f64 = self
+            .neighbors
+            .pairs()
+            .iter()
+            .map(|&[i, j]| {
+                let (i, j) = (i as usize, j as usize);
+                let d = B::separation(&world.domain, p.position[i] - p.position[j]).norm();
+                let overlap = p.radius[i] + p.radius[j] - d;
+                hertz_energy(coef.e_star, harmonic(p.radius[i], p.radius[j]), overlap)
+            })
+            .sum();
+        let wall_elastic: f64 = (0..p.len())
+            .flat_map(|i| self.placed.iter().enumerate().map(move |(k, w)| (i, k, w)))
+            .filter_map(|(i, k, w)| {
+                let c = w.contact(p.position[i], p.radius[i], 0.0)?;
+                Some(hertz_energy(self.wall_coefficients[k].e_star, p.radius[i], c.overlap_m))
+            })
+            .sum();
+        p.kinetic_energy_j() + potential + elastic + wall_elastic
+    }
+
+    fn check_energy(&mut self, world: &World) -> Result<(), HealthError> {
+        let e = self.mechanical_energy(world);
+        let Some(reference) = self.energy_reference else {
+            self.energy_reference = Some(e);
+            return Ok(());
+        };
+        if e > reference * (1.0 + self.limits.energy_growth) + f64::MIN_POSITIVE {
+            // Name the fastest particle: the likeliest culprit.
+            let p = &world.particles;
+            let fastest = (0..p.len())
+                .max_by(|&a, &b| p.velocity[a].norm_squared().total_cmp(&p.velocity[b].norm_squared()))
+                .unwrap_or(0);
+            return Err(self.health(world, fastest, HealthCause::EnergyGrowth {
+                energy_j: e,
+                reference_j: reference,
+            }));
+        }
+        Ok(())
+    }
+}
+
+/// Hertz elastic energy (8/15) E* √R* δ^{5/2}, J (0 without overlap).
+fn hertz_energy(e_star: f64, r_star: f64, overlap: f64) -> f64 {
+    if overlap <= 0.0 {
+        0.0
+    } else {
+        8.0 / 15.0 * e_star * r_star.sqrt() * overlap.powf(2.5)
+    }
+}
+
+/// The larger ratio; on ties the lower index (so reductions are order-independent).
+fn worse(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
+    if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) {
+        b
+    } else {
+        a
+    }
+}
+
+fn min_option(a: Option<usize>, b: Option<usize>) -> Option<usize> {
+    match (a, b) {
+        (Some(x), Some(y)) => Some(x.min(y)),
+        (x, None) => x,
+        (None, y) => y,
+    }
+}
+
+impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Stepper<N, R, G, B> {
+    fn advance(&mut self, world: &mut World, steps: u64) -> Result<(), HealthError> {
+        for _ in 0..steps {
+            self.step(world)?;
+        }
+        Ok(())
+    }
+
+    fn name(&self) -> String {
+        format!("{}+mindlin+{}+{}+{}", N::NAME, R::NAME, G::NAME, B::NAME)
+    }
+
+    fn stats(&self) -> StepStats {
+        self.stats
+    }
+
+    fn particles_changed(&mut self, world: &mut World, kept: Option<&[bool]>) -> Result<(), HealthError> {
+        let slots = self.wall_slots;
+        if let Some(mask) = kept {
+            let old = std::mem::take(&mut self.wall_history);
+            self.wall_history = mask
+                .iter()
+                .enumerate()
+                .filter(|(_, k)| **k)
+                .flat_map(|(i, _)| old[i * slots..(i + 1) * slots].iter().copied())
+                .collect();
+        }
+        self.wall_history
+            .resize(world.particles.len() * slots, ContactHistory::default());
+        self.energy_reference = None;
+        self.sort_and_rebuild(world).map_err(|e| self.neighbor_failure(world, e))?;
+        self.forces(world)
+    }
+}
