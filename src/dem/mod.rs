@@ -4,3 +4,4 @@
 //! contact-law choice and a time step, and steps. All quantities are SI.
 
 pub mod vec3;
+pub mod walls;
