@@ -112,7 +112,10 @@ impl fmt::Display for WallError {
         match self {
             WallError::NotFinite { field } => write!(f, "wall field `{field}` is not finite"),
             WallError::ZeroVector { field } => {
-                write!(f, "wall field `{field}` is a zero vector; a direction is needed")
+                write!(
+                    f,
+                    "wall field `{field}` is a zero vector; a direction is needed"
+                )
             }
             WallError::OutOfRange {
                 field,
@@ -272,7 +275,10 @@ impl Wall {
     /// Static infinite plane through `point` (m); particles live on the side
     /// `normal` points to. See [`Plane::new`].
     pub fn plane(point: Vec3, normal: Vec3, material: usize) -> Result<Wall, WallError> {
-        Ok(Wall::still(WallShape::Plane(Plane::new(point, normal)?), material))
+        Ok(Wall::still(
+            WallShape::Plane(Plane::new(point, normal)?),
+            material,
+        ))
     }
 
     /// Static rectangle. See [`Rectangle::new`].

@@ -123,8 +123,7 @@ impl Motion {
                 start_s,
             } => {
                 let angle = rpm_to_rad_s(rpm) * (t - start_s).max(0.0);
-                let rotation =
-                    Rotation3::from_axis_angle(&Unit::new_unchecked(axis_dir), angle);
+                let rotation = Rotation3::from_axis_angle(&Unit::new_unchecked(axis_dir), angle);
                 // x_w = a + R (x_b − a) = R x_b + (a − R a)
                 WallPose {
                     rotation,

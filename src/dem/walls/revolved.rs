@@ -25,6 +25,8 @@ pub struct RevolvedSegment {
     axis: Vec3,
     /// Fixed unit perpendicular to `axis`, used for centres on the axis.
     perp: Vec3,
+    /// `axis × perp`, completing the right-handed frame (perp, perp2, axis).
+    perp2: Vec3,
     /// Radius of the first end point (m, >= 0).
     r0: f64,
     /// Axial coordinate of the first end point (m).
@@ -93,10 +95,12 @@ impl RevolvedSegment {
             });
         }
         let len = len2.sqrt();
+        let perp = perpendicular(axis);
         Ok(RevolvedSegment {
             origin,
             axis,
-            perp: perpendicular(axis),
+            perp,
+            perp2: axis.cross(&perp),
             r0,
             z0,
             r1,
@@ -146,7 +150,8 @@ impl RevolvedSegment {
     ) -> Result<RevolvedSegment, WallError> {
         let r = check_positive("radius_m", radius_m)?;
         let l = check_positive("length_m", length_m)?;
-        RevolvedSegment::new(base_centre, axis, r, 0.0, r, l).map_err(rename("origin", "base_centre"))
+        RevolvedSegment::new(base_centre, axis, r, 0.0, r, l)
+            .map_err(rename("origin", "base_centre"))
     }
 
     /// An open cone frustum from radius `radius0_m` at `base_centre` (m, z = 0) to
@@ -203,13 +208,18 @@ impl RevolvedSegment {
     /// zero velocity.
     #[inline]
     pub fn contact(&self, c: Vec3, r: f64, range: f64) -> Option<WallContact> {
+        // Coordinates in the orthonormal frame (perp, perp2, axis): the radial
+        // direction is then a combination of perp and perp2, exactly perpendicular
+        // to the axis even for centres a rounding error off the axis (subtracting
+        // the axial part of `c − origin` instead would leave noise along the axis).
         let w = c - self.origin;
         let z = w.dot(&self.axis);
-        let radial = w - self.axis * z;
-        let rho = radial.norm();
+        let x = w.dot(&self.perp);
+        let y = w.dot(&self.perp2);
+        let rho = (x * x + y * y).sqrt();
         // Closest point of the 2-D segment to (rho, z).
-        let s = (((rho - self.r0) * self.dr + (z - self.z0) * self.dz) * self.inv_len2)
-            .clamp(0.0, 1.0);
+        let s =
+            (((rho - self.r0) * self.dr + (z - self.z0) * self.dz) * self.inv_len2).clamp(0.0, 1.0);
         let q_rho = self.r0 + s * self.dr;
         let q_z = self.z0 + s * self.dz;
         let (x_rho, x_z) = (rho - q_rho, z - q_z);
@@ -218,7 +228,11 @@ impl RevolvedSegment {
         if dist2 >= reach * reach {
             return None;
         }
-        let e_rho = if rho > 0.0 { radial / rho } else { self.perp };
+        let e_rho = if rho > 0.0 {
+            (self.perp * x + self.perp2 * y) / rho
+        } else {
+            self.perp
+        };
         let dist = dist2.sqrt();
         let (n_rho, n_z) = if dist > 0.0 {
             (x_rho / dist, x_z / dist)
@@ -239,6 +253,7 @@ impl RevolvedSegment {
             origin: pose.to_world(self.origin),
             axis: pose.to_world_dir(self.axis),
             perp: pose.to_world_dir(self.perp),
+            perp2: pose.to_world_dir(self.perp2),
             ..*self
         }
     }
@@ -270,10 +285,9 @@ fn rename(from: &'static str, to: &'static str) -> impl Fn(WallError) -> WallErr
                 value,
                 allowed,
             },
-            WallError::NotPerpendicular { other, .. } => WallError::NotPerpendicular {
-                field: to,
-                other,
-            },
+            WallError::NotPerpendicular { other, .. } => {
+                WallError::NotPerpendicular { field: to, other }
+            }
             WallError::Degenerate { reason, .. } => WallError::Degenerate { field: to, reason },
         }
     }
