@@ -8,7 +8,8 @@ use crate::dem::vec3::Vec3;
 ///
 /// Two-sided thin shell: the closest point is the clamped projection, so faces,
 /// edges and corners are all felt; the contact normal points from that point to the
-/// sphere centre (on either side).
+/// sphere centre (on either side). A centre that crosses the sheet is pushed out
+/// of the side it is then on, so the time step must keep overlaps below the radius.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Rectangle {
     /// Centre (m).

@@ -14,7 +14,8 @@ use crate::dem::vec3::Vec3;
 /// closest point of the 2-D segment to the centre's (ρ, z), lifted back to 3-D in the
 /// centre's own meridian half-plane (exact, because the segment has ρ >= 0). Rims
 /// are the segment end points, so a sphere at a rim feels the rim circle. Two-sided
-/// thin shell: inside and outside both act. A centre on the axis (ρ = 0) uses a
+/// thin shell: inside and outside both act (a centre that crosses the shell is
+/// pushed out of the side it is then on). A centre on the axis (ρ = 0) uses a
 /// fixed perpendicular chosen at construction, so the answer is deterministic and
 /// finite.
 #[derive(Clone, Copy, Debug, PartialEq)]
