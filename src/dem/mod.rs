@@ -7,3 +7,4 @@ pub mod contact;
 pub mod material;
 pub mod timestep;
 pub mod vec3;
+pub mod walls;
