@@ -4,4 +4,5 @@
 //! contact-law choice and a time step, and steps. All quantities are SI.
 
 pub mod domain;
+pub mod neighbor;
 pub mod vec3;
