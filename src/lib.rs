@@ -5,3 +5,4 @@
 //! - [`dem`]: the soft-sphere DEM engine; knows nothing of studies, manifests or files.
 
 pub mod dem;
+pub mod scenes;

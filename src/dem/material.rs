@@ -80,10 +80,10 @@ pub fn rayleigh_time_s(radius_m: f64, density_kg_m3: f64, material: &ElasticMate
 }
 
 /// Duration of an elastic Hertz impact, s:
-/// `t_c = 2.868 (m*² / (R*² E*² v))^{1/5}` for approach speed `speed_m_s`
+/// `t_c = 2.868 (m*² / (R* E*² v))^{1/5}` for approach speed `speed_m_s`
 /// (Johnson, Contact Mechanics §11.4, with `m*`, `R*`, `E*` effective values).
 pub fn hertz_contact_time_s(m_star: f64, r_star: f64, e_star: f64, speed_m_s: f64) -> f64 {
-    2.868 * (m_star * m_star / (r_star * r_star * e_star * e_star * speed_m_s)).powf(0.2)
+    2.868 * (m_star * m_star / (r_star * e_star * e_star * speed_m_s)).powf(0.2)
 }
 
 /// Maximum overlap of an elastic Hertz impact, m:
@@ -121,6 +121,14 @@ mod tests {
         assert!(e.is_finite());
         assert_eq!(harmonic(0.001, f64::INFINITY), 0.001);
         assert_eq!(harmonic(2.0, 2.0), 1.0);
+    }
+
+    #[test]
+    fn contact_time_is_2_94_max_overlap_over_speed() {
+        // Johnson §11.4: t_c = 2.94 δ_max / v for a Hertz impact.
+        let (m, r, e, v) = (5e-6, 5e-4, 5e7, 0.5);
+        let ratio = hertz_contact_time_s(m, r, e, v) * v / hertz_max_overlap_m(m, r, e, v);
+        assert!((ratio - 2.94).abs() < 0.01, "{ratio}");
     }
 
     #[test]

@@ -59,7 +59,8 @@ impl Particles {
         self.velocity.push(p.velocity);
         self.angular_velocity.push(p.angular_velocity);
         self.radius.push(p.radius_m);
-        self.mass.push(density_kg_m3 * 4.0 / 3.0 * PI * p.radius_m.powi(3));
+        self.mass
+            .push(density_kg_m3 * 4.0 / 3.0 * PI * p.radius_m.powi(3));
         self.force.push(Vec3::zeros());
         self.torque.push(Vec3::zeros());
         id
@@ -88,7 +89,9 @@ impl Particles {
 
     /// Keeps only the particles for which `keep(index)` is true, preserving order.
     pub fn retain_indices(&mut self, keep: &[bool]) {
-        let order: Vec<u32> = (0..self.len() as u32).filter(|&i| keep[i as usize]).collect();
+        let order: Vec<u32> = (0..self.len() as u32)
+            .filter(|&i| keep[i as usize])
+            .collect();
         self.permute(&order);
     }
 

@@ -19,8 +19,8 @@ use crate::dem::contact::rolling_cdt::ConstantDirectionalTorque;
 use crate::dem::contact::rolling_epsd::ElasticPlasticSpring;
 use crate::dem::contact::rolling_none::NoRolling;
 use crate::dem::contact::{
-    evaluate, ContactGeometry, ContactHistory, NormalModel, PairCoefficients, PairParameters, ParameterError,
-    RelativeMotion, RollingModel,
+    evaluate, ContactGeometry, ContactHistory, NormalModel, PairCoefficients, PairParameters,
+    ParameterError, RelativeMotion, RollingModel,
 };
 use crate::dem::domain::Domain;
 use crate::dem::effects::{BodyForce, Boundary, Gravity, NoGravity, Open, Periodic};
@@ -115,7 +115,9 @@ pub enum SetupError {
         source: ParameterError,
     },
     /// A wall refers to a material index with no parameters.
-    #[error("wall {wall} uses material index {material}, but only {count} wall materials are defined")]
+    #[error(
+        "wall {wall} uses material index {material}, but only {count} wall materials are defined"
+    )]
     WallMaterial {
         /// Wall index.
         wall: usize,
@@ -169,7 +171,11 @@ trait Kernel: Send {
     fn name(&self) -> String;
     fn stats(&self) -> StepStats;
     /// Particles were added (appended) or removed (`kept` mask of the old indices).
-    fn particles_changed(&mut self, world: &mut World, kept: Option<&[bool]>) -> Result<(), HealthError>;
+    fn particles_changed(
+        &mut self,
+        world: &mut World,
+        kept: Option<&[bool]>,
+    ) -> Result<(), HealthError>;
 }
 
 /// A DEM simulation: the world and its kernel.
@@ -195,7 +201,11 @@ impl Simulation {
         for (name, value, ok) in [
             ("dt_s", setup.dt_s, setup.dt_s > 0.0),
             ("skin_m", setup.skin_m, setup.skin_m >= 0.0),
-            ("density_kg_m3", setup.density_kg_m3, setup.density_kg_m3 > 0.0),
+            (
+                "density_kg_m3",
+                setup.density_kg_m3,
+                setup.density_kg_m3 > 0.0,
+            ),
         ] {
             if !(ok && value.is_finite()) {
                 return Err(SetupError::Setting {
@@ -254,19 +264,26 @@ impl Simulation {
     }
 
     /// Removes the particles for which `keep` is false (e.g. discharged ones).
-    pub fn retain(&mut self, keep: impl Fn(&Particles, usize) -> bool) -> Result<usize, HealthError> {
+    pub fn retain(
+        &mut self,
+        keep: impl Fn(&Particles, usize) -> bool,
+    ) -> Result<usize, HealthError> {
         let p = &self.world.particles;
         let mask: Vec<bool> = (0..p.len()).map(|i| keep(p, i)).collect();
         let removed = mask.iter().filter(|k| !**k).count();
         if removed > 0 {
             self.world.particles.retain_indices(&mask);
-            self.kernel.particles_changed(&mut self.world, Some(&mask))?;
+            self.kernel
+                .particles_changed(&mut self.world, Some(&mask))?;
         }
         Ok(removed)
     }
 }
 
-fn with_normal<N: NormalModel>(world: &mut World, setup: &SimulationSetup) -> Result<Box<dyn Kernel>, SetupError> {
+fn with_normal<N: NormalModel>(
+    world: &mut World,
+    setup: &SimulationSetup,
+) -> Result<Box<dyn Kernel>, SetupError> {
     match setup.contact.rolling {
         RollingChoice::None => with_rolling::<N, NoRolling>(world, setup),
         RollingChoice::Cdt => with_rolling::<N, ConstantDirectionalTorque>(world, setup),
@@ -290,7 +307,9 @@ fn with_body_force<N: NormalModel, R: RollingModel, G: BodyForce>(
     body: G,
 ) -> Result<Box<dyn Kernel>, SetupError> {
     if world.domain.any_periodic() {
-        Ok(Box::new(Stepper::<N, R, G, Periodic>::new(world, setup, body)?))
+        Ok(Box::new(Stepper::<N, R, G, Periodic>::new(
+            world, setup, body,
+        )?))
     } else {
         Ok(Box::new(Stepper::<N, R, G, Open>::new(world, setup, body)?))
     }
@@ -314,6 +333,10 @@ struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> {
     /// `max(walls, 1)`, so per-particle chunks are never empty.
     wall_slots: usize,
     placed: Vec<PlacedWall>,
+    /// Full-step velocity estimates v½ + ½dt·F/m (m/s) and ω½ + ½dt·T/I
+    /// (rad/s) that the contact laws see (see [`Stepper::kick_and_drift`]).
+    velocity_estimate: Vec<Vec3>,
+    angular_estimate: Vec<Vec3>,
     stats: StepStats,
     limits: HealthLimits,
     /// Energy check enabled (closed, undriven, non-cohesive) and its reference, J.
@@ -347,21 +370,23 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .iter()
             .enumerate()
             .map(|(k, (m, p))| {
-                PairCoefficients::new(&c.particle_material, m, p, c.clip_tensile).map_err(|source| {
-                    SetupError::Parameter {
+                PairCoefficients::new(&c.particle_material, m, p, c.clip_tensile).map_err(
+                    |source| SetupError::Parameter {
                         context: format!("particle_wall[{k}]"),
                         source,
-                    }
-                })
+                    },
+                )
             })
             .collect::<Result<Vec<_>, _>>()?;
         let mut wall_coefficients = Vec::with_capacity(world.walls.len());
         for (w, wall) in world.walls.iter().enumerate() {
-            let coef = by_material.get(wall.material).ok_or(SetupError::WallMaterial {
-                wall: w,
-                material: wall.material,
-                count: by_material.len(),
-            })?;
+            let coef = by_material
+                .get(wall.material)
+                .ok_or(SetupError::WallMaterial {
+                    wall: w,
+                    material: wall.material,
+                    count: by_material.len(),
+                })?;
             wall_coefficients.push(*coef);
         }
         let r_max = world.particles.radius.iter().cloned().fold(0.0, f64::max);
@@ -369,11 +394,15 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         // inserted later (up to twice the current largest) stay covered.
         let r_bound = if r_max > 0.0 { 2.0 * r_max } else { 1.0 };
         let pair_reach = N::reach_m(&particle_particle, 0.5 * r_bound);
-        let wall_reach: Vec<f64> = wall_coefficients.iter().map(|w| N::reach_m(w, r_bound)).collect();
+        let wall_reach: Vec<f64> = wall_coefficients
+            .iter()
+            .map(|w| N::reach_m(w, r_bound))
+            .collect();
         let cohesive = std::iter::once(&particle_particle)
             .chain(&wall_coefficients)
             .any(|c| c.surface_energy_j_m2 > 0.0);
-        let neighbors = NeighborList::new(setup.skin_m, pair_reach).map_err(SetupError::Neighbor)?;
+        let neighbors =
+            NeighborList::new(setup.skin_m, pair_reach).map_err(SetupError::Neighbor)?;
         let driven = world.walls.iter().any(|w| !w.motion().is_static());
         let wall_slots = world.walls.len().max(1);
         let mut stepper = Self {
@@ -388,6 +417,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             wall_history: vec![ContactHistory::default(); world.particles.len() * wall_slots],
             wall_slots,
             placed: Vec::new(),
+            velocity_estimate: world.particles.velocity.clone(),
+            angular_estimate: world.particles.angular_velocity.clone(),
             stats: StepStats::default(),
             limits: setup.health,
             energy_reference: None,
@@ -395,7 +426,9 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             rebuilds_since_sort: 0,
             _boundary: std::marker::PhantomData,
         };
-        stepper.sort_and_rebuild(world).map_err(SetupError::Neighbor)?;
+        stepper
+            .sort_and_rebuild(world)
+            .map_err(SetupError::Neighbor)?;
         stepper.forces(world).map_err(SetupError::Health)?;
         Ok(stepper)
     }
@@ -416,31 +449,50 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         Ok(())
     }
 
+    /// First half kick and drift. Also estimates the full-step velocities the
+    /// contact laws use, `v½ + ½dt·F_old/m`: damping evaluated with the
+    /// half-step velocity alone lags by dt/2 and makes the restitution error
+    /// first order in dt (4 % at e = 0.1 with 50 steps per contact); the
+    /// estimate makes it second order.
     fn kick_and_drift(&mut self, world: &mut World) -> Result<(), HealthError> {
         let dt = self.dt;
         let domain = world.domain;
         let p = &mut world.particles;
+        self.velocity_estimate.resize(p.len(), Vec3::zeros());
+        self.angular_estimate.resize(p.len(), Vec3::zeros());
         let left = p
             .position
             .par_iter_mut()
             .zip(p.velocity.par_iter_mut())
             .zip(p.angular_velocity.par_iter_mut())
-            .zip(p.force.par_iter())
-            .zip(p.torque.par_iter())
+            .zip(p.force.par_iter().zip(p.torque.par_iter()))
             .zip(p.mass.par_iter().zip(p.radius.par_iter()))
+            .zip(
+                self.velocity_estimate
+                    .par_iter_mut()
+                    .zip(self.angular_estimate.par_iter_mut()),
+            )
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
-            .filter_map(|(i, (((((x, v), w), f), t), (m, r)))| {
-                *v += f * (0.5 * dt / m);
-                *w += t * (0.5 * dt / (0.4 * m * r * r));
+            .filter_map(|(i, (((((x, v), w), (f, t)), (m, r)), (ve, we)))| {
+                let dv = f * (0.5 * dt / m);
+                let dw = t * (0.5 * dt / (0.4 * m * r * r));
+                *v += dv;
+                *w += dw;
+                *ve = *v + dv;
+                *we = *w + dw;
                 *x = B::wrap(&domain, *x + *v * dt);
                 (!domain.contains(*x)).then_some(i)
             })
             .min();
         match left {
-            Some(i) => Err(self.health(world, i, HealthCause::LeftDomain {
-                position: world.particles.position[i],
-            })),
+            Some(i) => Err(self.health(
+                world,
+                i,
+                HealthCause::LeftDomain {
+                    position: world.particles.position[i],
+                },
+            )),
             None => Ok(()),
         }
     }
@@ -460,14 +512,16 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             self.sort_and_rebuild(world)
         } else {
             let p = &world.particles;
-            self.neighbors.rebuild(&p.position, &p.radius, &p.id, &world.domain)
+            self.neighbors
+                .rebuild(&p.position, &p.radius, &p.id, &world.domain)
         };
         result.map_err(|e| self.neighbor_failure(world, e))
     }
 
     fn neighbor_failure(&self, world: &World, e: NeighborError) -> HealthError {
         let index = match e {
-            NeighborError::InvalidRadius { index, .. } | NeighborError::NonFinitePosition { index } => index,
+            NeighborError::InvalidRadius { index, .. }
+            | NeighborError::NonFinitePosition { index } => index,
             _ => 0,
         };
         HealthError {
@@ -482,15 +536,22 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     fn sort_and_rebuild(&mut self, world: &mut World) -> Result<(), NeighborError> {
         self.rebuilds_since_sort = 0;
         let p = &mut world.particles;
-        let order = self.neighbors.cell_order(&p.position, &p.radius, &world.domain)?;
+        let order = self
+            .neighbors
+            .cell_order(&p.position, &p.radius, &world.domain)?;
         p.permute(&order);
         let slots = self.wall_slots;
         let old = std::mem::take(&mut self.wall_history);
         self.wall_history = order
             .iter()
-            .flat_map(|&o| old[o as usize * slots..(o as usize + 1) * slots].iter().copied())
+            .flat_map(|&o| {
+                old[o as usize * slots..(o as usize + 1) * slots]
+                    .iter()
+                    .copied()
+            })
             .collect();
-        self.neighbors.rebuild(&p.position, &p.radius, &p.id, &world.domain)
+        self.neighbors
+            .rebuild(&p.position, &p.radius, &p.id, &world.domain)
     }
 
     /// Pair forces into the per-pair buffer, then per particle: gather, walls,
@@ -510,15 +571,27 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         if self.stats.max_overlap_ratio > self.limits.max_overlap_ratio {
             let (ratio, index, partner) = if worst_pair.0 >= worst_wall.0 {
                 let [i, j] = self.neighbors.pairs()[worst_pair.1];
-                (worst_pair.0, i as usize, format!("particle {}", world.particles.id[j as usize]))
+                (
+                    worst_pair.0,
+                    i as usize,
+                    format!("particle {}", world.particles.id[j as usize]),
+                )
             } else {
-                (worst_wall.0, worst_wall.1 / self.wall_slots, format!("wall {}", worst_wall.1 % self.wall_slots))
+                (
+                    worst_wall.0,
+                    worst_wall.1 / self.wall_slots,
+                    format!("wall {}", worst_wall.1 % self.wall_slots),
+                )
             };
-            return Err(self.health(world, index, HealthCause::Overlap {
-                ratio,
-                limit: self.limits.max_overlap_ratio,
-                partner,
-            }));
+            return Err(self.health(
+                world,
+                index,
+                HealthCause::Overlap {
+                    ratio,
+                    limit: self.limits.max_overlap_ratio,
+                    partner,
+                },
+            ));
         }
         Ok(())
     }
@@ -526,6 +599,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     /// Returns the number of force-carrying contacts and (worst overlap ratio, pair index).
     fn pair_forces(&mut self, world: &World) -> (usize, (f64, usize)) {
         let p = &world.particles;
+        let (vel, ang) = (&self.velocity_estimate, &self.angular_estimate);
         let domain = world.domain;
         let coef = self.particle_particle;
         let dt = self.dt;
@@ -556,9 +630,9 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                 let overlap = touch - dist;
                 let arm_i = ri - 0.5 * overlap;
                 let arm_j = rj - 0.5 * overlap;
-                let (wi, wj) = (p.angular_velocity[i], p.angular_velocity[j]);
+                let (wi, wj) = (ang[i], ang[j]);
                 let motion = RelativeMotion {
-                    velocity: p.velocity[i] - p.velocity[j] - (wi * arm_i + wj * arm_j).cross(&n),
+                    velocity: vel[i] - vel[j] - (wi * arm_i + wj * arm_j).cross(&n),
                     angular_velocity: wi - wj,
                 };
                 let geometry = ContactGeometry {
@@ -583,7 +657,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                     }
                 }
             })
-            .reduce(|| (0, (0.0, usize::MAX)), |a, b| (a.0 + b.0, worse(a.1, b.1)))
+            .reduce(
+                || (0, (0.0, usize::MAX)),
+                |a, b| (a.0 + b.0, worse(a.1, b.1)),
+            )
     }
 
     /// Returns wall contacts, (worst wall overlap ratio, particle*slots+wall),
@@ -591,7 +668,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     fn gather(&mut self, world: &mut World) -> (usize, (f64, usize), Option<usize>) {
         let t = world.time_s;
         self.placed.clear();
-        self.placed.extend(world.walls.iter().map(|w| w.placed_at(t)));
+        self.placed
+            .extend(world.walls.iter().map(|w| w.placed_at(t)));
         let dt = self.dt;
         let slots = self.wall_slots;
         let g = self.body.acceleration();
@@ -607,55 +685,72 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .zip(p.velocity.par_iter_mut())
             .zip(p.angular_velocity.par_iter_mut())
             .zip(self.wall_history.par_chunks_mut(slots))
-            .zip(p.position.par_iter().zip(p.radius.par_iter().zip(p.mass.par_iter())))
+            .zip(
+                p.position
+                    .par_iter()
+                    .zip(p.radius.par_iter().zip(p.mass.par_iter())),
+            )
+            .zip(
+                self.velocity_estimate
+                    .par_iter()
+                    .zip(self.angular_estimate.par_iter()),
+            )
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
-            .map(|(i, (((((f, t), v), w), hist), (x, (&r, &m))))| {
-                let mut force = g * m;
-                let mut torque = Vec3::zeros();
-                for e in neighbors.incident(i) {
-                    let pf = &buffer[e.pair()];
-                    if e.is_first() {
-                        force += pf.force_on_first;
-                        torque += pf.torque_first;
-                    } else {
-                        force -= pf.force_on_first;
-                        torque += pf.torque_second;
+            .map(
+                |(i, ((((((f, t), v), w), hist), (x, (&r, &m))), (ve, we)))| {
+                    let mut force = g * m;
+                    let mut torque = Vec3::zeros();
+                    for e in neighbors.incident(i) {
+                        let pf = &buffer[e.pair()];
+                        if e.is_first() {
+                            force += pf.force_on_first;
+                            torque += pf.torque_first;
+                        } else {
+                            force -= pf.force_on_first;
+                            torque += pf.torque_second;
+                        }
                     }
-                }
-                let mut contacts = 0;
-                let mut worst = (0.0, usize::MAX);
-                for (k, wall) in placed.iter().enumerate() {
-                    let Some(wc) = wall.contact(*x, r, wall_reach[k]) else {
-                        hist[k] = ContactHistory::default();
-                        continue;
-                    };
-                    let n = wc.normal;
-                    let arm = r - 0.5 * wc.overlap_m;
-                    let motion = RelativeMotion {
-                        velocity: *v - (*w * arm).cross(&n) - wc.velocity,
-                        angular_velocity: *w,
-                    };
-                    let geometry = ContactGeometry {
-                        normal: n,
-                        overlap_m: wc.overlap_m,
-                        r_star_m: r,
-                        m_star_kg: m,
-                    };
-                    if let Some(c) = evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k]) {
-                        force += c.force;
-                        torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
-                        contacts += 1;
-                        worst = worse(worst, (wc.overlap_m.max(0.0) / r, i * slots + k));
+                    let mut contacts = 0;
+                    let mut worst = (0.0, usize::MAX);
+                    for (k, wall) in placed.iter().enumerate() {
+                        let Some(wc) = wall.contact(*x, r, wall_reach[k]) else {
+                            hist[k] = ContactHistory::default();
+                            continue;
+                        };
+                        let n = wc.normal;
+                        let arm = r - 0.5 * wc.overlap_m;
+                        let motion = RelativeMotion {
+                            velocity: ve - (we * arm).cross(&n) - wc.velocity,
+                            angular_velocity: *we,
+                        };
+                        let geometry = ContactGeometry {
+                            normal: n,
+                            overlap_m: wc.overlap_m,
+                            r_star_m: r,
+                            m_star_kg: m,
+                        };
+                        if let Some(c) =
+                            evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k])
+                        {
+                            force += c.force;
+                            torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
+                            contacts += 1;
+                            worst = worse(worst, (wc.overlap_m.max(0.0) / r, i * slots + k));
+                        }
                     }
-                }
-                *f = force;
-                *t = torque;
-                *v += force * (0.5 * dt / m);
-                *w += torque * (0.5 * dt / (0.4 * m * r * r));
-                let finite = x.iter().chain(v.iter()).chain(w.iter()).all(|c| c.is_finite());
-                (contacts, worst, (!finite).then_some(i))
-            })
+                    *f = force;
+                    *t = torque;
+                    *v += force * (0.5 * dt / m);
+                    *w += torque * (0.5 * dt / (0.4 * m * r * r));
+                    let finite = x
+                        .iter()
+                        .chain(v.iter())
+                        .chain(w.iter())
+                        .all(|c| c.is_finite());
+                    (contacts, worst, (!finite).then_some(i))
+                },
+            )
             .reduce(
                 || (0, (0.0, usize::MAX), None),
                 |a, b| (a.0 + b.0, worse(a.1, b.1), min_option(a.2, b.2)),
@@ -673,7 +768,9 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             if g.y < 0.0 { lo.y } else { hi.y },
             if g.z < 0.0 { lo.z } else { hi.z },
         );
-        let potential: f64 = (0..p.len()).map(|i| -p.mass[i] * g.dot(&(p.position[i] - floor))).sum();
+        let potential: f64 = (0..p.len())
+            .map(|i| -p.mass[i] * g.dot(&(p.position[i] - floor)))
+            .sum();
         let coef = &self.particle_particle;
         let elastic: f64 = self
             .neighbors
@@ -690,7 +787,11 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .flat_map(|i| self.placed.iter().enumerate().map(move |(k, w)| (i, k, w)))
             .filter_map(|(i, k, w)| {
                 let c = w.contact(p.position[i], p.radius[i], 0.0)?;
-                Some(hertz_energy(self.wall_coefficients[k].e_star, p.radius[i], c.overlap_m))
+                Some(hertz_energy(
+                    self.wall_coefficients[k].e_star,
+                    p.radius[i],
+                    c.overlap_m,
+                ))
             })
             .sum();
         p.kinetic_energy_j() + potential + elastic + wall_elastic
@@ -706,12 +807,20 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             // Name the fastest particle: the likeliest culprit.
             let p = &world.particles;
             let fastest = (0..p.len())
-                .max_by(|&a, &b| p.velocity[a].norm_squared().total_cmp(&p.velocity[b].norm_squared()))
+                .max_by(|&a, &b| {
+                    p.velocity[a]
+                        .norm_squared()
+                        .total_cmp(&p.velocity[b].norm_squared())
+                })
                 .unwrap_or(0);
-            return Err(self.health(world, fastest, HealthCause::EnergyGrowth {
-                energy_j: e,
-                reference_j: reference,
-            }));
+            return Err(self.health(
+                world,
+                fastest,
+                HealthCause::EnergyGrowth {
+                    energy_j: e,
+                    reference_j: reference,
+                },
+            ));
         }
         Ok(())
     }
@@ -759,7 +868,11 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Step
         self.stats
     }
 
-    fn particles_changed(&mut self, world: &mut World, kept: Option<&[bool]>) -> Result<(), HealthError> {
+    fn particles_changed(
+        &mut self,
+        world: &mut World,
+        kept: Option<&[bool]>,
+    ) -> Result<(), HealthError> {
         let slots = self.wall_slots;
         if let Some(mask) = kept {
             let old = std::mem::take(&mut self.wall_history);
@@ -773,7 +886,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Step
         self.wall_history
             .resize(world.particles.len() * slots, ContactHistory::default());
         self.energy_reference = None;
-        self.sort_and_rebuild(world).map_err(|e| self.neighbor_failure(world, e))?;
+        self.sort_and_rebuild(world)
+            .map_err(|e| self.neighbor_failure(world, e))?;
         self.forces(world)
     }
 }

@@ -10,6 +10,18 @@
 //! zero-sized). Only JKR acts beyond touching, so only JKR widens the neighbour
 //! search ([`NormalModel::reach_m`]).
 //!
+//! The load L that caps friction (μ_s L) and rolling (μ_r R* L) is the
+//! elastic normal force, shifted by twice the pull-off force for JKR:
+//! `L = |F_el + 2F_pulloff|` (Hertz: `L = F_el ≥ 0`; JKR: `L ≥ F_pulloff` on
+//! the stable branch, vanishing only at the pull-off point as in Thornton's
+//! JKR friction). yan2015 Eq. 7 writes |F_n| with the damped force; the damping
+//! is left out on purpose: ψ-damping depends on δ only, so its impulse over a
+//! whole contact is exactly zero and ∫F_el dt equals the normal impulse
+//! (1+e)m*v — the gross-sliding impulse then matches the rigid-body closed
+//! form of Chung & Ooi (2011) exactly, where |F_n| overshoots it by 6.7 %
+//! (e = 0.5) through the tensile tail of the damped force. It also keeps the
+//! cap continuous at contact onset, where the damped force jumps.
+//!
 //! Sign conventions for one contact between body *i* and its partner *j* (a
 //! particle or a wall): `normal` is the unit vector from *j* towards *i*, the
 //! overlap `δ` is positive when the bodies interpenetrate, and every returned
@@ -206,7 +218,7 @@ pub struct NormalResponse {
     /// normal stiffness S_n = 2E*a, tangential S_t = 8G*a and rolling k_r = 8G*aR*².
     pub contact_radius_m: f64,
     /// Pull-off force 3πΓR*, N (0 for Hertz); the Coulomb and rolling caps use
-    /// the load |F_n + 2 F_pulloff| so that they vanish exactly at pull-off.
+    /// the load |F_el + 2 F_pulloff| (see the module docs).
     pub pull_off_force_n: f64,
 }
 
@@ -238,7 +250,7 @@ pub trait RollingModel: Send + Sync + 'static {
     /// Rolling torque on body *i*, N·m.
     ///
     /// `rolling_velocity` is the tangential part of ω_i − ω_j (rad/s), `load_n`
-    /// the cap load |F_n + 2F_pulloff| (N), `dt_s` the step.
+    /// the cap load |F_el + 2F_pulloff| (N), `dt_s` the step.
     #[allow(clippy::too_many_arguments)]
     fn torque(
         c: &PairCoefficients,
@@ -307,7 +319,7 @@ pub fn evaluate<N: NormalModel, R: RollingModel>(
     if c.clip_tensile {
         f_n = f_n.max(nr.elastic_force_n.min(0.0));
     }
-    let load = (f_n + 2.0 * nr.pull_off_force_n).abs();
+    let load = (nr.elastic_force_n + 2.0 * nr.pull_off_force_n).abs();
 
     let f_t =
         tangential_mindlin::force(c, a, m_star, load, &n, &v_t, dt_s, &mut history.tangential);

@@ -1,0 +1,3 @@
+//! Lab-test scenes: geometry, insertion, protocol and measurement.
+
+pub mod pair;

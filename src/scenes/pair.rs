@@ -1,0 +1,368 @@
+//! The `pair` scene: two particles, or a particle and a flat wall, colliding
+//! at a given normal and tangential speed and spin, or an adhered pair pulled
+//! apart quasi-statically. Users check their contact parameters with it; the
+//! physics tests validate the engine with it against Hertz, restitution,
+//! Chung & Ooi (2011) oblique impacts and JKR pull-off.
+//!
+//! Geometry: the partner (a particle at the origin, or the plane z = 0 with
+//! normal +z) sits below; the moving particle starts a hair (1 % of its
+//! radius) above contact and moves along −z with `normal_velocity_m_s` and
+//! along +x with `tangential_velocity_m_s`. Gravity (−z, 9.81 m/s²) only if
+//! asked. Contact start and end are found by linear interpolation of the
+//! overlap between steps, so the duration is resolved below one step.
+
+use crate::dem::contact::normal_jkr::separation_overlap_m;
+use crate::dem::contact::PairCoefficients;
+use crate::dem::domain::{Domain, DomainError};
+use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::particles::{ParticleInit, Particles};
+use crate::dem::simulation::{ContactSetup, SetupError, Simulation, SimulationSetup, World};
+use crate::dem::vec3::Vec3;
+use crate::dem::walls::{Wall, WallError};
+
+/// Standard gravity used when a pair test asks for gravity, m/s².
+pub const STANDARD_GRAVITY_M_S2: f64 = 9.81;
+
+/// What the moving particle meets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Partner {
+    /// A free particle of this radius (m), initially at rest.
+    Particle {
+        /// Partner radius, m.
+        radius_m: f64,
+    },
+    /// The flat wall z = 0 made of wall material 0 of the contact setup.
+    Wall,
+}
+
+/// What the test does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PairMode {
+    /// A free collision.
+    Impact,
+    /// The particle is pressed into contact, then pulled straight off at
+    /// `pull_speed_m_s` (kinematically); the partner particle is held.
+    Separation {
+        /// Pull speed, m/s.
+        pull_speed_m_s: f64,
+    },
+}
+
+/// A fully specified pair test.
+#[derive(Clone, Debug)]
+pub struct PairTest {
+    /// Contact physics (wall material 0 is the wall partner's).
+    pub contact: ContactSetup,
+    /// Particle density, kg/m³.
+    pub density_kg_m3: f64,
+    /// Radius of the moving particle, m.
+    pub radius_m: f64,
+    /// The partner.
+    pub partner: Partner,
+    /// Approach speed along the normal, m/s (≥ 0).
+    pub normal_velocity_m_s: f64,
+    /// Tangential speed along +x, m/s.
+    pub tangential_velocity_m_s: f64,
+    /// Initial angular velocity of the moving particle, rad/s.
+    pub angular_velocity_rad_s: Vec3,
+    /// Gravity along −z.
+    pub gravity: bool,
+    /// Impact or separation.
+    pub mode: PairMode,
+    /// Time step, s.
+    pub dt_s: f64,
+    /// Give up after this much simulated time, s.
+    pub max_time_s: f64,
+}
+
+/// What a pair test measured (the `measurements` of result.json).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PairMeasurements {
+    /// Duration of the (first) contact, s (interpolated).
+    pub contact_duration_s: f64,
+    /// Largest overlap, m.
+    pub max_overlap_m: f64,
+    /// Largest repulsive normal contact force, N.
+    pub max_normal_force_n: f64,
+    /// Normal restitution: −(relative normal velocity after)/(before).
+    pub restitution: f64,
+    /// Relative normal velocity after contact (positive = separating), m/s.
+    pub rebound_normal_velocity_m_s: f64,
+    /// Relative tangential velocity of the centres after contact along +x, m/s.
+    pub rebound_tangential_velocity_m_s: f64,
+    /// Moving particle's spin after contact about n × x̂ (= +y), rad/s; positive
+    /// is the sense friction drives in a +x impact.
+    pub rebound_angular_velocity_rad_s: f64,
+    /// Largest tensile contact force during separation, N (separation mode).
+    pub pull_off_force_n: Option<f64>,
+    /// The contact had not ended by `max_time_s` (the particle was captured,
+    /// e.g. e → 0 or adhesion): duration and rebound are those at that time.
+    pub captured: bool,
+    /// Steps simulated.
+    pub steps: u64,
+}
+
+/// Why a pair test failed.
+#[derive(Debug, thiserror::Error)]
+pub enum PairError {
+    /// The scene geometry is invalid.
+    #[error("pair scene: {0}")]
+    Domain(#[from] DomainError),
+    /// The wall could not be built.
+    #[error("pair scene wall: {0}")]
+    Wall(#[from] WallError),
+    /// The engine refused the setup.
+    #[error(transparent)]
+    Setup(#[from] SetupError),
+    /// The simulation became unhealthy.
+    #[error(transparent)]
+    Health(#[from] HealthError),
+    /// The contact did not end within `max_time_s`.
+    #[error("pair scene: the contact did not end within max_time_s = {0} s")]
+    Timeout(f64),
+}
+
+/// Stable ids of the moving particle and the partner particle (indices change
+/// when the engine re-sorts particles by cell).
+const MOVING_ID: u32 = 0;
+const PARTNER_ID: u32 = 1;
+
+/// Current index of the particle with stable id `id`.
+fn index_of(p: &Particles, id: u32) -> usize {
+    p.id.iter()
+        .position(|&i| i == id)
+        .expect("pair scene particles are never removed")
+}
+
+/// Runs the test and measures it. Returns the measurements and the kernel name.
+pub fn run_pair(test: &PairTest) -> Result<(PairMeasurements, String), PairError> {
+    let r = test.radius_m;
+    let (partner_r, walls) = match test.partner {
+        Partner::Particle { radius_m } => (radius_m, vec![]),
+        Partner::Wall => (0.0, vec![Wall::plane(Vec3::zeros(), Vec3::z(), 0)?]),
+    };
+    let reach = jkr_reach(test, partner_r);
+    let start_gap = 0.01 * r;
+    let z0 = match test.partner {
+        Partner::Particle { .. } => r + partner_r + start_gap,
+        Partner::Wall => r + start_gap,
+    };
+    let separating = matches!(test.mode, PairMode::Separation { .. });
+    let travel = test.max_time_s * (test.normal_velocity_m_s + test.tangential_velocity_m_s + 1.0);
+    let span = 4.0 * (r + partner_r) + travel + 2.0 * reach;
+    let domain = Domain::new(
+        Vec3::new(-span, -span, -span),
+        Vec3::new(span, span, span),
+        [false; 3],
+    )?;
+    let mut particles = Particles::default();
+    let approach = if separating {
+        0.0
+    } else {
+        test.normal_velocity_m_s
+    };
+    particles.push(
+        &ParticleInit {
+            position: Vec3::new(
+                0.0,
+                0.0,
+                if separating {
+                    z0 - start_gap - 1e-3 * r
+                } else {
+                    z0
+                },
+            ),
+            velocity: Vec3::new(test.tangential_velocity_m_s, 0.0, -approach),
+            angular_velocity: test.angular_velocity_rad_s,
+            radius_m: r,
+        },
+        test.density_kg_m3,
+    );
+    if let Partner::Particle { radius_m } = test.partner {
+        particles.push(
+            &ParticleInit {
+                position: Vec3::zeros(),
+                velocity: Vec3::zeros(),
+                angular_velocity: Vec3::zeros(),
+                radius_m,
+            },
+            test.density_kg_m3,
+        );
+    }
+    let world = World {
+        particles,
+        walls,
+        domain,
+        time_s: 0.0,
+        step: 0,
+    };
+    let setup = SimulationSetup {
+        contact: test.contact.clone(),
+        density_kg_m3: test.density_kg_m3,
+        gravity_m_s2: test
+            .gravity
+            .then(|| Vec3::new(0.0, 0.0, -STANDARD_GRAVITY_M_S2)),
+        dt_s: test.dt_s,
+        skin_m: 0.05 * r,
+        health: HealthLimits::default(),
+    };
+    let mut sim = Simulation::new(world, &setup)?;
+    let kernel = sim.kernel_name();
+    let m = match test.mode {
+        PairMode::Impact => measure_impact(&mut sim, test, partner_r)?,
+        PairMode::Separation { pull_speed_m_s } => {
+            measure_separation(&mut sim, test, pull_speed_m_s)?
+        }
+    };
+    Ok((m, kernel))
+}
+
+/// Extra separation (m) over which a JKR contact of this test stays alive.
+fn jkr_reach(test: &PairTest, partner_r: f64) -> f64 {
+    let c = &test.contact;
+    let (partner_material, params, r_star) = match test.partner {
+        Partner::Particle { .. } => (
+            c.particle_material,
+            c.particle_particle,
+            test.radius_m * partner_r / (test.radius_m + partner_r),
+        ),
+        Partner::Wall => match c.wall_materials.first() {
+            Some((m, p)) => (*m, *p, test.radius_m),
+            None => return 0.0,
+        },
+    };
+    PairCoefficients::new(
+        &c.particle_material,
+        &partner_material,
+        &params,
+        c.clip_tensile,
+    )
+    .map(|coef| -separation_overlap_m(&coef, r_star))
+    .unwrap_or(0.0)
+}
+
+/// Overlap (m), unit normal (partner → moving particle) and the relative velocity.
+fn contact_state(p: &Particles, partner_r: f64, wall: bool) -> (f64, Vec3, Vec3) {
+    let i = index_of(p, MOVING_ID);
+    if wall {
+        let x = p.position[i];
+        (p.radius[i] - x.z, Vec3::z(), p.velocity[i])
+    } else {
+        let j = index_of(p, PARTNER_ID);
+        let d = p.position[i] - p.position[j];
+        let dist = d.norm();
+        (
+            p.radius[i] + partner_r - dist,
+            d / dist,
+            p.velocity[i] - p.velocity[j],
+        )
+    }
+}
+
+fn in_contact(sim: &Simulation) -> bool {
+    let s = sim.stats();
+    s.contacts + s.wall_contacts > 0
+}
+
+fn measure_impact(
+    sim: &mut Simulation,
+    test: &PairTest,
+    partner_r: f64,
+) -> Result<PairMeasurements, PairError> {
+    let wall = test.partner == Partner::Wall;
+    let dt = test.dt_s;
+    let max_steps = (test.max_time_s / dt).ceil() as u64;
+    let gravity_force = if test.gravity {
+        let p = &sim.world().particles;
+        p.mass[index_of(p, MOVING_ID)] * STANDARD_GRAVITY_M_S2
+    } else {
+        0.0
+    };
+    let (mut prev_overlap, _, _) = contact_state(&sim.world().particles, partner_r, wall);
+    let mut m = PairMeasurements::default();
+    let (mut start, mut end) = (None, None);
+    let mut touched = false;
+    let mut approach_n = 0.0;
+    while m.steps < max_steps {
+        let (_, n_before, v_before) = contact_state(&sim.world().particles, partner_r, wall);
+        sim.advance(1)?;
+        m.steps += 1;
+        let p = &sim.world().particles;
+        let (overlap, n, _) = contact_state(p, partner_r, wall);
+        let t = sim.world().time_s;
+        if start.is_none() && overlap > 0.0 {
+            approach_n = v_before.dot(&n_before);
+            start = Some(t - dt * overlap / (overlap - prev_overlap));
+        }
+        if start.is_some() && end.is_none() && overlap <= 0.0 && prev_overlap > 0.0 {
+            end = Some(t - dt * overlap / (overlap - prev_overlap));
+        }
+        if start.is_some() {
+            m.max_overlap_m = m.max_overlap_m.max(overlap);
+            let normal_force = p.force[index_of(p, MOVING_ID)].dot(&n) + gravity_force * n.z;
+            m.max_normal_force_n = m.max_normal_force_n.max(normal_force);
+        }
+        prev_overlap = overlap;
+        touched |= in_contact(sim);
+        if touched && !in_contact(sim) && end.is_some() {
+            break;
+        }
+    }
+    let Some(start) = start else {
+        return Err(PairError::Timeout(test.max_time_s));
+    };
+    // A contact still closed at max_time_s captured the particle (e → 0):
+    // its duration is the time observed and its rebound the current motion.
+    m.captured = in_contact(sim) || end.is_none();
+    let end = end.filter(|_| !m.captured).unwrap_or(sim.world().time_s);
+    let p = &sim.world().particles;
+    let (_, n, v) = contact_state(p, partner_r, wall);
+    m.contact_duration_s = end - start;
+    m.rebound_normal_velocity_m_s = v.dot(&n);
+    m.restitution = -m.rebound_normal_velocity_m_s / approach_n;
+    m.rebound_tangential_velocity_m_s = v.x;
+    m.rebound_angular_velocity_rad_s =
+        p.angular_velocity[index_of(p, MOVING_ID)].dot(&n.cross(&Vec3::x()));
+    Ok(m)
+}
+
+fn measure_separation(
+    sim: &mut Simulation,
+    test: &PairTest,
+    pull_speed: f64,
+) -> Result<PairMeasurements, PairError> {
+    let dt = test.dt_s;
+    let max_steps = (test.max_time_s / dt).ceil() as u64;
+    let start = {
+        let p = &sim.world().particles;
+        p.position[index_of(p, MOVING_ID)]
+    };
+    let pull = Vec3::new(0.0, 0.0, pull_speed);
+    let mut m = PairMeasurements::default();
+    let mut tension: f64 = 0.0;
+    while m.steps < max_steps {
+        let t = sim.world().time_s;
+        let p = sim.particles_mut();
+        let i = index_of(p, MOVING_ID);
+        p.position[i] = start + pull * t;
+        p.velocity[i] = pull;
+        p.angular_velocity[i] = Vec3::zeros();
+        if p.len() > 1 {
+            let j = index_of(p, PARTNER_ID);
+            p.position[j] = Vec3::zeros();
+            p.velocity[j] = Vec3::zeros();
+            p.angular_velocity[j] = Vec3::zeros();
+        }
+        sim.advance(1)?;
+        m.steps += 1;
+        let p = &sim.world().particles;
+        let f = p.force[index_of(p, MOVING_ID)].z;
+        tension = tension.max(-f);
+        if m.steps > 1 && !in_contact(sim) {
+            m.pull_off_force_n = Some(tension);
+            m.contact_duration_s = sim.world().time_s;
+            return Ok(m);
+        }
+    }
+    Err(PairError::Timeout(test.max_time_s))
+}

@@ -1,0 +1,261 @@
+//! Single-contact physics against closed-form theory, through the `pair` scene.
+//! Each expected number names its source.
+
+use repose::dem::contact::PairParameters;
+use repose::dem::material::{
+    effective_youngs_modulus, harmonic, hertz_contact_time_s, hertz_max_overlap_m, ElasticMaterial,
+};
+use repose::dem::simulation::{ContactSetup, NormalChoice, RollingChoice};
+use repose::dem::timestep::{choose_time_step, StiffestContact, TimeStepRequest};
+use repose::dem::vec3::Vec3;
+use repose::scenes::pair::{run_pair, PairMeasurements, PairMode, PairTest, Partner};
+use std::f64::consts::PI;
+
+const R: f64 = 1e-3;
+const RHO: f64 = 2500.0;
+const SPHERE: ElasticMaterial = ElasticMaterial {
+    youngs_modulus_pa: 1e8,
+    poisson_ratio: 0.3,
+};
+
+fn params(e: f64, mu: f64, mu_r: f64, gamma: f64) -> PairParameters {
+    PairParameters {
+        restitution: e,
+        static_friction: mu,
+        rolling_friction: mu_r,
+        surface_energy_j_m2: gamma,
+    }
+}
+
+fn mass(r: f64) -> f64 {
+    RHO * 4.0 / 3.0 * PI * r * r * r
+}
+
+/// Steps per contact at the impact speed used by these validation tests
+/// (the automatic rule guarantees 20; see `repose::dem::timestep`).
+const STEPS_PER_CONTACT: f64 = 100.0;
+
+/// A pair test resolving the contact with [`STEPS_PER_CONTACT`] steps.
+fn test(
+    partner: Partner,
+    p: PairParameters,
+    normal: NormalChoice,
+    rolling: RollingChoice,
+    vn: f64,
+) -> PairTest {
+    let wall = ElasticMaterial::RIGID;
+    let (r_star, m_star, e_star) = match partner {
+        Partner::Particle { radius_m } => (
+            harmonic(R, radius_m),
+            harmonic(mass(R), mass(radius_m)),
+            effective_youngs_modulus(&SPHERE, &SPHERE),
+        ),
+        Partner::Wall => (R, mass(R), effective_youngs_modulus(&SPHERE, &wall)),
+    };
+    let plan = choose_time_step(&TimeStepRequest {
+        min_radius_m: R,
+        density_kg_m3: RHO,
+        material: SPHERE,
+        rayleigh_fraction: 0.2,
+        design_speed_m_s: vn.max(0.01),
+        stiffest: StiffestContact {
+            e_star_pa: e_star,
+            r_star_m: r_star,
+            m_star_kg: m_star,
+        },
+        requested_dt_s: Some(
+            hertz_contact_time_s(m_star, r_star, e_star, vn.max(0.01)) / STEPS_PER_CONTACT,
+        ),
+    })
+    .unwrap();
+    PairTest {
+        contact: ContactSetup {
+            normal,
+            rolling,
+            clip_tensile: false,
+            particle_material: SPHERE,
+            particle_particle: p,
+            wall_materials: vec![(wall, p)],
+        },
+        density_kg_m3: RHO,
+        radius_m: R,
+        partner,
+        normal_velocity_m_s: vn,
+        tangential_velocity_m_s: 0.0,
+        angular_velocity_rad_s: Vec3::zeros(),
+        gravity: false,
+        mode: PairMode::Impact,
+        dt_s: plan.dt_s,
+        max_time_s: 0.01,
+    }
+}
+
+fn hertz(partner: Partner, e: f64) -> PairMeasurements {
+    run_pair(&test(
+        partner,
+        params(e, 0.5, 0.0, 0.0),
+        NormalChoice::Hertz,
+        RollingChoice::None,
+        0.5,
+    ))
+    .unwrap()
+    .0
+}
+
+const PARTNERS: [Partner; 2] = [Partner::Particle { radius_m: R }, Partner::Wall];
+
+fn effective(partner: Partner) -> (f64, f64, f64) {
+    match partner {
+        Partner::Particle { radius_m } => (
+            harmonic(mass(R), mass(radius_m)),
+            harmonic(R, radius_m),
+            effective_youngs_modulus(&SPHERE, &SPHERE),
+        ),
+        Partner::Wall => (
+            mass(R),
+            R,
+            effective_youngs_modulus(&SPHERE, &ElasticMaterial::RIGID),
+        ),
+    }
+}
+
+#[test]
+fn hertz_elastic_impact_matches_theory_within_one_percent() {
+    // Johnson, Contact Mechanics §11.4: t_c = 2.868 (m*²/(R*²E*²v))^{1/5},
+    // δ_max = (15 m* v²/(16 E* √R*))^{2/5}, F_max = (4/3) E* √R* δ_max^{3/2}.
+    for partner in PARTNERS {
+        let m = hertz(partner, 1.0);
+        let (ms, rs, es) = effective(partner);
+        let v = 0.5;
+        let tc = hertz_contact_time_s(ms, rs, es, v);
+        let dmax = hertz_max_overlap_m(ms, rs, es, v);
+        let fmax = 4.0 / 3.0 * es * rs.sqrt() * dmax.powf(1.5);
+        let rel = |a: f64, b: f64| (a / b - 1.0).abs();
+        assert!(
+            rel(m.contact_duration_s, tc) < 0.01,
+            "{partner:?}: t_c {} vs {tc}",
+            m.contact_duration_s
+        );
+        assert!(
+            rel(m.max_overlap_m, dmax) < 0.01,
+            "{partner:?}: δ {} vs {dmax}",
+            m.max_overlap_m
+        );
+        assert!(
+            rel(m.max_normal_force_n, fmax) < 0.01,
+            "{partner:?}: F {} vs {fmax}",
+            m.max_normal_force_n
+        );
+    }
+}
+
+#[test]
+fn restitution_is_recovered_within_half_a_percent() {
+    // The damping ψ(e) of yan2015 Eq. 4 is designed to give restitution e.
+    for partner in PARTNERS {
+        for e in [0.1, 0.5, 0.9] {
+            let m = hertz(partner, e);
+            assert!(
+                (m.restitution / e - 1.0).abs() < 0.005,
+                "{partner:?} e = {e}: measured {}",
+                m.restitution
+            );
+        }
+    }
+}
+
+#[test]
+fn elastic_impact_conserves_kinetic_energy() {
+    // e = 1: no damping; the normal speed after equals the speed before (0.1 %).
+    for partner in PARTNERS {
+        let m = hertz(partner, 1.0);
+        let energy_ratio = m.restitution * m.restitution;
+        assert!(
+            (energy_ratio - 1.0).abs() < 1e-3,
+            "{partner:?}: {energy_ratio}"
+        );
+    }
+}
+
+#[test]
+fn vanishing_restitution_stays_finite() {
+    // e → 0 uses ψ → −1 (critically damped limit): no NaN, tiny rebound.
+    for partner in PARTNERS {
+        for e in [1e-3, 1e-12, f64::MIN_POSITIVE] {
+            let (m, _) = run_pair(&test(
+                partner,
+                params(e, 0.5, 0.0, 0.0),
+                NormalChoice::Hertz,
+                RollingChoice::None,
+                0.5,
+            ))
+            .unwrap();
+            assert!(
+                m.restitution.is_finite() && m.restitution < 0.1,
+                "{partner:?} e = {e}: {m:?}"
+            );
+            assert!(m.max_overlap_m.is_finite() && m.max_overlap_m < 0.1 * R);
+        }
+    }
+}
+
+#[test]
+fn oblique_sliding_impacts_match_rigid_body_closed_forms() {
+    // Chung & Ooi (2011), Powder Technol. 8(2), tests 6–7: in the gross sliding
+    // regime (tan θ > 3.5 μ (1+e)), tangential restitution v_t'/v_t = 1 − μ(1+e)/tan θ
+    // and rebound spin ω' = 2.5 μ (1+e) v cos θ / R, θ from the normal.
+    let (mu, e, v) = (0.1, 0.5, 1.0);
+    for theta_deg in [45.0f64, 60.0, 75.0] {
+        let th = theta_deg.to_radians();
+        let mut t = test(
+            Partner::Wall,
+            params(e, mu, 0.0, 0.0),
+            NormalChoice::Hertz,
+            RollingChoice::None,
+            v * th.cos(),
+        );
+        t.tangential_velocity_m_s = v * th.sin();
+        let (m, _) = run_pair(&t).unwrap();
+        let expected_ratio = 1.0 - mu * (1.0 + e) / th.tan();
+        let ratio = m.rebound_tangential_velocity_m_s / (v * th.sin());
+        let expected_spin = 2.5 * mu * (1.0 + e) * v * th.cos() / R;
+        assert!(
+            (ratio / expected_ratio - 1.0).abs() < 0.01,
+            "θ = {theta_deg}: v_t ratio {ratio} vs {expected_ratio}"
+        );
+        assert!(
+            (m.rebound_angular_velocity_rad_s / expected_spin - 1.0).abs() < 0.01,
+            "θ = {theta_deg}: spin {} vs {expected_spin}",
+            m.rebound_angular_velocity_rad_s
+        );
+    }
+}
+
+#[test]
+fn jkr_pull_off_force_is_three_pi_gamma_r_star() {
+    // JKR (Johnson, Kendall & Roberts 1971) with work of adhesion 2Γ: the
+    // largest tensile force is 3πΓR* (LAMMPS and EDEM agree, ../shared/bench).
+    let gamma = 0.05;
+    for partner in PARTNERS {
+        let mut t = test(
+            partner,
+            params(0.9, 0.5, 0.0, gamma),
+            NormalChoice::Jkr,
+            RollingChoice::None,
+            0.01,
+        );
+        t.mode = PairMode::Separation {
+            pull_speed_m_s: 1e-4,
+        };
+        t.max_time_s = 1.0;
+        let (m, kernel) = run_pair(&t).unwrap();
+        assert!(kernel.starts_with("jkr"), "{kernel}");
+        let (_, rs, _) = effective(partner);
+        let expected = 3.0 * PI * gamma * rs;
+        let got = m.pull_off_force_n.unwrap();
+        assert!(
+            (got / expected - 1.0).abs() < 0.02,
+            "{partner:?}: {got} vs {expected}"
+        );
+    }
+}
