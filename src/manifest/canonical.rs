@@ -3,8 +3,8 @@
 //! The canonical form of a typed manifest is its serialisation with object keys
 //! sorted, no whitespace, and numbers as the typed value prints them: every float
 //! field is an `f64` written as the shortest string that round-trips (ryu), so `1`,
-//! `1.0` and `1e0` in a float field all become `1.0`; integer fields (seeds,
-//! versions) stay integers. Canonicalising the *typed* value also fills defaults and
+//! `1.0` and `1e0` in a float field all become `1.0` (and `-0.0` becomes `0.0`);
+//! integer fields (seeds, versions) stay integers. Canonicalising the *typed* value also fills defaults and
 //! drops absent optionals, so omitted-default and spelled-out manifests hash alike.
 //! The id is the lowercase hex sha256 of the canonical bytes.
 
@@ -94,6 +94,8 @@ fn write_canonical(v: &Value, out: &mut String) {
             }
             out.push(']');
         }
+        // -0.0 and 0.0 are the same physical value: one spelling, one id.
+        Value::Number(n) if n.is_f64() && n.as_f64() == Some(0.0) => out.push_str("0.0"),
         scalar => out.push_str(&scalar.to_string()),
     }
 }
