@@ -92,7 +92,11 @@ impl CommandError {
 fn describe(path: &Path, error: &ManifestError) -> String {
     let file = path.display();
     match error {
-        ManifestError::Syntax { line, column, message } => format!("{file}:{line}:{column}: {message}"),
+        ManifestError::Syntax {
+            line,
+            column,
+            message,
+        } => format!("{file}:{line}:{column}: {message}"),
         ManifestError::Invalid(errors) => {
             let mut s = format!("{file}: {} invalid field(s):", errors.0.len());
             for e in &errors.0 {
@@ -106,7 +110,10 @@ fn describe(path: &Path, error: &ManifestError) -> String {
 }
 
 fn manifest_error(path: &Path) -> impl FnOnce(ManifestError) -> CommandError + '_ {
-    move |error| CommandError::Manifest { path: path.to_path_buf(), error }
+    move |error| CommandError::Manifest {
+        path: path.to_path_buf(),
+        error,
+    }
 }
 
 /// `repose hash FILE`: prints the content id of a valid manifest.
@@ -118,7 +125,12 @@ pub fn hash(path: &Path, kind: KindArg, out: &mut dyn Write) -> Result<(), Comma
 
 /// `repose validate FILE...`: checks every file, reporting each invalid one to
 /// `err` as found and each valid one to `out` (`ok <kind> <id> <file>`).
-pub fn validate(paths: &[PathBuf], kind: KindArg, out: &mut dyn Write, err: &mut dyn Write) -> Result<(), CommandError> {
+pub fn validate(
+    paths: &[PathBuf],
+    kind: KindArg,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<(), CommandError> {
     let mut failed = 0;
     for path in paths {
         match read_document(path, kind.kind()) {
@@ -136,7 +148,10 @@ pub fn validate(paths: &[PathBuf], kind: KindArg, out: &mut dyn Write, err: &mut
         }
     }
     if failed > 0 {
-        return Err(CommandError::ValidationFailed { failed, total: paths.len() });
+        return Err(CommandError::ValidationFailed {
+            failed,
+            total: paths.len(),
+        });
     }
     Ok(())
 }
@@ -151,18 +166,32 @@ pub fn run(store_root: &Path, manifest: &Path, out: &mut dyn Write) -> Result<()
     let (result, outcome) = match store.run_cached(&experiment, |e, _dir| run_experiment(e)) {
         Ok(done) => done,
         Err(RunError::Invalid(errors)) => {
-            return Err(CommandError::Manifest { path: manifest.to_path_buf(), error: ManifestError::Invalid(errors) })
+            return Err(CommandError::Manifest {
+                path: manifest.to_path_buf(),
+                error: ManifestError::Invalid(errors),
+            })
         }
         Err(RunError::Store(e)) => return Err(e.into()),
-        Err(RunError::Runner { error, record_failure }) => {
+        Err(RunError::Runner {
+            error,
+            record_failure,
+        }) => {
             let mut message = error.to_string();
             if let Some(f) = record_failure {
                 message.push_str(&format!(" (and error.json could not be written: {f})"));
             }
-            return Err(CommandError::RunFailed { id, message, error_path: dir.error_path() });
+            return Err(CommandError::RunFailed {
+                id,
+                message,
+                error_path: dir.error_path(),
+            });
         }
         Err(RunError::BadResult(message)) => {
-            return Err(CommandError::RunFailed { id, message, error_path: dir.error_path() })
+            return Err(CommandError::RunFailed {
+                id,
+                message,
+                error_path: dir.error_path(),
+            })
         }
     };
     let how = match outcome {
@@ -171,7 +200,11 @@ pub fn run(store_root: &Path, manifest: &Path, out: &mut dyn Write) -> Result<()
     };
     writeln!(out, "run {id} ({how})")?;
     writeln!(out, "  directory: {}", dir.path().display())?;
-    writeln!(out, "  scene: {}  profile: {}  kernel: {}", result.scene, result.profile, result.kernel)?;
+    writeln!(
+        out,
+        "  scene: {}  profile: {}  kernel: {}",
+        result.scene, result.profile, result.kernel
+    )?;
     if let Some(angle) = result.headline_angle_deg {
         writeln!(out, "  angle of repose: {angle:.2} deg")?;
     }
@@ -201,11 +234,20 @@ pub fn runs_list(store_root: &Path, out: &mut dyn Write) -> Result<(), CommandEr
         "{:<12}  {:<11}  {:<7}  {:>7}  {:>7}  {:>9}  {:<10}  {:>9}",
         "ID", "SCENE", "PROFILE", "e_pp", "mu_pp", "Γ_pp J/m²", "STATUS", "ANGLE deg"
     )?;
-    for RunSummary { id, status, experiment, result } in &runs {
+    for RunSummary {
+        id,
+        status,
+        experiment,
+        result,
+    } in &runs
+    {
         let pp = experiment.as_ref().map(|e| e.contact.particle_particle);
         let scene = experiment.as_ref().map_or("?", |e| e.scene.kind());
         let profile = experiment.as_ref().map_or("?", |e| e.profile.as_str());
-        let angle = result.as_ref().and_then(|r| r.headline_angle_deg).map(|a| format!("{a:.2}"));
+        let angle = result
+            .as_ref()
+            .and_then(|r| r.headline_angle_deg)
+            .map(|a| format!("{a:.2}"));
         writeln!(
             out,
             "{:<12}  {:<11}  {:<7}  {:>7}  {:>7}  {:>9}  {:<10}  {:>9}",
@@ -232,7 +274,10 @@ pub fn runs_show(store_root: &Path, prefix: &str, out: &mut dyn Write) -> Result
     writeln!(out, "status:    {}", store.status(&id))?;
     writeln!(out, "directory: {}", dir.path().display())?;
     let manifest = std::fs::read_to_string(dir.manifest_path()).ok();
-    if let Some(text) = manifest.as_deref().and_then(|t| serde_json::from_str::<serde_json::Value>(t).ok()) {
+    if let Some(text) = manifest
+        .as_deref()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(t).ok())
+    {
         writeln!(out, "manifest:\n{}", pretty(&text))?;
     }
     if let Some(result) = store.load_result(&id)? {

@@ -67,10 +67,16 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
     let mut out = io::stdout().lock();
     match cli.command {
         Command::Hash { file, kind } => commands::hash(&file, kind, &mut out),
-        Command::Validate { files, kind } => commands::validate(&files, kind, &mut out, &mut io::stderr()),
+        Command::Validate { files, kind } => {
+            commands::validate(&files, kind, &mut out, &mut io::stderr())
+        }
         Command::Run { manifest } => commands::run(&cli.store, &manifest, &mut out),
-        Command::Runs { command: RunsCommand::List } => commands::runs_list(&cli.store, &mut out),
-        Command::Runs { command: RunsCommand::Show { prefix } } => commands::runs_show(&cli.store, &prefix, &mut out),
+        Command::Runs {
+            command: RunsCommand::List,
+        } => commands::runs_list(&cli.store, &mut out),
+        Command::Runs {
+            command: RunsCommand::Show { prefix },
+        } => commands::runs_show(&cli.store, &prefix, &mut out),
     }
 }
 

@@ -15,11 +15,29 @@ fn any_json() -> impl Strategy<Value = Value> {
         any::<bool>().prop_map(Value::Bool),
         any::<i64>().prop_map(|i| json!(i)),
         any::<u64>().prop_map(|u| json!(u)),
-        any::<f64>().prop_filter("finite", |f| f.is_finite()).prop_map(|f| json!(f)),
-        prop_oneof![Just(-1.0), Just(0.0), Just(1e-300), Just(1e300), Just(0.5), Just(1.0)].prop_map(|f: f64| json!(f)),
+        any::<f64>()
+            .prop_filter("finite", |f| f.is_finite())
+            .prop_map(|f| json!(f)),
+        prop_oneof![
+            Just(-1.0),
+            Just(0.0),
+            Just(1e-300),
+            Just(1e300),
+            Just(0.5),
+            Just(1.0)
+        ]
+        .prop_map(|f: f64| json!(f)),
         "[a-z_*.]{0,12}".prop_map(Value::String),
-        prop_oneof![Just("rigid"), Just("pair"), Just("drum"), Just("jkr"), Just("hertz"), Just("lhs"), Just("smoke")]
-            .prop_map(|s| json!(s)),
+        prop_oneof![
+            Just("rigid"),
+            Just("pair"),
+            Just("drum"),
+            Just("jkr"),
+            Just("hertz"),
+            Just("lhs"),
+            Just("smoke")
+        ]
+        .prop_map(|s| json!(s)),
     ];
     leaf.prop_recursive(4, 64, 8, |inner| {
         prop_oneof![
@@ -44,8 +62,13 @@ fn pointers(v: &Value, pointer: String, out: &mut Vec<String>) {
         out.push(pointer.clone());
     }
     match v {
-        Value::Object(map) => map.iter().for_each(|(k, v)| pointers(v, format!("{pointer}/{k}"), out)),
-        Value::Array(items) => items.iter().enumerate().for_each(|(i, v)| pointers(v, format!("{pointer}/{i}"), out)),
+        Value::Object(map) => map
+            .iter()
+            .for_each(|(k, v)| pointers(v, format!("{pointer}/{k}"), out)),
+        Value::Array(items) => items
+            .iter()
+            .enumerate()
+            .for_each(|(i, v)| pointers(v, format!("{pointer}/{i}"), out)),
         _ => {}
     }
 }

@@ -27,7 +27,9 @@ impl ContentId {
 
     /// Accepts a full 64-character lowercase hex id (e.g. a run directory name).
     pub fn parse(s: &str) -> Option<ContentId> {
-        let ok = s.len() == 64 && s.bytes().all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b));
+        let ok = s.len() == 64
+            && s.bytes()
+                .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b));
         ok.then(|| ContentId(s.to_string()))
     }
 

@@ -19,8 +19,9 @@ use serde_json::Value;
 
 pub use canonical::{canonical_json, content_id, ContentId};
 pub use experiment::{
-    Contact, ContactModel, Experiment, Material, NormalModel, PairParams, ParticleMaterial, Profile,
-    RollingModel, Seeds, SizeDistribution, TimeStep, WallMaterial, WallStiffness, PAIR_PARAM_FIELDS,
+    Contact, ContactModel, Experiment, Material, NormalModel, PairParams, ParticleMaterial,
+    Profile, RollingModel, Seeds, SizeDistribution, TimeStep, WallMaterial, WallStiffness,
+    PAIR_PARAM_FIELDS,
 };
 pub use scene::{PairMode, PairScene, Partner, Scene};
 pub use study::{Design, DesignKind, ParameterRange, Study, TargetScene};
@@ -79,7 +80,11 @@ impl From<serde_json::Error> for ManifestError {
         let full = e.to_string();
         let suffix = format!(" at line {line} column {column}");
         let message = full.strip_suffix(&suffix).unwrap_or(&full).to_string();
-        ManifestError::Syntax { line, column, message }
+        ManifestError::Syntax {
+            line,
+            column,
+            message,
+        }
     }
 }
 
@@ -176,7 +181,10 @@ pub fn parse_document(text: &str, kind: Option<DocumentKind>) -> Result<Document
 fn detect_kind(text: &str) -> Result<DocumentKind, ManifestError> {
     let value: Value = serde_json::from_str(text)?;
     let object = value.as_object().ok_or(ManifestError::UnknownKind)?;
-    match (object.contains_key("scene"), object.contains_key("calibration")) {
+    match (
+        object.contains_key("scene"),
+        object.contains_key("calibration"),
+    ) {
         (true, false) => Ok(DocumentKind::Experiment),
         (false, true) => Ok(DocumentKind::Study),
         _ => Err(ManifestError::UnknownKind),
@@ -184,7 +192,10 @@ fn detect_kind(text: &str) -> Result<DocumentKind, ManifestError> {
 }
 
 fn read_text(path: &Path) -> Result<String, ManifestError> {
-    std::fs::read_to_string(path).map_err(|source| ManifestError::Io { path: path.to_path_buf(), source })
+    std::fs::read_to_string(path).map_err(|source| ManifestError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Reads, parses and validates a manifest file (see [`parse_document`]).

@@ -23,5 +23,7 @@ pub enum SceneError {
 /// [`SceneError::NotYetSimulated`] (the `pair` scene is implemented next, the lab
 /// scenes in issue 4). The store records the failure in error.json.
 pub fn run_experiment(experiment: &Experiment) -> Result<RunResult, SceneError> {
-    Err(SceneError::NotYetSimulated { kind: experiment.scene.kind() })
+    Err(SceneError::NotYetSimulated {
+        kind: experiment.scene.kind(),
+    })
 }

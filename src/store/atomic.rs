@@ -30,9 +30,12 @@ pub(crate) fn write_atomic_with(
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let name = path
-        .file_name()
-        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "atomic write needs a file name"))?;
+    let name = path.file_name().ok_or_else(|| {
+        io::Error::new(
+            io::ErrorKind::InvalidInput,
+            "atomic write needs a file name",
+        )
+    })?;
     let temp = dir.join(format!(
         "{TEMP_PREFIX}{}-{}-{}",
         name.to_string_lossy(),

@@ -40,7 +40,11 @@ pub struct InputRef {
 impl InputRef {
     /// A reference to a content-addressed manifest (run or study) by id.
     pub fn id(role: impl Into<String>, id: &ContentId) -> InputRef {
-        InputRef { role: role.into(), id_or_path: id.to_string(), sha256: id.to_string() }
+        InputRef {
+            role: role.into(),
+            id_or_path: id.to_string(),
+            sha256: id.to_string(),
+        }
     }
 
     /// A reference to a file, hashing its current bytes.
@@ -74,7 +78,10 @@ impl Lineage {
 
     /// The lineage file of an output: `<output>.lineage.json` beside it.
     pub fn path_beside(output: &Path) -> PathBuf {
-        let mut name = output.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+        let mut name = output
+            .file_name()
+            .map(|n| n.to_os_string())
+            .unwrap_or_default();
         name.push(".lineage.json");
         output.with_file_name(name)
     }
@@ -82,8 +89,10 @@ impl Lineage {
     /// Writes this record atomically beside `output`; returns the path written.
     pub fn write_beside(&self, output: &Path) -> Result<PathBuf, StoreError> {
         let path = Self::path_beside(output);
-        let mut bytes = serde_json::to_vec_pretty(self)
-            .map_err(|e| StoreError::Corrupt { path: path.clone(), message: e.to_string() })?;
+        let mut bytes = serde_json::to_vec_pretty(self).map_err(|e| StoreError::Corrupt {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
         bytes.push(b'\n');
         super::write_atomic(&path, &bytes).map_err(StoreError::io(&path))?;
         Ok(path)

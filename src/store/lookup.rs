@@ -53,15 +53,30 @@ impl Store {
     /// The one run id starting with `prefix`; an error names every candidate when
     /// the prefix is ambiguous.
     pub fn resolve_prefix(&self, prefix: &str) -> Result<ContentId, StoreError> {
-        let hex = !prefix.is_empty() && prefix.bytes().all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b));
+        let hex = !prefix.is_empty()
+            && prefix
+                .bytes()
+                .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b));
         if !hex || prefix.len() > 64 {
-            return Err(StoreError::BadPrefix { prefix: prefix.to_string() });
+            return Err(StoreError::BadPrefix {
+                prefix: prefix.to_string(),
+            });
         }
-        let mut matches: Vec<ContentId> = self.ids()?.into_iter().filter(|id| id.as_str().starts_with(prefix)).collect();
+        let mut matches: Vec<ContentId> = self
+            .ids()?
+            .into_iter()
+            .filter(|id| id.as_str().starts_with(prefix))
+            .collect();
         match matches.len() {
-            0 => Err(StoreError::NoMatch { prefix: prefix.to_string(), root: self.root().to_path_buf() }),
+            0 => Err(StoreError::NoMatch {
+                prefix: prefix.to_string(),
+                root: self.root().to_path_buf(),
+            }),
             1 => Ok(matches.remove(0)),
-            _ => Err(StoreError::Ambiguous { prefix: prefix.to_string(), candidates: matches }),
+            _ => Err(StoreError::Ambiguous {
+                prefix: prefix.to_string(),
+                candidates: matches,
+            }),
         }
     }
 }

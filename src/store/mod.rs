@@ -30,7 +30,9 @@ pub use lineage::{InputRef, Lineage};
 pub use lookup::RunSummary;
 pub use result::{ErrorRecord, RunResult, TimingRecord, Trace};
 
-use crate::manifest::{canonical_json, validate_experiment, ContentId, Experiment, ValidationErrors};
+use crate::manifest::{
+    canonical_json, validate_experiment, ContentId, Experiment, ValidationErrors,
+};
 
 /// File names inside a run directory.
 pub const MANIFEST_FILE: &str = "manifest.json";
@@ -105,11 +107,19 @@ pub enum StoreError {
 impl StoreError {
     /// True when the user's input (a prefix) is at fault rather than the store.
     pub fn is_invalid_input(&self) -> bool {
-        matches!(self, StoreError::BadPrefix { .. } | StoreError::NoMatch { .. } | StoreError::Ambiguous { .. })
+        matches!(
+            self,
+            StoreError::BadPrefix { .. }
+                | StoreError::NoMatch { .. }
+                | StoreError::Ambiguous { .. }
+        )
     }
 
     fn io(path: &Path) -> impl FnOnce(io::Error) -> StoreError + '_ {
-        move |source| StoreError::Io { path: path.to_path_buf(), source }
+        move |source| StoreError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
     }
 }
 
@@ -243,7 +253,10 @@ impl Store {
 
     /// The directory of run `id` (whether or not it exists).
     pub fn run_dir(&self, id: &ContentId) -> RunDir {
-        RunDir { id: id.clone(), path: self.root.join(id.as_str()) }
+        RunDir {
+            id: id.clone(),
+            path: self.root.join(id.as_str()),
+        }
     }
 
     /// The state of run `id`: complete exactly when result.json exists.
@@ -284,7 +297,10 @@ impl Store {
     /// Reads and parses a JSON file of the store.
     fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, StoreError> {
         let bytes = std::fs::read(path).map_err(StoreError::io(path))?;
-        serde_json::from_slice(&bytes).map_err(|e| StoreError::Corrupt { path: path.to_path_buf(), message: e.to_string() })
+        serde_json::from_slice(&bytes).map_err(|e| StoreError::Corrupt {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
     }
 
     /// The stored result of run `id`, if it is complete.
@@ -320,7 +336,11 @@ impl Store {
     /// (where it may write run.mcap), and its result is stored (timing.json first,
     /// result.json last, both atomic). If the runner fails, error.json records why
     /// and no result is written. The experiment is validated first.
-    pub fn run_cached<E, F>(&self, experiment: &Experiment, runner: F) -> Result<(RunResult, CacheOutcome), RunError<E>>
+    pub fn run_cached<E, F>(
+        &self,
+        experiment: &Experiment,
+        runner: F,
+    ) -> Result<(RunResult, CacheOutcome), RunError<E>>
     where
         E: std::error::Error + 'static,
         F: FnOnce(&Experiment, &RunDir) -> Result<RunResult, E>,
@@ -341,7 +361,11 @@ impl Store {
         match outcome {
             Ok(result) => {
                 if result.id != id {
-                    return Err(StoreError::ResultMismatch { expected: id, found: result.id }.into());
+                    return Err(StoreError::ResultMismatch {
+                        expected: id,
+                        found: result.id,
+                    }
+                    .into());
                 }
                 if let Some(defect) = result.defect() {
                     self.record_error(&id, &defect, Vec::new())?;
@@ -359,13 +383,25 @@ impl Store {
                     source = s.source();
                 }
                 let record_failure = self.record_error(&id, &error.to_string(), causes).err();
-                Err(RunError::Runner { error, record_failure })
+                Err(RunError::Runner {
+                    error,
+                    record_failure,
+                })
             }
         }
     }
 
-    fn record_error(&self, id: &ContentId, error: &str, causes: Vec<String>) -> Result<(), StoreError> {
-        let record = ErrorRecord { id: id.clone(), error: error.to_string(), causes };
+    fn record_error(
+        &self,
+        id: &ContentId,
+        error: &str,
+        causes: Vec<String>,
+    ) -> Result<(), StoreError> {
+        let record = ErrorRecord {
+            id: id.clone(),
+            error: error.to_string(),
+            causes,
+        };
         self.write_json(&self.run_dir(id).error_path(), &record)
     }
 }

@@ -9,7 +9,10 @@ use super::*;
 use crate::manifest::parse_experiment;
 
 fn experiment() -> Experiment {
-    parse_experiment(include_str!("../../experiments/validation/pair_hertz_rigid_wall.json")).expect("valid example")
+    parse_experiment(include_str!(
+        "../../experiments/validation/pair_hertz_rigid_wall.json"
+    ))
+    .expect("valid example")
 }
 
 fn result_for(e: &Experiment) -> RunResult {
@@ -53,7 +56,10 @@ fn identical_manifests_give_byte_identical_results() {
     let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     let e = experiment();
     for dir in [a.path(), b.path()] {
-        Store::open(dir).unwrap().run_cached(&e, |e, _| Ok::<_, Never>(result_for(e))).unwrap();
+        Store::open(dir)
+            .unwrap()
+            .run_cached(&e, |e, _| Ok::<_, Never>(result_for(e)))
+            .unwrap();
     }
     let read = |d: &Path| std::fs::read(d.join(e.id().as_str()).join(RESULT_FILE)).unwrap();
     assert_eq!(read(a.path()), read(b.path()));
@@ -64,18 +70,31 @@ fn a_failed_run_records_error_json_and_no_result_then_a_retry_completes() {
     let tmp = tempfile::tempdir().unwrap();
     let store = Store::open(tmp.path()).unwrap();
     let e = experiment();
-    let err = store.run_cached(&e, |_, _| Err::<RunResult, _>(Boom)).unwrap_err();
-    assert!(matches!(err, RunError::Runner { record_failure: None, .. }));
+    let err = store
+        .run_cached(&e, |_, _| Err::<RunResult, _>(Boom))
+        .unwrap_err();
+    assert!(matches!(
+        err,
+        RunError::Runner {
+            record_failure: None,
+            ..
+        }
+    ));
     let dir = store.run_dir(&e.id());
     assert_eq!(store.status(&e.id()), RunStatus::Failed);
     assert!(!dir.result_path().exists());
     let record = store.load_error(&e.id()).unwrap().unwrap();
     assert_eq!(record.error, "the test runner failed");
 
-    let (_, outcome) = store.run_cached(&e, |e, _| Ok::<_, Never>(result_for(e))).unwrap();
+    let (_, outcome) = store
+        .run_cached(&e, |e, _| Ok::<_, Never>(result_for(e)))
+        .unwrap();
     assert_eq!(outcome, CacheOutcome::Computed);
     assert_eq!(store.status(&e.id()), RunStatus::Complete);
-    assert!(!dir.error_path().exists(), "a completed retry leaves no stale error.json");
+    assert!(
+        !dir.error_path().exists(),
+        "a completed retry leaves no stale error.json"
+    );
 }
 
 #[test]
@@ -84,14 +103,21 @@ fn a_write_interrupted_before_rename_leaves_no_complete_looking_run() {
     let mut store = Store::open(tmp.path()).unwrap();
     store.fault = Some(Box::new(|temp: &Path| {
         if temp.to_string_lossy().contains(RESULT_FILE) {
-            Err(io::Error::other("injected crash between temp write and rename"))
+            Err(io::Error::other(
+                "injected crash between temp write and rename",
+            ))
         } else {
             Ok(())
         }
     }));
     let e = experiment();
-    let err = store.run_cached(&e, |e, _| Ok::<_, Never>(result_for(e))).unwrap_err();
-    assert!(matches!(err, RunError::Store(StoreError::Io { .. })), "{err}");
+    let err = store
+        .run_cached(&e, |e, _| Ok::<_, Never>(result_for(e)))
+        .unwrap_err();
+    assert!(
+        matches!(err, RunError::Store(StoreError::Io { .. })),
+        "{err}"
+    );
     let dir = store.run_dir(&e.id());
     assert_eq!(store.status(&e.id()), RunStatus::Incomplete);
     assert!(!dir.result_path().exists());
@@ -105,7 +131,9 @@ fn a_write_interrupted_before_rename_leaves_no_complete_looking_run() {
 
     // The next attempt (no fault) computes instead of trusting the partial run.
     store.fault = None;
-    let (_, outcome) = store.run_cached(&e, |e, _| Ok::<_, Never>(result_for(e))).unwrap();
+    let (_, outcome) = store
+        .run_cached(&e, |e, _| Ok::<_, Never>(result_for(e)))
+        .unwrap();
     assert_eq!(outcome, CacheOutcome::Computed);
 }
 
@@ -116,7 +144,11 @@ fn a_temp_file_left_by_a_killed_process_does_not_count_as_a_result() {
     let e = experiment();
     let dir = store.run_dir(&e.id());
     std::fs::create_dir_all(dir.path()).unwrap();
-    std::fs::write(dir.path().join(format!("{TEMP_PREFIX}{RESULT_FILE}-1-0")), b"{\"partial\":").unwrap();
+    std::fs::write(
+        dir.path().join(format!("{TEMP_PREFIX}{RESULT_FILE}-1-0")),
+        b"{\"partial\":",
+    )
+    .unwrap();
     assert_eq!(store.status(&e.id()), RunStatus::Incomplete);
     let summaries = store.list().unwrap();
     assert_eq!(summaries.len(), 1);
@@ -135,7 +167,10 @@ fn a_result_with_a_non_finite_number_is_refused_and_recorded() {
             Ok::<_, Never>(r)
         })
         .unwrap_err();
-    assert!(matches!(err, RunError::BadResult(ref m) if m.contains("peak_force_n")), "{err}");
+    assert!(
+        matches!(err, RunError::BadResult(ref m) if m.contains("peak_force_n")),
+        "{err}"
+    );
     assert_eq!(store.status(&e.id()), RunStatus::Failed);
 }
 
@@ -146,8 +181,13 @@ fn a_result_for_another_experiment_is_refused() {
     let e = experiment();
     let mut other = e.clone();
     other.seeds.packing_seed += 1;
-    let err = store.run_cached(&e, |_, _| Ok::<_, Never>(result_for(&other))).unwrap_err();
-    assert!(matches!(err, RunError::Store(StoreError::ResultMismatch { .. })), "{err}");
+    let err = store
+        .run_cached(&e, |_, _| Ok::<_, Never>(result_for(&other)))
+        .unwrap_err();
+    assert!(
+        matches!(err, RunError::Store(StoreError::ResultMismatch { .. })),
+        "{err}"
+    );
     assert_ne!(store.status(&e.id()), RunStatus::Complete);
 }
 
@@ -157,7 +197,9 @@ fn an_invalid_experiment_is_refused_before_anything_is_written() {
     let store = Store::open(tmp.path()).unwrap();
     let mut e = experiment();
     e.contact.particle_particle.restitution = 1.3;
-    let err = store.run_cached(&e, |e, _| Ok::<_, Never>(result_for(e))).unwrap_err();
+    let err = store
+        .run_cached(&e, |e, _| Ok::<_, Never>(result_for(e)))
+        .unwrap_err();
     assert!(matches!(err, RunError::Invalid(_)));
     assert_eq!(store.status(&e.id()), RunStatus::Missing);
 }
@@ -180,9 +222,18 @@ fn prefixes_resolve_uniquely_or_name_every_candidate() {
         }
         other => panic!("expected ambiguity, got {other}"),
     }
-    assert!(matches!(store.resolve_prefix("ff"), Err(StoreError::NoMatch { .. })));
-    assert!(matches!(store.resolve_prefix("AB"), Err(StoreError::BadPrefix { .. })));
-    assert!(matches!(store.resolve_prefix(""), Err(StoreError::BadPrefix { .. })));
+    assert!(matches!(
+        store.resolve_prefix("ff"),
+        Err(StoreError::NoMatch { .. })
+    ));
+    assert!(matches!(
+        store.resolve_prefix("AB"),
+        Err(StoreError::BadPrefix { .. })
+    ));
+    assert!(matches!(
+        store.resolve_prefix(""),
+        Err(StoreError::BadPrefix { .. })
+    ));
 }
 
 #[test]
@@ -201,5 +252,8 @@ fn lineage_is_written_beside_its_output_and_names_its_inputs() {
     let back = Lineage::read_beside(&output).unwrap();
     assert_eq!(back, lineage);
     assert_eq!(back.repose_version, env!("CARGO_PKG_VERSION"));
-    assert_eq!(back.inputs[1].sha256, hex::encode(<sha2::Sha256 as sha2::Digest>::digest(b"a,b\n1,2\n")));
+    assert_eq!(
+        back.inputs[1].sha256,
+        hex::encode(<sha2::Sha256 as sha2::Digest>::digest(b"a,b\n1,2\n"))
+    );
 }

@@ -41,7 +41,9 @@ pub fn study() -> Value {
 /// key is inserted), or removed when `new` is `None`.
 pub fn edit(mut v: Value, pointer: &str, new: Option<Value>) -> Value {
     let (parent, key) = pointer.rsplit_once('/').expect("pointer has a /");
-    let target = v.pointer_mut(parent).unwrap_or_else(|| panic!("no parent {parent}"));
+    let target = v
+        .pointer_mut(parent)
+        .unwrap_or_else(|| panic!("no parent {parent}"));
     match (target, new) {
         (Value::Object(map), Some(new)) => {
             map.insert(key.to_string(), new);

@@ -111,23 +111,46 @@ pub(crate) struct Interval {
 impl Interval {
     /// `(lo, hi]`.
     pub(crate) fn open_closed(lo: f64, hi: f64) -> Interval {
-        Interval { lo, lo_closed: false, hi, hi_closed: true }
+        Interval {
+            lo,
+            lo_closed: false,
+            hi,
+            hi_closed: true,
+        }
     }
 
     /// `(lo, hi)`.
     pub(crate) fn open(lo: f64, hi: f64) -> Interval {
-        Interval { lo, lo_closed: false, hi, hi_closed: false }
+        Interval {
+            lo,
+            lo_closed: false,
+            hi,
+            hi_closed: false,
+        }
     }
 
     /// `[lo, hi)`.
     pub(crate) fn closed_open(lo: f64, hi: f64) -> Interval {
-        Interval { lo, lo_closed: true, hi, hi_closed: false }
+        Interval {
+            lo,
+            lo_closed: true,
+            hi,
+            hi_closed: false,
+        }
     }
 
     /// Whether `v` (finite) lies inside.
     pub(crate) fn contains(&self, v: f64) -> bool {
-        let above = if self.lo_closed { v >= self.lo } else { v > self.lo };
-        let below = if self.hi_closed { v <= self.hi } else { v < self.hi };
+        let above = if self.lo_closed {
+            v >= self.lo
+        } else {
+            v > self.lo
+        };
+        let below = if self.hi_closed {
+            v <= self.hi
+        } else {
+            v < self.hi
+        };
         v.is_finite() && above && below
     }
 }

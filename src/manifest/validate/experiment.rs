@@ -12,7 +12,12 @@ use crate::manifest::experiment::{
 use crate::manifest::{PHYSICS_VERSION, SCHEMA_VERSION};
 
 /// Poisson ratios allowed for isotropic elastic materials.
-const POISSON: Interval = Interval { lo: -1.0, lo_closed: false, hi: 0.5, hi_closed: true };
+const POISSON: Interval = Interval {
+    lo: -1.0,
+    lo_closed: false,
+    hi: 0.5,
+    hi_closed: true,
+};
 
 /// Checks every field of an experiment.
 pub(crate) fn check_experiment(c: &mut Checker, e: &Experiment) {
@@ -28,11 +33,21 @@ pub(crate) fn check_experiment(c: &mut Checker, e: &Experiment) {
         );
     }
     check_material(c, "material", &e.material);
-    check_pair_params(c, "contact.particle_particle", &e.contact.particle_particle, &e.contact.model, "contact.model");
+    check_pair_params(
+        c,
+        "contact.particle_particle",
+        &e.contact.particle_particle,
+        &e.contact.model,
+        "contact.model",
+    );
     for (wall, params) in &e.contact.particle_wall {
         let path = join("contact.particle_wall", wall);
         if !e.material.walls.contains_key(wall) {
-            c.fail(&path, string(wall), "must name a wall material defined in material.walls");
+            c.fail(
+                &path,
+                string(wall),
+                "must name a wall material defined in material.walls",
+            );
         }
         check_pair_params(c, &path, params, &e.contact.model, "contact.model");
     }
@@ -44,7 +59,11 @@ pub(crate) fn check_experiment(c: &mut Checker, e: &Experiment) {
 /// Requires the schema version this build reads.
 pub(crate) fn check_schema_version(c: &mut Checker, path: &str, v: u32) {
     if v != SCHEMA_VERSION {
-        c.fail(path, v.to_string(), format!("must be {SCHEMA_VERSION} (the schema this build reads)"));
+        c.fail(
+            path,
+            v.to_string(),
+            format!("must be {SCHEMA_VERSION} (the schema this build reads)"),
+        );
     }
 }
 
@@ -70,18 +89,31 @@ pub(crate) fn check_material(c: &mut Checker, path: &str, m: &Material) {
 /// Wall material names become path segments and parameter addresses, so they are
 /// restricted to letters, digits, `_` and `-`.
 fn check_wall_name(c: &mut Checker, path: &str, name: &str) {
-    let ok = !name.is_empty() && name.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '_' || ch == '-');
+    let ok = !name.is_empty()
+        && name
+            .chars()
+            .all(|ch| ch.is_ascii_alphanumeric() || ch == '_' || ch == '-');
     if !ok {
-        c.fail(path, string(name), "wall material names must be non-empty and use only letters, digits, '_' and '-'");
+        c.fail(
+            path,
+            string(name),
+            "wall material names must be non-empty and use only letters, digits, '_' and '-'",
+        );
     }
 }
 
 fn check_size(c: &mut Checker, path: &str, size: &SizeDistribution) {
     match size {
-        SizeDistribution::Monodisperse { radius_m } => c.positive(&join(path, "radius_m"), *radius_m),
+        SizeDistribution::Monodisperse { radius_m } => {
+            c.positive(&join(path, "radius_m"), *radius_m)
+        }
         SizeDistribution::List { radii_m, weights } => {
             if radii_m.is_empty() {
-                c.fail(&join(path, "radii_m"), "[]".into(), "must list at least one radius");
+                c.fail(
+                    &join(path, "radii_m"),
+                    "[]".into(),
+                    "must list at least one radius",
+                );
             }
             if radii_m.len() != weights.len() {
                 c.fail(
@@ -97,15 +129,27 @@ fn check_size(c: &mut Checker, path: &str, size: &SizeDistribution) {
                 c.positive(&format!("{path}.weights[{i}]"), *w);
             }
         }
-        SizeDistribution::D10D50D90 { d10_m, d50_m, d90_m } => {
+        SizeDistribution::D10D50D90 {
+            d10_m,
+            d50_m,
+            d90_m,
+        } => {
             c.positive(&join(path, "d10_m"), *d10_m);
             c.positive(&join(path, "d50_m"), *d50_m);
             c.positive(&join(path, "d90_m"), *d90_m);
             if d50_m <= d10_m {
-                c.fail(&join(path, "d50_m"), number(*d50_m), format!("must be > d10_m = {}", number(*d10_m)));
+                c.fail(
+                    &join(path, "d50_m"),
+                    number(*d50_m),
+                    format!("must be > d10_m = {}", number(*d10_m)),
+                );
             }
             if d90_m <= d50_m {
-                c.fail(&join(path, "d90_m"), number(*d90_m), format!("must be > d50_m = {}", number(*d50_m)));
+                c.fail(
+                    &join(path, "d90_m"),
+                    number(*d90_m),
+                    format!("must be > d50_m = {}", number(*d50_m)),
+                );
             }
         }
     }
@@ -113,26 +157,75 @@ fn check_size(c: &mut Checker, path: &str, size: &SizeDistribution) {
 
 /// Checks one pair-parameter set against the contact model (`model_path` names the
 /// model in the document, for the consistency messages).
-pub(crate) fn check_pair_params(c: &mut Checker, path: &str, p: &PairParams, model: &ContactModel, model_path: &str) {
-    check_pair_field(c, &join(path, "restitution"), "restitution", p.restitution, model, model_path);
-    check_pair_field(c, &join(path, "static_friction"), "static_friction", p.static_friction, model, model_path);
-    check_pair_field(c, &join(path, "rolling_friction"), "rolling_friction", p.rolling_friction, model, model_path);
-    check_pair_field(c, &join(path, "surface_energy_j_m2"), "surface_energy_j_m2", p.surface_energy_j_m2, model, model_path);
+pub(crate) fn check_pair_params(
+    c: &mut Checker,
+    path: &str,
+    p: &PairParams,
+    model: &ContactModel,
+    model_path: &str,
+) {
+    check_pair_field(
+        c,
+        &join(path, "restitution"),
+        "restitution",
+        p.restitution,
+        model,
+        model_path,
+    );
+    check_pair_field(
+        c,
+        &join(path, "static_friction"),
+        "static_friction",
+        p.static_friction,
+        model,
+        model_path,
+    );
+    check_pair_field(
+        c,
+        &join(path, "rolling_friction"),
+        "rolling_friction",
+        p.rolling_friction,
+        model,
+        model_path,
+    );
+    check_pair_field(
+        c,
+        &join(path, "surface_energy_j_m2"),
+        "surface_energy_j_m2",
+        p.surface_energy_j_m2,
+        model,
+        model_path,
+    );
 }
 
 /// Checks one pair-parameter value: restitution in (0, 1], the others ≥ 0; a
 /// parameter of a switched-off law must be 0 so that equal physics has one id.
-pub(crate) fn check_pair_field(c: &mut Checker, path: &str, field: &str, v: f64, model: &ContactModel, model_path: &str) {
+pub(crate) fn check_pair_field(
+    c: &mut Checker,
+    path: &str,
+    field: &str,
+    v: f64,
+    model: &ContactModel,
+    model_path: &str,
+) {
     if field == "restitution" {
         c.within(path, v, Interval::open_closed(0.0, 1.0));
         return;
     }
     c.non_negative(path, v);
     if field == "surface_energy_j_m2" && model.normal == NormalModel::Hertz && v != 0.0 {
-        c.fail(path, number(v), format!("must be 0 when {model_path}.normal = \"hertz\" (Hertz has no surface energy)"));
+        c.fail(
+            path,
+            number(v),
+            format!("must be 0 when {model_path}.normal = \"hertz\" (Hertz has no surface energy)"),
+        );
     }
     if field == "rolling_friction" && model.rolling == RollingModel::None && v != 0.0 {
-        c.fail(path, number(v), format!("must be 0 when {model_path}.rolling = \"none\""));
+        c.fail(
+            path,
+            number(v),
+            format!("must be 0 when {model_path}.rolling = \"none\""),
+        );
     }
 }
 
@@ -156,6 +249,13 @@ pub(crate) fn check_scene_walls_have_params(
 
 /// Checks the time-step rule.
 pub(crate) fn check_time_step(c: &mut Checker, path: &str, t: &TimeStep) {
-    c.within(&join(path, "rayleigh_fraction"), t.rayleigh_fraction, Interval::open_closed(0.0, 0.5));
-    c.positive(&join(path, "design_impact_speed_m_s"), t.design_impact_speed_m_s);
+    c.within(
+        &join(path, "rayleigh_fraction"),
+        t.rayleigh_fraction,
+        Interval::open_closed(0.0, 0.5),
+    );
+    c.positive(
+        &join(path, "design_impact_speed_m_s"),
+        t.design_impact_speed_m_s,
+    );
 }

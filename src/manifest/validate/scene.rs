@@ -15,7 +15,11 @@ pub const PACKING_LIMIT: f64 = 0.64;
 pub(crate) fn check_scene(c: &mut Checker, path: &str, scene: &Scene, material: &Material) {
     for (field, name) in scene.wall_materials() {
         if !material.walls.contains_key(name) {
-            c.fail(&join(path, field), string(name), "must name a wall material defined in material.walls");
+            c.fail(
+                &join(path, field),
+                string(name),
+                "must name a wall material defined in material.walls",
+            );
         }
     }
     match scene {
@@ -29,9 +33,20 @@ pub(crate) fn check_scene(c: &mut Checker, path: &str, scene: &Scene, material: 
 }
 
 /// Requires `small < large` (both already checked positive), naming `small`.
-fn smaller(c: &mut Checker, path: &str, small_field: &str, small: f64, large_field: &str, large: f64) {
+fn smaller(
+    c: &mut Checker,
+    path: &str,
+    small_field: &str,
+    small: f64,
+    large_field: &str,
+    large: f64,
+) {
     if small.is_finite() && large.is_finite() && small >= large {
-        c.fail(&join(path, small_field), number(small), format!("must be < {large_field} = {}", number(large)));
+        c.fail(
+            &join(path, small_field),
+            number(small),
+            format!("must be < {large_field} = {}", number(large)),
+        );
     }
 }
 
@@ -42,34 +57,67 @@ fn check_pair(c: &mut Checker, path: &str, s: &PairScene) {
     }
     c.non_negative(&join(path, "normal_velocity_m_s"), s.normal_velocity_m_s);
     if s.mode == PairMode::Impact && s.normal_velocity_m_s == 0.0 {
-        c.fail(&join(path, "normal_velocity_m_s"), number(0.0), "must be > 0 in impact mode (the bodies never meet)");
+        c.fail(
+            &join(path, "normal_velocity_m_s"),
+            number(0.0),
+            "must be > 0 in impact mode (the bodies never meet)",
+        );
     }
-    c.non_negative(&join(path, "tangential_velocity_m_s"), s.tangential_velocity_m_s);
+    c.non_negative(
+        &join(path, "tangential_velocity_m_s"),
+        s.tangential_velocity_m_s,
+    );
     for (i, w) in s.angular_velocity_rad_s.iter().enumerate() {
-        c.finite(&format!("{}[{i}]", join(path, "angular_velocity_rad_s")), *w);
+        c.finite(
+            &format!("{}[{i}]", join(path, "angular_velocity_rad_s")),
+            *w,
+        );
     }
     match s.pull_speed_m_s {
         Some(v) => c.positive(&join(path, "pull_speed_m_s"), v),
-        None if s.mode == PairMode::Separation => {
-            c.fail(&join(path, "pull_speed_m_s"), "(absent)".into(), "is required in separation mode (a speed > 0 in m/s)")
-        }
+        None if s.mode == PairMode::Separation => c.fail(
+            &join(path, "pull_speed_m_s"),
+            "(absent)".into(),
+            "is required in separation mode (a speed > 0 in m/s)",
+        ),
         None => {}
     }
     c.positive(&join(path, "max_time_s"), s.max_time_s);
 }
 
 fn check_funnel(c: &mut Checker, path: &str, s: &FunnelPileScene) {
-    c.positive(&join(path, "funnel_top_diameter_m"), s.funnel_top_diameter_m);
-    c.positive(&join(path, "funnel_outlet_diameter_m"), s.funnel_outlet_diameter_m);
-    smaller(c, path, "funnel_outlet_diameter_m", s.funnel_outlet_diameter_m, "funnel_top_diameter_m", s.funnel_top_diameter_m);
+    c.positive(
+        &join(path, "funnel_top_diameter_m"),
+        s.funnel_top_diameter_m,
+    );
+    c.positive(
+        &join(path, "funnel_outlet_diameter_m"),
+        s.funnel_outlet_diameter_m,
+    );
+    smaller(
+        c,
+        path,
+        "funnel_outlet_diameter_m",
+        s.funnel_outlet_diameter_m,
+        "funnel_top_diameter_m",
+        s.funnel_top_diameter_m,
+    );
     c.positive(&join(path, "funnel_height_m"), s.funnel_height_m);
-    c.within(&join(path, "outlet_tilt_deg"), s.outlet_tilt_deg, Interval::closed_open(0.0, 90.0));
+    c.within(
+        &join(path, "outlet_tilt_deg"),
+        s.outlet_tilt_deg,
+        Interval::closed_open(0.0, 90.0),
+    );
     c.positive(&join(path, "outlet_height_m"), s.outlet_height_m);
     c.positive(&join(path, "platform_diameter_m"), s.platform_diameter_m);
     if let Some(rpm) = s.brush_rpm {
         c.positive(&join(path, "brush_rpm"), rpm);
     }
-    c.within(&join(path, "fill_fraction"), s.fill_fraction, Interval::open(0.0, PACKING_LIMIT));
+    c.within(
+        &join(path, "fill_fraction"),
+        s.fill_fraction,
+        Interval::open(0.0, PACKING_LIMIT),
+    );
     c.positive(&join(path, "fill_time_s"), s.fill_time_s);
     c.non_negative(&join(path, "standing_time_s"), s.standing_time_s);
     c.positive(&join(path, "total_time_s"), s.total_time_s);
@@ -109,7 +157,11 @@ fn check_baffle(c: &mut Checker, path: &str, s: &BaffleLiftScene, density_kg_m3:
 fn check_drum(c: &mut Checker, path: &str, s: &DrumScene) {
     c.positive(&join(path, "inner_diameter_m"), s.inner_diameter_m);
     c.positive(&join(path, "length_m"), s.length_m);
-    c.within(&join(path, "fill_fraction"), s.fill_fraction, Interval::open(0.0, 1.0));
+    c.within(
+        &join(path, "fill_fraction"),
+        s.fill_fraction,
+        Interval::open(0.0, 1.0),
+    );
     c.positive(&join(path, "rpm"), s.rpm);
     c.positive(&join(path, "rotation_time_s"), s.rotation_time_s);
     c.non_negative(&join(path, "standing_time_s"), s.standing_time_s);
@@ -119,20 +171,52 @@ fn check_hopper(c: &mut Checker, path: &str, s: &HopperScene) {
     c.positive(&join(path, "diameter_m"), s.diameter_m);
     c.positive(&join(path, "height_m"), s.height_m);
     c.positive(&join(path, "orifice_diameter_m"), s.orifice_diameter_m);
-    smaller(c, path, "orifice_diameter_m", s.orifice_diameter_m, "diameter_m", s.diameter_m);
+    smaller(
+        c,
+        path,
+        "orifice_diameter_m",
+        s.orifice_diameter_m,
+        "diameter_m",
+        s.diameter_m,
+    );
     c.positive(&join(path, "drop_height_m"), s.drop_height_m);
     c.positive(&join(path, "plate_diameter_m"), s.plate_diameter_m);
-    smaller(c, path, "orifice_diameter_m", s.orifice_diameter_m, "plate_diameter_m", s.plate_diameter_m);
-    c.within(&join(path, "packing_fraction"), s.packing_fraction, Interval::open(0.0, PACKING_LIMIT));
+    smaller(
+        c,
+        path,
+        "orifice_diameter_m",
+        s.orifice_diameter_m,
+        "plate_diameter_m",
+        s.plate_diameter_m,
+    );
+    c.within(
+        &join(path, "packing_fraction"),
+        s.packing_fraction,
+        Interval::open(0.0, PACKING_LIMIT),
+    );
     c.positive(&join(path, "no_discharge_stop_s"), s.no_discharge_stop_s);
     c.positive(&join(path, "max_time_s"), s.max_time_s);
 }
 
 fn check_static_pile(c: &mut Checker, path: &str, s: &StaticPileScene) {
-    c.within(&join(path, "cone_angle_deg"), s.cone_angle_deg, Interval::open(0.0, 180.0));
-    c.positive(&join(path, "funnel_top_diameter_m"), s.funnel_top_diameter_m);
+    c.within(
+        &join(path, "cone_angle_deg"),
+        s.cone_angle_deg,
+        Interval::open(0.0, 180.0),
+    );
+    c.positive(
+        &join(path, "funnel_top_diameter_m"),
+        s.funnel_top_diameter_m,
+    );
     c.positive(&join(path, "outlet_diameter_m"), s.outlet_diameter_m);
-    smaller(c, path, "outlet_diameter_m", s.outlet_diameter_m, "funnel_top_diameter_m", s.funnel_top_diameter_m);
+    smaller(
+        c,
+        path,
+        "outlet_diameter_m",
+        s.outlet_diameter_m,
+        "funnel_top_diameter_m",
+        s.funnel_top_diameter_m,
+    );
     c.positive(&join(path, "outlet_height_m"), s.outlet_height_m);
     c.positive(&join(path, "disk_diameter_m"), s.disk_diameter_m);
     if s.particle_count == 0 {

@@ -36,9 +36,16 @@ fn expand_address(address: &str, walls: &[&str]) -> Result<Vec<String>, String> 
     let parts: Vec<&str> = address.split('.').collect();
     let (pairs, field): (Vec<String>, &str) = match parts.as_slice() {
         ["particle_particle", field] => (vec!["particle_particle".to_string()], field),
-        ["particle_wall", "*", field] => (walls.iter().map(|w| format!("particle_wall.{w}")).collect(), field),
-        ["particle_wall", wall, field] if walls.contains(wall) => (vec![format!("particle_wall.{wall}")], field),
-        ["particle_wall", _, _] => return Err("must name a wall material defined in material.walls (or *)".into()),
+        ["particle_wall", "*", field] => (
+            walls.iter().map(|w| format!("particle_wall.{w}")).collect(),
+            field,
+        ),
+        ["particle_wall", wall, field] if walls.contains(wall) => {
+            (vec![format!("particle_wall.{wall}")], field)
+        }
+        ["particle_wall", _, _] => {
+            return Err("must name a wall material defined in material.walls (or *)".into())
+        }
         _ => return Err(RULE.into()),
     };
     if !PAIR_PARAM_FIELDS.contains(&field) {
@@ -50,14 +57,22 @@ fn expand_address(address: &str, walls: &[&str]) -> Result<Vec<String>, String> 
 fn check_parameters(c: &mut Checker, s: &Study) {
     let walls: Vec<&str> = s.material.walls.keys().map(String::as_str).collect();
     if s.parameters.is_empty() {
-        c.fail("parameters", "{}".into(), "must calibrate at least one contact parameter");
+        c.fail(
+            "parameters",
+            "{}".into(),
+            "must calibrate at least one contact parameter",
+        );
     }
     // slot -> the address that gave it a value
     let mut covered: BTreeMap<String, String> = BTreeMap::new();
     let mut cover = |c: &mut Checker, path: &str, address: &str, slots: Vec<String>| {
         for slot in slots {
             if let Some(first) = covered.get(&slot) {
-                c.fail(path, string(address), format!("sets {slot}, which {first} already sets"));
+                c.fail(
+                    path,
+                    string(address),
+                    format!("sets {slot}, which {first} already sets"),
+                );
             } else {
                 covered.insert(slot, path.to_string());
             }
@@ -69,10 +84,28 @@ fn check_parameters(c: &mut Checker, s: &Study) {
             Err(rule) => c.fail(&path, string(address), rule),
             Ok(slots) => {
                 let field = address.rsplit('.').next().unwrap_or_default();
-                check_pair_field(c, &join(&path, "min"), field, range.min, &s.contact_model, "contact_model");
-                check_pair_field(c, &join(&path, "max"), field, range.max, &s.contact_model, "contact_model");
+                check_pair_field(
+                    c,
+                    &join(&path, "min"),
+                    field,
+                    range.min,
+                    &s.contact_model,
+                    "contact_model",
+                );
+                check_pair_field(
+                    c,
+                    &join(&path, "max"),
+                    field,
+                    range.max,
+                    &s.contact_model,
+                    "contact_model",
+                );
                 if range.min.is_finite() && range.max.is_finite() && range.min >= range.max {
-                    c.fail(&join(&path, "min"), number(range.min), format!("must be < max = {}", number(range.max)));
+                    c.fail(
+                        &join(&path, "min"),
+                        number(range.min),
+                        format!("must be < max = {}", number(range.max)),
+                    );
                 }
                 cover(c, &path, address, slots);
             }
@@ -89,9 +122,16 @@ fn check_parameters(c: &mut Checker, s: &Study) {
             }
         }
     }
-    let mut all_slots: Vec<String> = PAIR_PARAM_FIELDS.iter().map(|f| format!("particle_particle.{f}")).collect();
+    let mut all_slots: Vec<String> = PAIR_PARAM_FIELDS
+        .iter()
+        .map(|f| format!("particle_particle.{f}"))
+        .collect();
     for wall in &walls {
-        all_slots.extend(PAIR_PARAM_FIELDS.iter().map(|f| format!("particle_wall.{wall}.{f}")));
+        all_slots.extend(
+            PAIR_PARAM_FIELDS
+                .iter()
+                .map(|f| format!("particle_wall.{wall}.{f}")),
+        );
     }
     for slot in all_slots {
         if !covered.contains_key(&slot) {
@@ -106,7 +146,11 @@ fn check_parameters(c: &mut Checker, s: &Study) {
 
 fn check_target(c: &mut Checker, path: &str, t: &TargetScene, s: &Study) {
     if t.name.trim().is_empty() {
-        c.fail(&join(path, "name"), string(&t.name), "must be a non-empty name");
+        c.fail(
+            &join(path, "name"),
+            string(&t.name),
+            "must be a non-empty name",
+        );
     }
     let scene_path = join(path, "scene");
     if let Scene::Pair(_) = t.scene {
@@ -117,8 +161,16 @@ fn check_target(c: &mut Checker, path: &str, t: &TargetScene, s: &Study) {
         );
     }
     check_scene(c, &scene_path, &t.scene, &s.material);
-    c.within(&join(path, "target_angle_deg"), t.target_angle_deg, Interval::open(0.0, 90.0));
-    c.within(&join(path, "tolerance_fraction"), t.tolerance_fraction, Interval::open(0.0, 1.0));
+    c.within(
+        &join(path, "target_angle_deg"),
+        t.target_angle_deg,
+        Interval::open(0.0, 90.0),
+    );
+    c.within(
+        &join(path, "tolerance_fraction"),
+        t.tolerance_fraction,
+        Interval::open(0.0, 1.0),
+    );
 }
 
 fn check_design(c: &mut Checker, s: &Study) {
@@ -129,13 +181,20 @@ fn check_design(c: &mut Checker, s: &Study) {
         DesignKind::BoxBehnken => (1, "centre points"),
     };
     if d.size < min_size {
-        c.fail("design.size", d.size.to_string(), format!("must be >= {min_size} ({meaning})"));
+        c.fail(
+            "design.size",
+            d.size.to_string(),
+            format!("must be >= {min_size} ({meaning})"),
+        );
     }
     if d.kind == DesignKind::BoxBehnken && s.parameters.len() < 3 {
         c.fail(
             "design.kind",
             string("box_behnken"),
-            format!("needs at least 3 calibrated parameters ({} given)", s.parameters.len()),
+            format!(
+                "needs at least 3 calibrated parameters ({} given)",
+                s.parameters.len()
+            ),
         );
     }
 }
