@@ -250,17 +250,6 @@ pub const PAIR_PARAM_FIELDS: [&str; 4] = [
 ];
 
 impl PairParams {
-    /// The value of the field named `field` (one of [`PAIR_PARAM_FIELDS`]).
-    pub fn get(&self, field: &str) -> Option<f64> {
-        match field {
-            "restitution" => Some(self.restitution),
-            "static_friction" => Some(self.static_friction),
-            "rolling_friction" => Some(self.rolling_friction),
-            "surface_energy_j_m2" => Some(self.surface_energy_j_m2),
-            _ => None,
-        }
-    }
-
     /// Sets the field named `field`; returns false when there is no such field.
     pub fn set(&mut self, field: &str, value: f64) -> bool {
         let slot = match field {

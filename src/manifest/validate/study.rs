@@ -7,7 +7,7 @@ use super::checker::{join, number, string, Checker, Interval};
 use super::experiment::{check_material, check_pair_field, check_schema_version, check_time_step};
 use super::scene::check_scene;
 use crate::manifest::experiment::PAIR_PARAM_FIELDS;
-use crate::manifest::study::{DesignKind, Study, TargetScene};
+use crate::manifest::study::{DesignKind, Slot, Study, TargetScene};
 use crate::manifest::Scene;
 
 /// Checks every field of a study.
@@ -26,36 +26,7 @@ pub(crate) fn check_study(c: &mut Checker, s: &Study) {
     check_time_step(c, "time_step", &s.time_step);
 }
 
-/// The contact-parameter slots an address stands for, as `pair.field` strings
-/// (`particle_wall.*.x` expands to every wall material); an error text when the
-/// address is not one.
-fn expand_address(address: &str, walls: &[&str]) -> Result<Vec<String>, String> {
-    const RULE: &str = "must address a contact parameter: particle_particle.<field> or \
-                        particle_wall.<wall material or *>.<field>, with <field> one of \
-                        restitution, static_friction, rolling_friction, surface_energy_j_m2";
-    let parts: Vec<&str> = address.split('.').collect();
-    let (pairs, field): (Vec<String>, &str) = match parts.as_slice() {
-        ["particle_particle", field] => (vec!["particle_particle".to_string()], field),
-        ["particle_wall", "*", field] => (
-            walls.iter().map(|w| format!("particle_wall.{w}")).collect(),
-            field,
-        ),
-        ["particle_wall", wall, field] if walls.contains(wall) => {
-            (vec![format!("particle_wall.{wall}")], field)
-        }
-        ["particle_wall", _, _] => {
-            return Err("must name a wall material defined in material.walls (or *)".into())
-        }
-        _ => return Err(RULE.into()),
-    };
-    if !PAIR_PARAM_FIELDS.contains(&field) {
-        return Err(RULE.into());
-    }
-    Ok(pairs.into_iter().map(|p| format!("{p}.{field}")).collect())
-}
-
 fn check_parameters(c: &mut Checker, s: &Study) {
-    let walls: Vec<&str> = s.material.walls.keys().map(String::as_str).collect();
     if s.parameters.is_empty() {
         c.fail(
             "parameters",
@@ -64,8 +35,8 @@ fn check_parameters(c: &mut Checker, s: &Study) {
         );
     }
     // slot -> the address that gave it a value
-    let mut covered: BTreeMap<String, String> = BTreeMap::new();
-    let mut cover = |c: &mut Checker, path: &str, address: &str, slots: Vec<String>| {
+    let mut covered: BTreeMap<Slot, String> = BTreeMap::new();
+    let mut cover = |c: &mut Checker, path: &str, address: &str, slots: Vec<Slot>| {
         for slot in slots {
             if let Some(first) = covered.get(&slot) {
                 c.fail(
@@ -80,10 +51,10 @@ fn check_parameters(c: &mut Checker, s: &Study) {
     };
     for (address, range) in &s.parameters {
         let path = join("parameters", address);
-        match expand_address(address, &walls) {
+        match s.resolve_address(address) {
             Err(rule) => c.fail(&path, string(address), rule),
             Ok(slots) => {
-                let field = address.rsplit('.').next().unwrap_or_default();
+                let field = slots.first().map_or("", |s| s.field);
                 check_pair_field(
                     c,
                     &join(&path, "min"),
@@ -113,30 +84,26 @@ fn check_parameters(c: &mut Checker, s: &Study) {
     }
     for (address, value) in &s.fixed {
         let path = join("fixed", address);
-        match expand_address(address, &walls) {
+        match s.resolve_address(address) {
             Err(rule) => c.fail(&path, string(address), rule),
             Ok(slots) => {
-                let field = address.rsplit('.').next().unwrap_or_default();
+                let field = slots.first().map_or("", |s| s.field);
                 check_pair_field(c, &path, field, *value, &s.contact_model, "contact_model");
                 cover(c, &path, address, slots);
             }
         }
     }
-    let mut all_slots: Vec<String> = PAIR_PARAM_FIELDS
-        .iter()
-        .map(|f| format!("particle_particle.{f}"))
-        .collect();
-    for wall in &walls {
-        all_slots.extend(
-            PAIR_PARAM_FIELDS
-                .iter()
-                .map(|f| format!("particle_wall.{wall}.{f}")),
-        );
-    }
+    let walls = std::iter::once(None).chain(s.material.walls.keys().cloned().map(Some));
+    let all_slots = walls.flat_map(|wall| {
+        PAIR_PARAM_FIELDS.iter().map(move |field| Slot {
+            wall: wall.clone(),
+            field,
+        })
+    });
     for slot in all_slots {
         if !covered.contains_key(&slot) {
             c.fail(
-                &join("fixed", &slot),
+                &join("fixed", &slot.to_string()),
                 "(absent)".into(),
                 "every contact parameter must be fixed here or calibrated in parameters",
             );
