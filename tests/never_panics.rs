@@ -56,23 +56,6 @@ fn examples() -> Vec<Value> {
         .collect()
 }
 
-/// Pointers to every node (objects, arrays and leaves) of a value.
-fn pointers(v: &Value, pointer: String, out: &mut Vec<String>) {
-    if !pointer.is_empty() {
-        out.push(pointer.clone());
-    }
-    match v {
-        Value::Object(map) => map
-            .iter()
-            .for_each(|(k, v)| pointers(v, format!("{pointer}/{k}"), out)),
-        Value::Array(items) => items
-            .iter()
-            .enumerate()
-            .for_each(|(i, v)| pointers(v, format!("{pointer}/{i}"), out)),
-        _ => {}
-    }
-}
-
 fn exercise(text: &str) {
     let _ = parse_document(text, None);
     let _ = parse_document(text, Some(DocumentKind::Experiment));
@@ -107,8 +90,7 @@ proptest! {
     fn examples_with_one_node_replaced(which in any::<prop::sample::Index>(), at in any::<prop::sample::Index>(), new in any_json()) {
         let all = examples();
         let doc = which.get(&all).clone();
-        let mut ptrs = Vec::new();
-        pointers(&doc, String::new(), &mut ptrs);
+        let ptrs: Vec<String> = common::nodes(&doc).into_iter().map(|(p, _)| p).collect();
         let pointer = at.get(&ptrs).clone();
         exercise(&edit(doc, &pointer, Some(new)).to_string());
     }
@@ -117,8 +99,7 @@ proptest! {
     fn examples_with_one_node_removed(which in any::<prop::sample::Index>(), at in any::<prop::sample::Index>()) {
         let all = examples();
         let doc = which.get(&all).clone();
-        let mut ptrs = Vec::new();
-        pointers(&doc, String::new(), &mut ptrs);
+        let ptrs: Vec<String> = common::nodes(&doc).into_iter().map(|(p, _)| p).collect();
         let pointer = at.get(&ptrs).clone();
         let is_array_item = doc.pointer(pointer.rsplit_once('/').unwrap().0).is_some_and(Value::is_array);
         prop_assume!(!is_array_item);

@@ -303,14 +303,18 @@ impl Store {
         })
     }
 
-    /// The stored result of run `id`, if it is complete.
-    pub fn load_result(&self, id: &ContentId) -> Result<Option<RunResult>, StoreError> {
-        let path = self.run_dir(id).result_path();
+    /// Reads and parses a JSON file of the store, if it exists.
+    fn read_json_if_present<T: DeserializeOwned>(path: &Path) -> Result<Option<T>, StoreError> {
         if path.is_file() {
-            Self::read_json(&path).map(Some)
+            Self::read_json(path).map(Some)
         } else {
             Ok(None)
         }
+    }
+
+    /// The stored result of run `id`, if it is complete.
+    pub fn load_result(&self, id: &ContentId) -> Result<Option<RunResult>, StoreError> {
+        Self::read_json_if_present(&self.run_dir(id).result_path())
     }
 
     /// The stored manifest of run `id` (parsed, not re-validated: a manifest of an
@@ -321,12 +325,7 @@ impl Store {
 
     /// The stored error record of run `id`, if it failed.
     pub fn load_error(&self, id: &ContentId) -> Result<Option<ErrorRecord>, StoreError> {
-        let path = self.run_dir(id).error_path();
-        if path.is_file() {
-            Self::read_json(&path).map(Some)
-        } else {
-            Ok(None)
-        }
+        Self::read_json_if_present(&self.run_dir(id).error_path())
     }
 
     /// Runs `experiment` unless a complete run with its id exists.

@@ -74,3 +74,26 @@ pub fn json_files(dir: &Path) -> Vec<PathBuf> {
     out.sort();
     out
 }
+
+/// Every node below the root of `v` (objects, arrays and leaves) with its JSON
+/// pointer, parents before children.
+pub fn nodes(v: &Value) -> Vec<(String, Value)> {
+    fn walk(v: &Value, pointer: String, out: &mut Vec<(String, Value)>) {
+        if !pointer.is_empty() {
+            out.push((pointer.clone(), v.clone()));
+        }
+        match v {
+            Value::Object(map) => map
+                .iter()
+                .for_each(|(k, v)| walk(v, format!("{pointer}/{k}"), out)),
+            Value::Array(items) => items
+                .iter()
+                .enumerate()
+                .for_each(|(i, v)| walk(v, format!("{pointer}/{i}"), out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    walk(v, String::new(), &mut out);
+    out
+}
