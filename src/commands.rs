@@ -1,0 +1,293 @@
+//! One library function per CLI subcommand; `main.rs` only parses arguments and
+//! calls these. Each writes its report to the given writer and returns a typed
+//! error whose [`CommandError::exit_code`] is 2 for invalid input and 1 for a
+//! runtime failure.
+
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+use crate::manifest::{read_document, read_experiment, ContentId, DocumentKind, ManifestError};
+use crate::scenes::run_experiment;
+use crate::store::{CacheOutcome, RunError, RunSummary, Store, StoreError};
+
+/// Which kind of manifest a file holds, as chosen on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum KindArg {
+    /// Decide by content: an object with `scene` is an experiment, one with
+    /// `calibration` a study.
+    #[default]
+    Auto,
+    /// An experiment (one DEM run).
+    Experiment,
+    /// A calibration study.
+    Study,
+}
+
+impl KindArg {
+    fn kind(self) -> Option<DocumentKind> {
+        match self {
+            KindArg::Auto => None,
+            KindArg::Experiment => Some(DocumentKind::Experiment),
+            KindArg::Study => Some(DocumentKind::Study),
+        }
+    }
+}
+
+/// Why a command failed.
+#[derive(Debug, thiserror::Error)]
+pub enum CommandError {
+    /// A manifest could not be read, parsed or validated.
+    #[error("{}", describe(path, error))]
+    Manifest {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        error: ManifestError,
+    },
+    /// `validate` found invalid files (each was reported as found).
+    #[error("{failed} of {total} file(s) failed validation")]
+    ValidationFailed {
+        /// How many failed.
+        failed: usize,
+        /// How many were checked.
+        total: usize,
+    },
+    /// The run store failed, or a prefix did not resolve.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// The run itself failed; its error.json says why.
+    #[error("run {id} failed: {message}\n(recorded in {})", error_path.display())]
+    RunFailed {
+        /// The experiment id.
+        id: ContentId,
+        /// The failure.
+        message: String,
+        /// Where it is recorded.
+        error_path: PathBuf,
+    },
+    /// Writing the report failed (e.g. a closed pipe).
+    #[error("cannot write output: {0}")]
+    Output(#[from] io::Error),
+}
+
+impl CommandError {
+    /// Process exit code: 2 when the user's input is at fault, 1 otherwise.
+    pub fn exit_code(&self) -> u8 {
+        let invalid = match self {
+            CommandError::Manifest { error, .. } => error.is_invalid_input(),
+            CommandError::ValidationFailed { .. } => true,
+            CommandError::Store(e) => e.is_invalid_input(),
+            CommandError::RunFailed { .. } | CommandError::Output(_) => false,
+        };
+        if invalid {
+            2
+        } else {
+            1
+        }
+    }
+}
+
+/// A file-prefixed report of a manifest error: `file:line:column: message` for
+/// syntax errors, one indented line per field error for validation errors.
+fn describe(path: &Path, error: &ManifestError) -> String {
+    let file = path.display();
+    match error {
+        ManifestError::Syntax {
+            line,
+            column,
+            message,
+        } => format!("{file}:{line}:{column}: {message}"),
+        ManifestError::Invalid(errors) => {
+            let mut s = format!("{file}: {} invalid field(s):", errors.0.len());
+            for e in &errors.0 {
+                s.push_str("\n  ");
+                s.push_str(&e.to_string());
+            }
+            s
+        }
+        other => format!("{file}: {other}"),
+    }
+}
+
+fn manifest_error(path: &Path) -> impl FnOnce(ManifestError) -> CommandError + '_ {
+    move |error| CommandError::Manifest {
+        path: path.to_path_buf(),
+        error,
+    }
+}
+
+/// `repose hash FILE`: prints the content id of a valid manifest.
+pub fn hash(path: &Path, kind: KindArg, out: &mut dyn Write) -> Result<(), CommandError> {
+    let doc = read_document(path, kind.kind()).map_err(manifest_error(path))?;
+    writeln!(out, "{}", doc.id())?;
+    Ok(())
+}
+
+/// `repose validate FILE...`: checks every file, reporting each invalid one to
+/// `err` as found and each valid one to `out` (`ok <kind> <id> <file>`).
+pub fn validate(
+    paths: &[PathBuf],
+    kind: KindArg,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let mut failed = 0;
+    for path in paths {
+        match read_document(path, kind.kind()) {
+            Ok(doc) => {
+                let kind = match doc.kind() {
+                    DocumentKind::Experiment => "experiment",
+                    DocumentKind::Study => "study",
+                };
+                writeln!(out, "ok {kind} {} {}", doc.id(), path.display())?;
+            }
+            Err(error) => {
+                failed += 1;
+                writeln!(err, "{}", describe(path, &error))?;
+            }
+        }
+    }
+    if failed > 0 {
+        return Err(CommandError::ValidationFailed {
+            failed,
+            total: paths.len(),
+        });
+    }
+    Ok(())
+}
+
+/// `repose run MANIFEST`: validates the experiment and runs it through the store
+/// cache (a complete run with the same id is reused).
+pub fn run(store_root: &Path, manifest: &Path, out: &mut dyn Write) -> Result<(), CommandError> {
+    let experiment = read_experiment(manifest).map_err(manifest_error(manifest))?;
+    let store = Store::open(store_root)?;
+    let id = experiment.id();
+    let dir = store.run_dir(&id);
+    let (result, outcome) = match store.run_cached(&experiment, |e, _dir| run_experiment(e)) {
+        Ok(done) => done,
+        Err(RunError::Invalid(errors)) => {
+            return Err(CommandError::Manifest {
+                path: manifest.to_path_buf(),
+                error: ManifestError::Invalid(errors),
+            })
+        }
+        Err(RunError::Store(e)) => return Err(e.into()),
+        Err(RunError::Runner {
+            error,
+            record_failure,
+        }) => {
+            let mut message = error.to_string();
+            if let Some(f) = record_failure {
+                message.push_str(&format!(" (and error.json could not be written: {f})"));
+            }
+            return Err(CommandError::RunFailed {
+                id,
+                message,
+                error_path: dir.error_path(),
+            });
+        }
+        Err(RunError::BadResult(message)) => {
+            return Err(CommandError::RunFailed {
+                id,
+                message,
+                error_path: dir.error_path(),
+            })
+        }
+    };
+    let how = match outcome {
+        CacheOutcome::Hit => "cache hit",
+        CacheOutcome::Computed => "computed",
+    };
+    writeln!(out, "run {id} ({how})")?;
+    writeln!(out, "  directory: {}", dir.path().display())?;
+    writeln!(
+        out,
+        "  scene: {}  profile: {}  kernel: {}",
+        result.scene, result.profile, result.kernel
+    )?;
+    if let Some(angle) = result.headline_angle_deg {
+        writeln!(out, "  angle of repose: {angle:.2} deg")?;
+    }
+    for (name, value) in &result.measurements {
+        writeln!(out, "  {name} = {value}")?;
+    }
+    Ok(())
+}
+
+/// Formats an optional number for the runs table.
+fn cell(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".to_string(), |v| format!("{v:.4}"))
+}
+
+/// `repose runs list`: one line per run (id prefix, scene, profile, the
+/// particle–particle restitution, friction and surface energy, status, headline
+/// angle).
+pub fn runs_list(store_root: &Path, out: &mut dyn Write) -> Result<(), CommandError> {
+    let store = Store::open(store_root)?;
+    let runs = store.list()?;
+    if runs.is_empty() {
+        writeln!(out, "no runs in {}", store.root().display())?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "{:<12}  {:<11}  {:<7}  {:>7}  {:>7}  {:>9}  {:<10}  {:>9}",
+        "ID", "SCENE", "PROFILE", "e_pp", "mu_pp", "Γ_pp J/m²", "STATUS", "ANGLE deg"
+    )?;
+    for RunSummary {
+        id,
+        status,
+        experiment,
+        result,
+    } in &runs
+    {
+        let pp = experiment.as_ref().map(|e| e.contact.particle_particle);
+        let scene = experiment.as_ref().map_or("?", |e| e.scene.kind());
+        let profile = experiment.as_ref().map_or("?", |e| e.profile.as_str());
+        let angle = result
+            .as_ref()
+            .and_then(|r| r.headline_angle_deg)
+            .map(|a| format!("{a:.2}"));
+        writeln!(
+            out,
+            "{:<12}  {:<11}  {:<7}  {:>7}  {:>7}  {:>9}  {:<10}  {:>9}",
+            id.short(12),
+            scene,
+            profile,
+            cell(pp.map(|p| p.restitution)),
+            cell(pp.map(|p| p.static_friction)),
+            cell(pp.map(|p| p.surface_energy_j_m2)),
+            status.to_string(),
+            angle.unwrap_or_else(|| "-".to_string()),
+        )?;
+    }
+    Ok(())
+}
+
+/// `repose runs show PREFIX`: the run whose id starts with PREFIX (which must be
+/// unique): status, directory, manifest, and result or error.
+pub fn runs_show(store_root: &Path, prefix: &str, out: &mut dyn Write) -> Result<(), CommandError> {
+    let store = Store::open(store_root)?;
+    let id = store.resolve_prefix(prefix)?;
+    let dir = store.run_dir(&id);
+    writeln!(out, "id:        {id}")?;
+    writeln!(out, "status:    {}", store.status(&id))?;
+    writeln!(out, "directory: {}", dir.path().display())?;
+    let manifest = std::fs::read_to_string(dir.manifest_path()).ok();
+    if let Some(text) = manifest
+        .as_deref()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(t).ok())
+    {
+        writeln!(out, "manifest:\n{}", pretty(&text))?;
+    }
+    if let Some(result) = store.load_result(&id)? {
+        writeln!(out, "result:\n{}", pretty(&result))?;
+    } else if let Some(error) = store.load_error(&id)? {
+        writeln!(out, "error:\n{}", pretty(&error))?;
+    }
+    Ok(())
+}
+
+fn pretty<T: serde::Serialize>(value: &T) -> String {
+    serde_json::to_string_pretty(value).unwrap_or_else(|e| format!("(cannot display: {e})"))
+}

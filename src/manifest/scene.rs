@@ -1,0 +1,260 @@
+//! Scenes as data: the two-body `pair` check and the five lab tests of the papers.
+//!
+//! Numbers in the doc comments come from shared/METHODS.md. Where a paper is silent
+//! (an outlet diameter, a drop height) the example manifests choose a value and the
+//! field's doc says so; nothing here is hard-coded into the engine. The lab scenes are
+//! validated data only until their protocol is simulated (issue 4).
+
+use serde::{Deserialize, Serialize};
+
+/// What an experiment simulates, tagged by `kind`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Scene {
+    /// Two bodies in contact: an impact or a quasi-static separation (physics checks).
+    Pair(PairScene),
+    /// he2019's modified FBS-104 funnel flow meter (calibration test).
+    FunnelPile(FunnelPileScene),
+    /// he2019's baffle lift box (static angle verification).
+    BaffleLift(BaffleLiftScene),
+    /// Rotating drum (he2019 and cai2024 dynamic angle).
+    Drum(DrumScene),
+    /// yan2015's flat-bottomed cylindrical hopper discharging onto a plate.
+    Hopper(HopperScene),
+    /// cai2024's fixed-base funnel (GB/T 16913-2008) static pile.
+    StaticPile(StaticPileScene),
+}
+
+impl Scene {
+    /// The scene's `kind` tag as written in manifests.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Scene::Pair(_) => "pair",
+            Scene::FunnelPile(_) => "funnel_pile",
+            Scene::BaffleLift(_) => "baffle_lift",
+            Scene::Drum(_) => "drum",
+            Scene::Hopper(_) => "hopper",
+            Scene::StaticPile(_) => "static_pile",
+        }
+    }
+
+    /// Every wall material the scene uses, as (field name, material name) pairs, so
+    /// validation can check each is defined and has particle–wall parameters.
+    pub fn wall_materials(&self) -> Vec<(&'static str, &str)> {
+        match self {
+            Scene::Pair(s) => match &s.partner {
+                Partner::Wall { material } => vec![("partner.material", material.as_str())],
+                Partner::Particle { .. } => Vec::new(),
+            },
+            Scene::FunnelPile(s) => vec![
+                ("funnel_material", s.funnel_material.as_str()),
+                ("platform_material", s.platform_material.as_str()),
+            ],
+            Scene::BaffleLift(s) => vec![
+                ("box_material", s.box_material.as_str()),
+                ("floor_material", s.floor_material.as_str()),
+            ],
+            Scene::Drum(s) => vec![("wall_material", s.wall_material.as_str())],
+            Scene::Hopper(s) => vec![
+                ("hopper_material", s.hopper_material.as_str()),
+                ("plate_material", s.plate_material.as_str()),
+            ],
+            Scene::StaticPile(s) => vec![
+                ("funnel_material", s.funnel_material.as_str()),
+                ("disk_material", s.disk_material.as_str()),
+            ],
+        }
+    }
+}
+
+/// Two bodies: particle against particle or against a flat wall. Body 1 (radius
+/// `radius_m`) moves towards the partner along the contact normal.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairScene {
+    /// Impact (approach and rebound) or separation (JKR pull-off).
+    pub mode: PairMode,
+    /// Radius of the moving particle, m.
+    pub radius_m: f64,
+    /// The body it meets.
+    pub partner: Partner,
+    /// Approach speed along the normal, m/s, ≥ 0 (> 0 in impact mode).
+    pub normal_velocity_m_s: f64,
+    /// Tangential speed at first contact, m/s, ≥ 0 (oblique impacts).
+    pub tangential_velocity_m_s: f64,
+    /// Initial angular velocity of the moving particle, rad/s, (x, y, z).
+    pub angular_velocity_rad_s: [f64; 3],
+    /// Whether gravity (9.81 m/s², −z) acts; default false.
+    #[serde(default)]
+    pub gravity: bool,
+    /// Separation mode: quasi-static pull speed, m/s, > 0 (required there; optional
+    /// in impact mode).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pull_speed_m_s: Option<f64>,
+    /// Simulated time limit, s, > 0.
+    pub max_time_s: f64,
+}
+
+/// What a pair scene measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PairMode {
+    /// Approach, collide and rebound: restitution, contact time, peak force.
+    Impact,
+    /// Pull a contact apart quasi-statically: pull-off force.
+    Separation,
+}
+
+/// The partner body of a pair scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Partner {
+    /// A second particle of the same material, initially at rest.
+    Particle {
+        /// Radius, m.
+        radius_m: f64,
+    },
+    /// A fixed flat wall of the named wall material.
+    Wall {
+        /// Wall material name (a key of `material.walls`).
+        material: String,
+    },
+}
+
+/// he2019 §2.1/§2.3.2: modified FBS-104 funnel flow meter. A factory fills the funnel,
+/// the powder stands, then the brush turns and pushes it down onto the platform.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FunnelPileScene {
+    /// Funnel top (inlet) diameter, m (he2019: 0.120).
+    pub funnel_top_diameter_m: f64,
+    /// Funnel outlet diameter, m (paper silent; the examples choose 0.010).
+    pub funnel_outlet_diameter_m: f64,
+    /// Height of the conical part, m (paper silent; the examples choose 0.095,
+    /// a 60° cone).
+    pub funnel_height_m: f64,
+    /// Tilt of the outlet, degrees, in [0, 90) (he2019: 7).
+    pub outlet_tilt_deg: f64,
+    /// Height of the outlet above the platform, m (paper silent; examples 0.060).
+    pub outlet_height_m: f64,
+    /// Receiving platform diameter, m (he2019: 0.094).
+    pub platform_diameter_m: f64,
+    /// Brush speed, rpm, > 0; absent means no brush (the effect is not simulated).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub brush_rpm: Option<f64>,
+    /// Solid volume fraction the factory fills the funnel to, below the random close
+    /// packing limit 0.64 (he2019's "filling rate 0.56").
+    pub fill_fraction: f64,
+    /// Factory generation time, s (he2019: 0.01).
+    pub fill_time_s: f64,
+    /// Standing time after filling, before the brush starts, s (he2019: 3).
+    pub standing_time_s: f64,
+    /// Total simulated time, s (he2019: 20).
+    pub total_time_s: f64,
+    /// Final settling time inside the total, s (he2019: 2).
+    pub settle_time_s: f64,
+    /// Funnel (and brush) wall material name.
+    pub funnel_material: String,
+    /// Platform wall material name.
+    pub platform_material: String,
+}
+
+/// he2019 §3.6.1: a box holds the powder; one side (the baffle) is lifted at a
+/// constant speed and the remaining slope's angle is the static angle of repose.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BaffleLiftScene {
+    /// Box length along the flow direction, m (he2019: 0.060).
+    pub box_length_m: f64,
+    /// Box width, m (he2019: 0.060).
+    pub box_width_m: f64,
+    /// Box height, m (he2019: 0.080).
+    pub box_height_m: f64,
+    /// Powder mass, kg; its bulk volume at random close packing must fit the box.
+    pub powder_mass_kg: f64,
+    /// Baffle lift speed, m/s (he2019: 0.1).
+    pub lift_speed_m_s: f64,
+    /// Settling time after the baffle is clear, s.
+    pub settle_time_s: f64,
+    /// Box and baffle wall material name (he2019: Plexiglas).
+    pub box_material: String,
+    /// Floor wall material name.
+    pub floor_material: String,
+}
+
+/// Rotating drum: fill, rotate at constant speed, stop and stand (he2019 §3.6.2:
+/// ID 45 mm, length 100 mm, 30 % fill, 60 rpm for 5 s, stand 2 s; cai2024: 100 × 100 mm,
+/// 25 %, 50 rpm).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DrumScene {
+    /// Inner diameter, m.
+    pub inner_diameter_m: f64,
+    /// Inner length along the axis, m.
+    pub length_m: f64,
+    /// Fraction of the drum volume occupied by the bed (bulk, not solid), in (0, 1).
+    pub fill_fraction: f64,
+    /// Rotation speed, revolutions per minute, > 0.
+    pub rpm: f64,
+    /// Rotation duration, s.
+    pub rotation_time_s: f64,
+    /// Standing time after the drum stops, s, ≥ 0.
+    pub standing_time_s: f64,
+    /// Drum wall material name.
+    pub wall_material: String,
+}
+
+/// yan2015: flat-bottomed cylindrical hopper with a central orifice above a plate.
+/// Particles are poured in, the lid opens, and the run stops when no particle has
+/// left for `no_discharge_stop_s`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HopperScene {
+    /// Hopper inner diameter, m (yan2015: 0.050).
+    pub diameter_m: f64,
+    /// Hopper height, m (yan2015: 0.070).
+    pub height_m: f64,
+    /// Central orifice diameter, m (yan2015: 0.015).
+    pub orifice_diameter_m: f64,
+    /// Height of the orifice above the plate, m (yan2015: 0.070).
+    pub drop_height_m: f64,
+    /// Plate diameter, m (paper silent; the examples choose 0.200).
+    pub plate_diameter_m: f64,
+    /// Solid volume fraction of the poured bed, below 0.64 (yan2015: 0.567).
+    pub packing_fraction: f64,
+    /// Stop once no particle has left the hopper for this long, s.
+    pub no_discharge_stop_s: f64,
+    /// Hard limit on simulated time, s.
+    pub max_time_s: f64,
+    /// Hopper wall material name.
+    pub hopper_material: String,
+    /// Plate wall material name.
+    pub plate_material: String,
+}
+
+/// cai2024 fixed-base funnel (GB/T 16913-2008): particles generated at the funnel top
+/// at a rate flow out onto a disk; angle from the profile and from tan(a) = 2H/D.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StaticPileScene {
+    /// Included angle of the funnel cone, degrees, in (0, 180) (cai2024: 60).
+    pub cone_angle_deg: f64,
+    /// Funnel top diameter, m (paper silent; the examples choose 0.060).
+    pub funnel_top_diameter_m: f64,
+    /// Funnel outlet diameter, m (cai2024: 0.005).
+    pub outlet_diameter_m: f64,
+    /// Height of the outlet above the disk, m (cai2024: 0.080).
+    pub outlet_height_m: f64,
+    /// Disk diameter, m (cai2024: 0.080).
+    pub disk_diameter_m: f64,
+    /// Number of particles generated, > 0 (cai2024: 20 000).
+    pub particle_count: u64,
+    /// Generation rate, particles per second, > 0 (cai2024: 5000).
+    pub insertion_rate_per_s: f64,
+    /// Settling time after the last particle is generated, s.
+    pub settle_time_s: f64,
+    /// Funnel wall material name.
+    pub funnel_material: String,
+    /// Disk wall material name.
+    pub disk_material: String,
+}

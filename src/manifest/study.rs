@@ -1,0 +1,236 @@
+//! The study: a calibration plan (`experiments/<study>/study.json`) from which the
+//! sampler generates experiments.
+//!
+//! A study fixes the material and contact model, says which contact parameters are
+//! calibrated (with ranges) and which are fixed, and names the calibration scene and
+//! the verification scenes with their measured target angles.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use super::experiment::{
+    Contact, ContactModel, Experiment, Material, PairParams, Profile, Seeds, TimeStep,
+    PAIR_PARAM_FIELDS,
+};
+use super::scene::Scene;
+use super::validate::{validate_experiment, FieldError, ValidationErrors};
+use super::{PHYSICS_VERSION, SCHEMA_VERSION};
+
+/// A calibration study.
+///
+/// Contact parameters are addressed as `particle_particle.<field>` or
+/// `particle_wall.<wall>.<field>`, where `<field>` is one of
+/// [`super::PAIR_PARAM_FIELDS`] and `<wall>` a wall material name or `*` (every wall
+/// material: one parameter drives all walls, as he2019's single e_pw / mu_pw do).
+/// Every parameter slot is either calibrated or fixed, exactly once.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Study {
+    /// Manifest format version; must equal [`super::SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// Short name of the study (e.g. `he2019`).
+    pub name: String,
+    /// Free text: sources, and every choice made where the paper is silent.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub description: String,
+    /// Fidelity profile of the generated experiments.
+    pub profile: Profile,
+    /// Particle and wall materials.
+    pub material: Material,
+    /// Force-law choice of the generated experiments.
+    pub contact_model: ContactModel,
+    /// Calibrated parameters by address, with their ranges.
+    pub parameters: BTreeMap<String, ParameterRange>,
+    /// Fixed parameters by address.
+    pub fixed: BTreeMap<String, f64>,
+    /// The scene whose angle the parameters are calibrated against.
+    pub calibration: TargetScene,
+    /// Scenes that re-simulate the calibrated candidates.
+    #[serde(default)]
+    pub verification: Vec<TargetScene>,
+    /// The sampling plan.
+    pub design: Design,
+    /// Packing seed shared by the generated experiments.
+    pub packing_seed: u64,
+    /// Time-step rule of the generated experiments.
+    pub time_step: TimeStep,
+}
+
+/// A closed range `[min, max]` of a calibrated parameter (min < max).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParameterRange {
+    /// Lower bound.
+    pub min: f64,
+    /// Upper bound.
+    pub max: f64,
+}
+
+/// A lab scene with its measured angle of repose.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TargetScene {
+    /// Short name used in reports (e.g. `funnel`, `drum`).
+    pub name: String,
+    /// The scene (a lab scene; `pair` has no angle of repose).
+    pub scene: Scene,
+    /// Measured angle of repose, degrees, in (0, 90).
+    pub target_angle_deg: f64,
+    /// Accepted relative deviation |sim − target| / target, in (0, 1)
+    /// (he2019 Eq. 8–10 uses 0.05).
+    pub tolerance_fraction: f64,
+}
+
+/// The sampling plan over the calibrated parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Design {
+    /// Which design.
+    pub kind: DesignKind,
+    /// LHS: number of samples (≥ 2). Full factorial: levels per parameter (≥ 2).
+    /// Box–Behnken: number of centre points (≥ 1).
+    pub size: u64,
+    /// Seed of the design's random stream.
+    pub seed: u64,
+}
+
+/// Kinds of sampling plan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DesignKind {
+    /// Latin hypercube (midpoints of equal-probability strata, random permutations).
+    Lhs,
+    /// Latin hypercube optimised for space filling.
+    LhsOptimised,
+    /// Every combination of equally spaced levels.
+    FullFactorial,
+    /// Box–Behnken (needs at least 3 parameters).
+    BoxBehnken,
+}
+
+/// One contact-parameter slot: a pair type and one field of its [`PairParams`].
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Slot {
+    /// `None` for particle–particle, else the wall material name.
+    pub wall: Option<String>,
+    /// One of [`PAIR_PARAM_FIELDS`].
+    pub field: &'static str,
+}
+
+impl fmt::Display for Slot {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.wall {
+            None => write!(f, "particle_particle.{}", self.field),
+            Some(w) => write!(f, "particle_wall.{w}.{}", self.field),
+        }
+    }
+}
+
+impl Study {
+    /// The slots a parameter address stands for (`particle_wall.*.x` expands to every
+    /// wall material), or what is wrong with the address.
+    pub fn resolve_address(&self, address: &str) -> Result<Vec<Slot>, String> {
+        const RULE: &str = "must address a contact parameter: particle_particle.<field> or \
+                            particle_wall.<wall material or *>.<field>, with <field> one of \
+                            restitution, static_friction, rolling_friction, surface_energy_j_m2";
+        let parts: Vec<&str> = address.split('.').collect();
+        let (walls, field): (Vec<Option<String>>, &str) = match parts.as_slice() {
+            ["particle_particle", field] => (vec![None], field),
+            ["particle_wall", "*", field] => (
+                self.material
+                    .walls
+                    .keys()
+                    .map(|w| Some(w.clone()))
+                    .collect(),
+                field,
+            ),
+            ["particle_wall", wall, field] if self.material.walls.contains_key(*wall) => {
+                (vec![Some(wall.to_string())], field)
+            }
+            ["particle_wall", _, _] => {
+                return Err("must name a wall material defined in material.walls (or *)".into())
+            }
+            _ => return Err(RULE.into()),
+        };
+        let field = PAIR_PARAM_FIELDS
+            .iter()
+            .find(|f| **f == field)
+            .ok_or_else(|| RULE.to_string())?;
+        Ok(walls.into_iter().map(|wall| Slot { wall, field }).collect())
+    }
+
+    /// The experiment that runs `scene` with the calibrated parameters at `point`
+    /// (address → value, one entry per entry of `parameters`) and the fixed ones;
+    /// material, contact model, profile, time step and seeds come from the study
+    /// (design seed, `sample_index`, packing seed). Only the wall materials the scene
+    /// uses get particle–wall parameters, so unused walls do not change the id. The
+    /// experiment is validated; a point outside a field's allowed range is an error.
+    pub fn experiment(
+        &self,
+        scene: &Scene,
+        point: &BTreeMap<String, f64>,
+        sample_index: u64,
+    ) -> Result<Experiment, ValidationErrors> {
+        let mut errors = Vec::new();
+        for address in self.parameters.keys().filter(|a| !point.contains_key(*a)) {
+            errors.push(FieldError {
+                path: format!("point.{address}"),
+                value: "(absent)".into(),
+                rule: "every calibrated parameter needs a value".into(),
+            });
+        }
+        for address in point.keys().filter(|a| !self.parameters.contains_key(*a)) {
+            errors.push(FieldError {
+                path: format!("point.{address}"),
+                value: "(present)".into(),
+                rule: "is not a calibrated parameter of this study".into(),
+            });
+        }
+        if !errors.is_empty() {
+            return Err(ValidationErrors(errors));
+        }
+        let zero = PairParams {
+            restitution: 0.0,
+            static_friction: 0.0,
+            rolling_friction: 0.0,
+            surface_energy_j_m2: 0.0,
+        };
+        let used: Vec<&str> = scene.wall_materials().into_iter().map(|(_, w)| w).collect();
+        let mut particle_particle = zero;
+        let mut particle_wall: BTreeMap<String, PairParams> =
+            used.iter().map(|w| (w.to_string(), zero)).collect();
+        for (address, value) in self.fixed.iter().chain(point.iter()) {
+            for slot in self.resolve_address(address).unwrap_or_default() {
+                let params = match &slot.wall {
+                    None => Some(&mut particle_particle),
+                    Some(w) => particle_wall.get_mut(w),
+                };
+                if let Some(params) = params {
+                    params.set(slot.field, *value);
+                }
+            }
+        }
+        let experiment = Experiment {
+            schema_version: SCHEMA_VERSION,
+            physics_version: PHYSICS_VERSION,
+            profile: self.profile,
+            scene: scene.clone(),
+            material: self.material.clone(),
+            contact: Contact {
+                model: self.contact_model,
+                particle_particle,
+                particle_wall,
+            },
+            seeds: Seeds {
+                design_seed: self.design.seed,
+                sample_index,
+                packing_seed: self.packing_seed,
+            },
+            time_step: self.time_step,
+        };
+        validate_experiment(&experiment)?;
+        Ok(experiment)
+    }
+}

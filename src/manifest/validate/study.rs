@@ -1,0 +1,167 @@
+//! Rules for studies: parameter addresses and ranges, every contact parameter given
+//! exactly once, lab scenes with targets inside the angle range, a usable design.
+
+use std::collections::BTreeMap;
+
+use super::checker::{join, number, string, Checker, Interval};
+use super::experiment::{check_material, check_pair_field, check_schema_version, check_time_step};
+use super::scene::check_scene;
+use crate::manifest::experiment::PAIR_PARAM_FIELDS;
+use crate::manifest::study::{DesignKind, Slot, Study, TargetScene};
+use crate::manifest::Scene;
+
+/// Checks every field of a study.
+pub(crate) fn check_study(c: &mut Checker, s: &Study) {
+    check_schema_version(c, "schema_version", s.schema_version);
+    if s.name.trim().is_empty() {
+        c.fail("name", string(&s.name), "must be a non-empty name");
+    }
+    check_material(c, "material", &s.material);
+    check_parameters(c, s);
+    check_target(c, "calibration", &s.calibration, s);
+    for (i, v) in s.verification.iter().enumerate() {
+        check_target(c, &format!("verification[{i}]"), v, s);
+    }
+    check_design(c, s);
+    check_time_step(c, "time_step", &s.time_step);
+}
+
+fn check_parameters(c: &mut Checker, s: &Study) {
+    if s.parameters.is_empty() {
+        c.fail(
+            "parameters",
+            "{}".into(),
+            "must calibrate at least one contact parameter",
+        );
+    }
+    // slot -> the address that gave it a value
+    let mut covered: BTreeMap<Slot, String> = BTreeMap::new();
+    let mut cover = |c: &mut Checker, path: &str, address: &str, slots: Vec<Slot>| {
+        for slot in slots {
+            if let Some(first) = covered.get(&slot) {
+                c.fail(
+                    path,
+                    string(address),
+                    format!("sets {slot}, which {first} already sets"),
+                );
+            } else {
+                covered.insert(slot, path.to_string());
+            }
+        }
+    };
+    for (address, range) in &s.parameters {
+        let path = join("parameters", address);
+        match s.resolve_address(address) {
+            Err(rule) => c.fail(&path, string(address), rule),
+            Ok(slots) => {
+                let field = slots.first().map_or("", |s| s.field);
+                check_pair_field(
+                    c,
+                    &join(&path, "min"),
+                    field,
+                    range.min,
+                    &s.contact_model,
+                    "contact_model",
+                );
+                check_pair_field(
+                    c,
+                    &join(&path, "max"),
+                    field,
+                    range.max,
+                    &s.contact_model,
+                    "contact_model",
+                );
+                if range.min.is_finite() && range.max.is_finite() && range.min >= range.max {
+                    c.fail(
+                        &join(&path, "min"),
+                        number(range.min),
+                        format!("must be < max = {}", number(range.max)),
+                    );
+                }
+                cover(c, &path, address, slots);
+            }
+        }
+    }
+    for (address, value) in &s.fixed {
+        let path = join("fixed", address);
+        match s.resolve_address(address) {
+            Err(rule) => c.fail(&path, string(address), rule),
+            Ok(slots) => {
+                let field = slots.first().map_or("", |s| s.field);
+                check_pair_field(c, &path, field, *value, &s.contact_model, "contact_model");
+                cover(c, &path, address, slots);
+            }
+        }
+    }
+    let walls = std::iter::once(None).chain(s.material.walls.keys().cloned().map(Some));
+    let all_slots = walls.flat_map(|wall| {
+        PAIR_PARAM_FIELDS.iter().map(move |field| Slot {
+            wall: wall.clone(),
+            field,
+        })
+    });
+    for slot in all_slots {
+        if !covered.contains_key(&slot) {
+            c.fail(
+                &join("fixed", &slot.to_string()),
+                "(absent)".into(),
+                "every contact parameter must be fixed here or calibrated in parameters",
+            );
+        }
+    }
+}
+
+fn check_target(c: &mut Checker, path: &str, t: &TargetScene, s: &Study) {
+    if t.name.trim().is_empty() {
+        c.fail(
+            &join(path, "name"),
+            string(&t.name),
+            "must be a non-empty name",
+        );
+    }
+    let scene_path = join(path, "scene");
+    if let Scene::Pair(_) = t.scene {
+        c.fail(
+            &join(&scene_path, "kind"),
+            string("pair"),
+            "must be a lab scene (funnel_pile, baffle_lift, drum, hopper, static_pile); a pair has no angle of repose",
+        );
+    }
+    check_scene(c, &scene_path, &t.scene, &s.material);
+    c.within(
+        &join(path, "target_angle_deg"),
+        t.target_angle_deg,
+        Interval::open(0.0, 90.0),
+    );
+    c.within(
+        &join(path, "tolerance_fraction"),
+        t.tolerance_fraction,
+        Interval::open(0.0, 1.0),
+    );
+}
+
+fn check_design(c: &mut Checker, s: &Study) {
+    let d = &s.design;
+    let (min_size, meaning) = match d.kind {
+        DesignKind::Lhs | DesignKind::LhsOptimised => (2, "samples"),
+        DesignKind::FullFactorial => (2, "levels per parameter"),
+        DesignKind::BoxBehnken => (1, "centre points"),
+    };
+    if d.size < min_size {
+        c.fail(
+            "design.size",
+            d.size.to_string(),
+            format!("must be >= {min_size} ({meaning})"),
+        );
+    }
+    if d.kind == DesignKind::BoxBehnken && s.parameters.len() < 3 {
+        c.fail(
+            "design.kind",
+            string("box_behnken"),
+            format!(
+                "needs at least 3 calibrated parameters ({} given)",
+                s.parameters.len()
+            ),
+        );
+    }
+}

@@ -1,0 +1,105 @@
+//! Lineage records: every stage output names the stage, the repose version, the
+//! stage's parameters and the id or sha256 of every input, so any output can be
+//! traced back to manifests (a DAG, as DVC keeps).
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use super::{Store, StoreError};
+use crate::manifest::ContentId;
+
+/// Where an output came from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Lineage {
+    /// The stage that produced the output (e.g. `sample`, `train`).
+    pub stage: String,
+    /// Version of repose that ran the stage.
+    pub repose_version: String,
+    /// The stage's own settings.
+    pub parameters: serde_json::Value,
+    /// Every input, in the order the stage read them.
+    pub inputs: Vec<InputRef>,
+}
+
+/// One input of a stage.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InputRef {
+    /// What the input is to the stage (e.g. `study`, `training_run`).
+    pub role: String,
+    /// A run/study id, or the path of an input file.
+    pub id_or_path: String,
+    /// sha256 (hex) of the input's bytes; for a run, its id (the sha256 of its
+    /// canonical manifest.json).
+    pub sha256: String,
+}
+
+impl InputRef {
+    /// A reference to a content-addressed manifest (run or study) by id.
+    pub fn id(role: impl Into<String>, id: &ContentId) -> InputRef {
+        InputRef {
+            role: role.into(),
+            id_or_path: id.to_string(),
+            sha256: id.to_string(),
+        }
+    }
+
+    /// A reference to a file, hashing its current bytes.
+    pub fn file(role: impl Into<String>, path: &Path) -> Result<InputRef, StoreError> {
+        let bytes = std::fs::read(path).map_err(StoreError::io(path))?;
+        Ok(InputRef {
+            role: role.into(),
+            id_or_path: path.display().to_string(),
+            sha256: hex::encode(Sha256::digest(&bytes)),
+        })
+    }
+}
+
+impl Lineage {
+    /// A record for `stage` with its parameters, no inputs yet, and this build's
+    /// version.
+    pub fn new(stage: impl Into<String>, parameters: serde_json::Value) -> Lineage {
+        Lineage {
+            stage: stage.into(),
+            repose_version: env!("CARGO_PKG_VERSION").to_string(),
+            parameters,
+            inputs: Vec::new(),
+        }
+    }
+
+    /// Adds an input.
+    pub fn with_input(mut self, input: InputRef) -> Lineage {
+        self.inputs.push(input);
+        self
+    }
+
+    /// The lineage file of an output: `<output>.lineage.json` beside it.
+    pub fn path_beside(output: &Path) -> PathBuf {
+        let mut name = output
+            .file_name()
+            .map(|n| n.to_os_string())
+            .unwrap_or_default();
+        name.push(".lineage.json");
+        output.with_file_name(name)
+    }
+
+    /// Writes this record atomically beside `output`; returns the path written.
+    pub fn write_beside(&self, output: &Path) -> Result<PathBuf, StoreError> {
+        let path = Self::path_beside(output);
+        let mut bytes = serde_json::to_vec_pretty(self).map_err(|e| StoreError::Corrupt {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+        bytes.push(b'\n');
+        super::write_atomic(&path, &bytes).map_err(StoreError::io(&path))?;
+        Ok(path)
+    }
+
+    /// Reads a lineage record written by [`Lineage::write_beside`].
+    pub fn read_beside(output: &Path) -> Result<Lineage, StoreError> {
+        Store::read_json(&Self::path_beside(output))
+    }
+}

@@ -1,0 +1,82 @@
+//! Finding runs: listing the store and resolving an id prefix.
+
+use super::{RunStatus, Store, StoreError};
+use crate::manifest::{ContentId, Experiment};
+use crate::store::RunResult;
+
+/// One run as shown by `repose runs list`. Manifest and result are `None` when
+/// absent or unreadable (the status still says what the directory holds).
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    /// The run id.
+    pub id: ContentId,
+    /// Its state.
+    pub status: RunStatus,
+    /// Its manifest.
+    pub experiment: Option<Experiment>,
+    /// Its result, when complete.
+    pub result: Option<RunResult>,
+}
+
+impl Store {
+    /// The ids of every run directory, sorted (other entries are ignored).
+    pub fn ids(&self) -> Result<Vec<ContentId>, StoreError> {
+        let entries = std::fs::read_dir(self.root()).map_err(StoreError::io(self.root()))?;
+        let mut ids = Vec::new();
+        for entry in entries {
+            let entry = entry.map_err(StoreError::io(self.root()))?;
+            if !entry.path().is_dir() {
+                continue;
+            }
+            if let Some(id) = entry.file_name().to_str().and_then(ContentId::parse) {
+                ids.push(id);
+            }
+        }
+        ids.sort();
+        Ok(ids)
+    }
+
+    /// A summary of every run, sorted by id.
+    pub fn list(&self) -> Result<Vec<RunSummary>, StoreError> {
+        Ok(self
+            .ids()?
+            .into_iter()
+            .map(|id| RunSummary {
+                status: self.status(&id),
+                experiment: self.load_manifest(&id).ok(),
+                result: self.load_result(&id).ok().flatten(),
+                id,
+            })
+            .collect())
+    }
+
+    /// The one run id starting with `prefix`; an error names every candidate when
+    /// the prefix is ambiguous.
+    pub fn resolve_prefix(&self, prefix: &str) -> Result<ContentId, StoreError> {
+        let hex = !prefix.is_empty()
+            && prefix
+                .bytes()
+                .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b));
+        if !hex || prefix.len() > 64 {
+            return Err(StoreError::BadPrefix {
+                prefix: prefix.to_string(),
+            });
+        }
+        let mut matches: Vec<ContentId> = self
+            .ids()?
+            .into_iter()
+            .filter(|id| id.as_str().starts_with(prefix))
+            .collect();
+        match matches.len() {
+            0 => Err(StoreError::NoMatch {
+                prefix: prefix.to_string(),
+                root: self.root().to_path_buf(),
+            }),
+            1 => Ok(matches.remove(0)),
+            _ => Err(StoreError::Ambiguous {
+                prefix: prefix.to_string(),
+                candidates: matches,
+            }),
+        }
+    }
+}

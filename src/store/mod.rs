@@ -1,0 +1,416 @@
+//! The content-addressed run store.
+//!
+//! Layout under the root (default `./runs`, set by `--store` or `REPOSE_STORE`):
+//!
+//! ```text
+//! runs/<id>/manifest.json   the experiment's canonical JSON (sha256 of the file = id)
+//! runs/<id>/result.json     the result; its presence is what makes a run complete
+//! runs/<id>/run.mcap        the run's log (written by the engine side)
+//! runs/<id>/error.json      why the run failed (a failed run never has a result)
+//! runs/<id>/timing.json     wall-clock time of the run (non-deterministic, not hashed)
+//! ```
+//!
+//! Every file is written atomically ([`write_atomic`]), so an interrupted run never
+//! leaves anything that looks complete, and a complete run is a cache hit.
+
+mod atomic;
+pub mod lineage;
+mod lookup;
+pub mod result;
+
+use std::fmt;
+use std::io;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::de::DeserializeOwned;
+
+pub use atomic::{write_atomic, TEMP_PREFIX};
+pub use lineage::{InputRef, Lineage};
+pub use lookup::RunSummary;
+pub use result::{ErrorRecord, RunResult, TimingRecord, Trace};
+
+use crate::manifest::{
+    canonical_json, validate_experiment, ContentId, Experiment, ValidationErrors,
+};
+
+/// File names inside a run directory.
+pub const MANIFEST_FILE: &str = "manifest.json";
+/// See [`MANIFEST_FILE`].
+pub const RESULT_FILE: &str = "result.json";
+/// See [`MANIFEST_FILE`].
+pub const MCAP_FILE: &str = "run.mcap";
+/// See [`MANIFEST_FILE`].
+pub const ERROR_FILE: &str = "error.json";
+/// See [`MANIFEST_FILE`].
+pub const TIMING_FILE: &str = "timing.json";
+
+/// Environment variable naming the store root.
+pub const STORE_ENV: &str = "REPOSE_STORE";
+/// Store root used when neither `--store` nor [`STORE_ENV`] is given.
+pub const DEFAULT_STORE: &str = "runs";
+
+/// Errors of the store.
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    /// A file-system operation failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The I/O error.
+        source: io::Error,
+    },
+    /// A stored JSON file does not parse (it was changed outside repose).
+    #[error("{}: corrupt store file: {message}", path.display())]
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// The parse error.
+        message: String,
+    },
+    /// A runner returned a result for another experiment.
+    #[error("the runner returned a result for {found}, expected {expected}")]
+    ResultMismatch {
+        /// The experiment being run.
+        expected: ContentId,
+        /// The id inside the returned result.
+        found: ContentId,
+    },
+    /// An id prefix is empty or not lowercase hex.
+    #[error("`{prefix}` is not an id prefix (lowercase hex digits expected)")]
+    BadPrefix {
+        /// The prefix given.
+        prefix: String,
+    },
+    /// No run id starts with the prefix.
+    #[error("no run in {} has an id starting with `{prefix}`", root.display())]
+    NoMatch {
+        /// The prefix given.
+        prefix: String,
+        /// The store root searched.
+        root: PathBuf,
+    },
+    /// Several run ids start with the prefix.
+    #[error(
+        "`{prefix}` is ambiguous; it matches:\n{}",
+        candidates.iter().map(|c| format!("  {c}")).collect::<Vec<_>>().join("\n")
+    )]
+    Ambiguous {
+        /// The prefix given.
+        prefix: String,
+        /// Every matching id.
+        candidates: Vec<ContentId>,
+    },
+}
+
+impl StoreError {
+    /// True when the user's input (a prefix) is at fault rather than the store.
+    pub fn is_invalid_input(&self) -> bool {
+        matches!(
+            self,
+            StoreError::BadPrefix { .. }
+                | StoreError::NoMatch { .. }
+                | StoreError::Ambiguous { .. }
+        )
+    }
+
+    fn io(path: &Path) -> impl FnOnce(io::Error) -> StoreError + '_ {
+        move |source| StoreError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+}
+
+/// Errors of [`Store::run_cached`].
+#[derive(Debug, thiserror::Error)]
+pub enum RunError<E: std::error::Error + 'static> {
+    /// The experiment failed validation; nothing was written.
+    #[error("invalid experiment:\n{0}")]
+    Invalid(ValidationErrors),
+    /// The store itself failed.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// The runner failed; error.json records why.
+    #[error("{error}")]
+    Runner {
+        /// The runner's error.
+        #[source]
+        error: E,
+        /// Set when even error.json could not be written.
+        record_failure: Option<StoreError>,
+    },
+    /// The runner returned a result that cannot be stored; error.json records why.
+    #[error("the run produced an unusable result: {0}")]
+    BadResult(String),
+}
+
+/// Where a run's result came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CacheOutcome {
+    /// A complete run already existed; the runner was not called.
+    Hit,
+    /// The runner was called and its result stored.
+    Computed,
+}
+
+/// State of a run directory.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum RunStatus {
+    /// No directory for this id.
+    Missing,
+    /// A directory without result or error: running, or interrupted.
+    Incomplete,
+    /// error.json and no result.json.
+    Failed,
+    /// result.json exists.
+    Complete,
+}
+
+impl fmt::Display for RunStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            RunStatus::Missing => "missing",
+            RunStatus::Incomplete => "incomplete",
+            RunStatus::Failed => "failed",
+            RunStatus::Complete => "complete",
+        })
+    }
+}
+
+/// The directory of one run and the paths of its files.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RunDir {
+    id: ContentId,
+    path: PathBuf,
+}
+
+impl RunDir {
+    /// The run's experiment id.
+    pub fn id(&self) -> &ContentId {
+        &self.id
+    }
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+    /// `manifest.json`.
+    pub fn manifest_path(&self) -> PathBuf {
+        self.path.join(MANIFEST_FILE)
+    }
+    /// `result.json`.
+    pub fn result_path(&self) -> PathBuf {
+        self.path.join(RESULT_FILE)
+    }
+    /// `run.mcap`.
+    pub fn mcap_path(&self) -> PathBuf {
+        self.path.join(MCAP_FILE)
+    }
+    /// `error.json`.
+    pub fn error_path(&self) -> PathBuf {
+        self.path.join(ERROR_FILE)
+    }
+    /// `timing.json`.
+    pub fn timing_path(&self) -> PathBuf {
+        self.path.join(TIMING_FILE)
+    }
+}
+
+/// Test-only fault injection: called between temp write and rename of every file.
+#[cfg(test)]
+type FaultHook = Box<dyn Fn(&Path) -> io::Result<()>>;
+
+/// A run store rooted at a directory.
+pub struct Store {
+    root: PathBuf,
+    #[cfg(test)]
+    fault: Option<FaultHook>,
+}
+
+impl fmt::Debug for Store {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Store").field("root", &self.root).finish()
+    }
+}
+
+impl Store {
+    /// Opens (creating if needed) the store at `root`.
+    pub fn open(root: impl Into<PathBuf>) -> Result<Store, StoreError> {
+        let root = root.into();
+        std::fs::create_dir_all(&root).map_err(StoreError::io(&root))?;
+        Ok(Store {
+            root,
+            #[cfg(test)]
+            fault: None,
+        })
+    }
+
+    /// The store's root directory.
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    /// The directory of run `id` (whether or not it exists).
+    pub fn run_dir(&self, id: &ContentId) -> RunDir {
+        RunDir {
+            id: id.clone(),
+            path: self.root.join(id.as_str()),
+        }
+    }
+
+    /// The state of run `id`: complete exactly when result.json exists.
+    pub fn status(&self, id: &ContentId) -> RunStatus {
+        let dir = self.run_dir(id);
+        if dir.result_path().is_file() {
+            RunStatus::Complete
+        } else if dir.error_path().is_file() {
+            RunStatus::Failed
+        } else if dir.path().is_dir() {
+            RunStatus::Incomplete
+        } else {
+            RunStatus::Missing
+        }
+    }
+
+    /// Writes a file atomically (see [`write_atomic`]).
+    pub fn write_atomic(&self, path: &Path, bytes: &[u8]) -> Result<(), StoreError> {
+        #[cfg(test)]
+        let written = match &self.fault {
+            Some(hook) => atomic::write_atomic_with(path, bytes, hook),
+            None => write_atomic(path, bytes),
+        };
+        #[cfg(not(test))]
+        let written = write_atomic(path, bytes);
+        written.map_err(StoreError::io(path))
+    }
+
+    fn write_json<T: serde::Serialize>(&self, path: &Path, value: &T) -> Result<(), StoreError> {
+        let mut bytes = serde_json::to_vec_pretty(value).map_err(|e| StoreError::Corrupt {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        bytes.push(b'\n');
+        self.write_atomic(path, &bytes)
+    }
+
+    /// Reads and parses a JSON file of the store.
+    fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, StoreError> {
+        let bytes = std::fs::read(path).map_err(StoreError::io(path))?;
+        serde_json::from_slice(&bytes).map_err(|e| StoreError::Corrupt {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
+    }
+
+    /// Reads and parses a JSON file of the store, if it exists.
+    fn read_json_if_present<T: DeserializeOwned>(path: &Path) -> Result<Option<T>, StoreError> {
+        if path.is_file() {
+            Self::read_json(path).map(Some)
+        } else {
+            Ok(None)
+        }
+    }
+
+    /// The stored result of run `id`, if it is complete.
+    pub fn load_result(&self, id: &ContentId) -> Result<Option<RunResult>, StoreError> {
+        Self::read_json_if_present(&self.run_dir(id).result_path())
+    }
+
+    /// The stored manifest of run `id` (parsed, not re-validated: a manifest of an
+    /// older physics version still loads for listing).
+    pub fn load_manifest(&self, id: &ContentId) -> Result<Experiment, StoreError> {
+        Self::read_json(&self.run_dir(id).manifest_path())
+    }
+
+    /// The stored error record of run `id`, if it failed.
+    pub fn load_error(&self, id: &ContentId) -> Result<Option<ErrorRecord>, StoreError> {
+        Self::read_json_if_present(&self.run_dir(id).error_path())
+    }
+
+    /// Runs `experiment` unless a complete run with its id exists.
+    ///
+    /// On a cache hit the stored result is returned and `runner` is not called. Else
+    /// the canonical manifest is written, `runner` is called with the run directory
+    /// (where it may write run.mcap), and its result is stored (timing.json first,
+    /// result.json last, both atomic). If the runner fails, error.json records why
+    /// and no result is written. The experiment is validated first.
+    pub fn run_cached<E, F>(
+        &self,
+        experiment: &Experiment,
+        runner: F,
+    ) -> Result<(RunResult, CacheOutcome), RunError<E>>
+    where
+        E: std::error::Error + 'static,
+        F: FnOnce(&Experiment, &RunDir) -> Result<RunResult, E>,
+    {
+        validate_experiment(experiment).map_err(RunError::Invalid)?;
+        let id = experiment.id();
+        let dir = self.run_dir(&id);
+        if let Some(result) = self.load_result(&id)? {
+            return Ok((result, CacheOutcome::Hit));
+        }
+        std::fs::create_dir_all(dir.path()).map_err(StoreError::io(dir.path()))?;
+        self.write_atomic(&dir.manifest_path(), canonical_json(experiment).as_bytes())?;
+        remove_if_present(&dir.error_path())?;
+
+        let started = Instant::now();
+        let outcome = runner(experiment, &dir);
+        let wall_time_s = started.elapsed().as_secs_f64();
+        match outcome {
+            Ok(result) => {
+                if result.id != id {
+                    return Err(StoreError::ResultMismatch {
+                        expected: id,
+                        found: result.id,
+                    }
+                    .into());
+                }
+                if let Some(defect) = result.defect() {
+                    self.record_error(&id, &defect, Vec::new())?;
+                    return Err(RunError::BadResult(defect));
+                }
+                self.write_json(&dir.timing_path(), &TimingRecord { wall_time_s })?;
+                self.write_json(&dir.result_path(), &result)?;
+                Ok((result, CacheOutcome::Computed))
+            }
+            Err(error) => {
+                let mut causes = Vec::new();
+                let mut source = std::error::Error::source(&error);
+                while let Some(s) = source {
+                    causes.push(s.to_string());
+                    source = s.source();
+                }
+                let record_failure = self.record_error(&id, &error.to_string(), causes).err();
+                Err(RunError::Runner {
+                    error,
+                    record_failure,
+                })
+            }
+        }
+    }
+
+    fn record_error(
+        &self,
+        id: &ContentId,
+        error: &str,
+        causes: Vec<String>,
+    ) -> Result<(), StoreError> {
+        let record = ErrorRecord {
+            id: id.clone(),
+            error: error.to_string(),
+            causes,
+        };
+        self.write_json(&self.run_dir(id).error_path(), &record)
+    }
+}
+
+fn remove_if_present(path: &Path) -> Result<(), StoreError> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != io::ErrorKind::NotFound => Err(StoreError::io(path)(e)),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,103 @@
+//! The result of one run (`runs/<id>/result.json`) and the side records of a run.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::manifest::{ContentId, Experiment, Profile};
+
+/// What a run produced. Deterministic: identical manifests give byte-identical
+/// result.json (wall-clock times live in timing.json instead).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunResult {
+    /// Id of the experiment that produced it.
+    pub id: ContentId,
+    /// Scene kind (e.g. `pair`, `drum`).
+    pub scene: String,
+    /// Fidelity profile of the run.
+    pub profile: Profile,
+    /// Name of the engine kernel that ran (the force-law combination).
+    pub kernel: String,
+    /// Scalar measurements by name; the name states the unit (e.g. `restitution`,
+    /// `contact_time_s`).
+    pub measurements: BTreeMap<String, f64>,
+    /// Named time series sampled during the run.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub traces: BTreeMap<String, Trace>,
+    /// The angle of repose the scene reports, degrees (none for pair scenes).
+    pub headline_angle_deg: Option<f64>,
+}
+
+/// A time series: `values[i]` at simulated time `time_s[i]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Trace {
+    /// Simulated times, s.
+    pub time_s: Vec<f64>,
+    /// Values, in `unit`.
+    pub values: Vec<f64>,
+    /// Unit of the values (e.g. `J`, `deg`, `1`).
+    pub unit: String,
+}
+
+impl RunResult {
+    /// An empty result for `experiment` (id, scene kind and profile filled in).
+    pub fn new(experiment: &Experiment, kernel: impl Into<String>) -> RunResult {
+        RunResult {
+            id: experiment.id(),
+            scene: experiment.scene.kind().to_string(),
+            profile: experiment.profile,
+            kernel: kernel.into(),
+            measurements: BTreeMap::new(),
+            traces: BTreeMap::new(),
+            headline_angle_deg: None,
+        }
+    }
+
+    /// Why this result cannot be stored, if it cannot: a non-finite number (JSON has
+    /// none) or a trace whose columns differ in length.
+    pub fn defect(&self) -> Option<String> {
+        if let Some((name, v)) = self.measurements.iter().find(|(_, v)| !v.is_finite()) {
+            return Some(format!("measurement `{name}` is not finite ({v})"));
+        }
+        if let Some(a) = self.headline_angle_deg.filter(|a| !a.is_finite()) {
+            return Some(format!("headline angle is not finite ({a})"));
+        }
+        for (name, t) in &self.traces {
+            if t.time_s.len() != t.values.len() {
+                return Some(format!(
+                    "trace `{name}` has {} times but {} values",
+                    t.time_s.len(),
+                    t.values.len()
+                ));
+            }
+            if t.time_s.iter().chain(&t.values).any(|v| !v.is_finite()) {
+                return Some(format!("trace `{name}` holds a non-finite number"));
+            }
+        }
+        None
+    }
+}
+
+/// `runs/<id>/error.json`: why a run failed (a failed run never has a result).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ErrorRecord {
+    /// Id of the experiment.
+    pub id: ContentId,
+    /// The error, as displayed.
+    pub error: String,
+    /// Its chain of causes, outermost first.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub causes: Vec<String>,
+}
+
+/// `runs/<id>/timing.json`: wall-clock cost of the run. Non-deterministic by nature,
+/// which is why it is kept out of result.json.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimingRecord {
+    /// Wall time of the runner, s.
+    pub wall_time_s: f64,
+}

@@ -1,0 +1,174 @@
+//! The `repose` binary: exit codes (2 invalid input, 1 runtime failure), error
+//! reports naming fields and positions, the run store commands.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use common::{edit, pair_wall, root};
+use serde_json::json;
+
+fn repose(store: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_repose"))
+        .args(args)
+        .current_dir(root())
+        .env("REPOSE_STORE", store)
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn validate_reports_every_field_error_and_exits_2() {
+    let tmp = tempfile::tempdir().unwrap();
+    let bad = edit(
+        pair_wall(),
+        "/contact/particle_particle/restitution",
+        Some(json!(1.3)),
+    );
+    let bad = edit(bad, "/scene/radius_m", Some(json!(0)));
+    let path = tmp.path().join("bad.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&bad).unwrap()).unwrap();
+    let out = repose(tmp.path(), &["validate", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(
+        err.contains("contact.particle_particle.restitution = 1.3: must be in (0, 1]"),
+        "{err}"
+    );
+    assert!(
+        err.contains("scene.radius_m = 0.0: must be a finite number > 0"),
+        "{err}"
+    );
+    assert!(!err.contains("backtrace"), "{err}");
+}
+
+#[test]
+fn malformed_json_reports_line_and_column_and_exits_2() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("broken.json");
+    std::fs::write(&path, "{\n  \"schema_version\": 1,\n  \"scene\": {,}\n}\n").unwrap();
+    let out = repose(tmp.path(), &["validate", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("broken.json:3:13: "),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn validate_accepts_every_example_and_names_its_kind() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = repose(
+        tmp.path(),
+        &[
+            "validate",
+            "experiments/he2019/study.json",
+            "experiments/validation/pair_jkr_separation.json",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stdout(&out).contains("ok study "));
+    assert!(stdout(&out).contains("ok experiment "));
+}
+
+#[test]
+fn a_missing_file_is_a_runtime_failure() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = repose(tmp.path(), &["hash", "no/such/file.json"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("cannot read no/such/file.json"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn hash_prints_the_pinned_id() {
+    let tmp = tempfile::tempdir().unwrap();
+    let golden: serde_json::Value =
+        serde_json::from_str(&common::text("golden/manifest_ids.json")).unwrap();
+    let file = "experiments/validation/pair_hertz_particle_particle.json";
+    let out = repose(tmp.path(), &["hash", file]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(stdout(&out).trim(), golden[file].as_str().unwrap());
+    let out = repose(tmp.path(), &["hash", "--kind", "study", file]);
+    assert_eq!(out.status.code(), Some(2), "an experiment is not a study");
+}
+
+#[test]
+fn run_stores_the_manifest_and_a_failure_then_lists_and_shows_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = tmp.path().join("store");
+    let file = "experiments/drum/smoke.json";
+    let out = repose(&store, &["run", file]);
+    // No scene is simulated yet: a runtime failure recorded in error.json.
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("scene kind `drum` is not simulated yet"),
+        "{}",
+        stderr(&out)
+    );
+    let id = stdout(&repose(&store, &["hash", file])).trim().to_string();
+    assert!(store.join(&id).join("manifest.json").is_file());
+    assert!(store.join(&id).join("error.json").is_file());
+    assert!(!store.join(&id).join("result.json").exists());
+
+    let list = stdout(&repose(&store, &["runs", "list"]));
+    let row = list
+        .lines()
+        .find(|l| l.starts_with(&id[..12]))
+        .unwrap_or_else(|| panic!("{list}"));
+    assert!(
+        row.contains("drum") && row.contains("smoke") && row.contains("failed"),
+        "{row}"
+    );
+
+    let show = repose(
+        &store,
+        &["--store", store.to_str().unwrap(), "runs", "show", &id[..8]],
+    );
+    assert_eq!(show.status.code(), Some(0), "{}", stderr(&show));
+    assert!(stdout(&show).contains(&id) && stdout(&show).contains("not simulated yet"));
+}
+
+#[test]
+fn runs_show_names_every_candidate_of_an_ambiguous_prefix() {
+    let tmp = tempfile::tempdir().unwrap();
+    let a = format!("cd{}", "0".repeat(62));
+    let b = format!("cd{}", "1".repeat(62));
+    for id in [&a, &b] {
+        std::fs::create_dir_all(tmp.path().join(id)).unwrap();
+    }
+    let out = repose(tmp.path(), &["runs", "show", "cd"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("ambiguous")
+            && stderr(&out).contains(&a)
+            && stderr(&out).contains(&b),
+        "{}",
+        stderr(&out)
+    );
+    let out = repose(tmp.path(), &["runs", "show", "ee"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("no run"), "{}", stderr(&out));
+}
+
+#[test]
+fn an_empty_store_lists_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = repose(tmp.path(), &["runs", "list"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(stdout(&out).starts_with("no runs in"));
+}
