@@ -4,8 +4,9 @@
 //! [`crate::store::Store::run_cached`].
 
 pub mod pair;
+pub mod physics;
 
-use crate::manifest::Experiment;
+use crate::manifest::{Experiment, Scene};
 use crate::store::RunResult;
 
 /// Why a scene could not be run.
@@ -17,15 +18,20 @@ pub enum SceneError {
         /// The scene's `kind` tag.
         kind: &'static str,
     },
+    /// No stable time step exists for the manifest's settings.
+    #[error("time_step: {0}")]
+    TimeStep(#[from] crate::dem::timestep::TimeStepError),
+    /// The pair scene failed.
+    #[error(transparent)]
+    Pair(#[from] pair::PairError),
 }
 
-/// Runs the experiment's scene and returns its result.
-///
-/// Placeholder, deliberately: no scene is simulated yet, so every kind returns
-/// [`SceneError::NotYetSimulated`] (the `pair` scene is implemented next, the lab
-/// scenes in issue 4). The store records the failure in error.json.
+/// Runs the experiment's scene and returns its result. The lab scenes are
+/// simulated from issue 4 on; until then they return
+/// [`SceneError::NotYetSimulated`] (the store records it in error.json).
 pub fn run_experiment(experiment: &Experiment) -> Result<RunResult, SceneError> {
-    Err(SceneError::NotYetSimulated {
-        kind: experiment.scene.kind(),
-    })
+    match &experiment.scene {
+        Scene::Pair(scene) => pair::run(experiment, scene),
+        other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
+    }
 }

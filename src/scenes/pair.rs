@@ -11,14 +11,19 @@
 //! asked. Contact start and end are found by linear interpolation of the
 //! overlap between steps, so the duration is resolved below one step.
 
-use crate::dem::contact::normal_jkr::separation_overlap_m;
+use super::{physics, SceneError};
+use crate::dem::contact::normal_jkr::{pull_off_force_n, separation_overlap_m};
 use crate::dem::contact::PairCoefficients;
 use crate::dem::domain::{Domain, DomainError};
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::particles::{ParticleInit, Particles};
 use crate::dem::simulation::{ContactSetup, SetupError, Simulation, SimulationSetup, World};
 use crate::dem::vec3::Vec3;
+use crate::dem::material::{harmonic, hertz_contact_time_s, hertz_max_overlap_m};
 use crate::dem::walls::{Wall, WallError};
+use crate::manifest::scene::{PairMode as ManifestPairMode, PairScene, Partner as ManifestPartner};
+use crate::manifest::Experiment;
+use crate::store::RunResult;
 
 /// Standard gravity used when a pair test asks for gravity, m/s².
 pub const STANDARD_GRAVITY_M_S2: f64 = 9.81;
@@ -365,4 +370,83 @@ fn measure_separation(
         }
     }
     Err(PairError::Timeout(test.max_time_s))
+}
+
+/// Runs a `pair` experiment: the manifest's materials and contact model, the
+/// automatic time step from its `time_step` settings, and the measurements
+/// named as in result.json, with the closed-form references beside them
+/// (`theory_*`: elastic Hertz duration and maximum overlap at the approach
+/// speed; JKR pull-off 3πΓR*).
+pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError> {
+    let (partner, walls): (Partner, Vec<&str>) = match &scene.partner {
+        ManifestPartner::Particle { radius_m } => (Partner::Particle { radius_m: *radius_m }, vec![]),
+        ManifestPartner::Wall { material } => (Partner::Wall, vec![material.as_str()]),
+    };
+    let contact = physics::contact_setup(exp, &walls);
+    let min_radius = match partner {
+        Partner::Particle { radius_m } => radius_m.min(scene.radius_m),
+        Partner::Wall => scene.radius_m,
+    };
+    let plan = physics::time_step(exp, &contact, min_radius)?;
+    let test = PairTest {
+        contact,
+        density_kg_m3: exp.material.particle.density_kg_m3,
+        radius_m: scene.radius_m,
+        partner,
+        normal_velocity_m_s: scene.normal_velocity_m_s,
+        tangential_velocity_m_s: scene.tangential_velocity_m_s,
+        angular_velocity_rad_s: Vec3::from(scene.angular_velocity_rad_s),
+        gravity: scene.gravity,
+        mode: match scene.mode {
+            ManifestPairMode::Impact => PairMode::Impact,
+            ManifestPairMode::Separation => PairMode::Separation {
+                pull_speed_m_s: scene.pull_speed_m_s.unwrap_or(1e-4),
+            },
+        },
+        dt_s: plan.dt_s,
+        max_time_s: scene.max_time_s,
+    };
+    let (m, kernel) = run_pair(&test)?;
+    let mut result = RunResult::new(exp, kernel);
+    let mut put = |k: &str, v: f64| {
+        result.measurements.insert(k.to_string(), v);
+    };
+    put("dt_s", plan.dt_s);
+    put("steps", m.steps as f64);
+    put("contact_duration_s", m.contact_duration_s);
+    put("max_overlap_m", m.max_overlap_m);
+    put("max_normal_force_n", m.max_normal_force_n);
+    let (m_star, r_star, coef) = effective_pair(&test);
+    if let Some(f) = m.pull_off_force_n {
+        put("pull_off_force_n", f);
+        put("theory_pull_off_force_n", pull_off_force_n(&coef, r_star));
+    } else {
+        put("captured", f64::from(u8::from(m.captured)));
+        put("restitution", m.restitution);
+        put("rebound_normal_velocity_m_s", m.rebound_normal_velocity_m_s);
+        put("rebound_tangential_velocity_m_s", m.rebound_tangential_velocity_m_s);
+        put("rebound_angular_velocity_rad_s", m.rebound_angular_velocity_rad_s);
+        let v = scene.normal_velocity_m_s;
+        put("theory_hertz_contact_duration_s", hertz_contact_time_s(m_star, r_star, coef.e_star, v));
+        put("theory_hertz_max_overlap_m", hertz_max_overlap_m(m_star, r_star, coef.e_star, v));
+    }
+    Ok(result)
+}
+
+/// m*, R* and the mixed coefficients of the test's contact.
+fn effective_pair(test: &PairTest) -> (f64, f64, PairCoefficients) {
+    let c = &test.contact;
+    let mass = |r: f64| test.density_kg_m3 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+    let (partner_material, params, m_star, r_star) = match test.partner {
+        Partner::Particle { radius_m } => (
+            c.particle_material,
+            c.particle_particle,
+            harmonic(mass(test.radius_m), mass(radius_m)),
+            harmonic(test.radius_m, radius_m),
+        ),
+        Partner::Wall => (c.wall_materials[0].0, c.wall_materials[0].1, mass(test.radius_m), test.radius_m),
+    };
+    let coef = PairCoefficients::new(&c.particle_material, &partner_material, &params, c.clip_tensile)
+        .expect("validated manifest parameters");
+    (m_star, r_star, coef)
 }
