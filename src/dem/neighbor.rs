@@ -277,9 +277,10 @@ impl Grid {
     fn coords(&self, p: Vec3) -> [usize; 3] {
         let mut c = [0usize; 3];
         for (a, ca) in c.iter_mut().enumerate() {
-            let u = ((p[a] - self.origin[a]) * self.inv_width[a]).floor();
-            // `as` saturates: negatives -> 0; clamp the top.
-            *ca = (u.max(0.0) as usize).min(self.n[a] - 1);
+            let u = (p[a] - self.origin[a]) * self.inv_width[a];
+            // Truncation is floor for u >= 0 (no libm call); `as` saturates, so
+            // negatives give 0 and huge values are clamped to the last cell.
+            *ca = (u as usize).min(self.n[a] - 1);
         }
         c
     }
@@ -289,32 +290,43 @@ impl Grid {
         c[0] + self.n[0] * (c[1] + self.n[1] * c[2])
     }
 
-    #[inline]
-    fn unlinear(&self, l: usize) -> [usize; 3] {
-        let x = l % self.n[0];
-        let yz = l / self.n[0];
-        [x, yz % self.n[1], yz / self.n[1]]
-    }
-
-    /// The distinct neighbour cells of `c` along axis `a` (itself and ±1, wrapped on
-    /// periodic axes, clipped otherwise), sorted, merged into runs of consecutive cells.
-    /// Returns up to two runs `[first, last]` and their count.
+    /// The neighbour cells of `c` along axis `a` (itself and ±1; wrapped on periodic
+    /// axes with ≥ 3 cells, clipped otherwise — on a periodic axis with ≤ 2 cells every
+    /// cell is a neighbour and minimum image does the wrapping), as up to two runs
+    /// `[first, last]` of consecutive cells, and the run count. Each cell appears once.
     #[inline]
     fn runs(&self, a: usize, c: usize) -> ([[usize; 2]; 2], usize) {
         let n = self.n[a];
-        if self.periodic[a] && n <= 3 {
-            // Every cell on this axis is a neighbour; listing each once avoids visiting
-            // the same cell twice through two images.
-            return ([[0, n - 1], [0, 0]], 1);
-        }
-        if !self.periodic[a] || (c > 0 && c + 1 < n) {
-            // Clipped at the ends of a non-periodic axis.
+        if !self.wraps(a) || (c > 0 && c + 1 < n) {
             return ([[c.saturating_sub(1), (c + 1).min(n - 1)], [0, 0]], 1);
         }
-        if c == 0 {
+        if n == 3 {
+            ([[0, 2], [0, 0]], 1)
+        } else if c == 0 {
             ([[0, 1], [n - 1, n - 1]], 2)
         } else {
             ([[0, 0], [n - 2, n - 1]], 2)
+        }
+    }
+
+    /// True when cell indices wrap around on axis `a` (periodic with ≥ 3 cells, so that
+    /// the cells at −1 and +1 differ).
+    #[inline]
+    fn wraps(&self, a: usize) -> bool {
+        self.periodic[a] && self.n[a] >= 3
+    }
+
+    /// The forward neighbour cell (+1) of `c` along axis `a`, if any. Together with
+    /// [`runs`](Self::runs) this defines a half stencil visiting every unordered pair of
+    /// neighbouring cells exactly once.
+    #[inline]
+    fn forward(&self, a: usize, c: usize) -> Option<usize> {
+        if c + 1 < self.n[a] {
+            Some(c + 1)
+        } else if self.wraps(a) {
+            Some(0)
+        } else {
+            None
         }
     }
 }
@@ -614,54 +626,63 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         if n >= u32::MAX as usize {
             return Err(NeighborError::TooManyParticles { count: n });
         }
-        if let Some(index) = radii
-            .par_iter()
-            .position_first(|r| !(r.is_finite() && *r > 0.0))
-        {
-            return Err(NeighborError::InvalidRadius {
-                index,
-                value: radii[index],
-            });
-        }
-        if let Some(index) = positions
-            .par_iter()
-            .position_first(|p| !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()))
-        {
-            return Err(NeighborError::NonFinitePosition { index });
-        }
-        let r_max = radii.par_iter().copied().reduce(|| 0.0, f64::max);
-        let cutoff = 2.0 * r_max + self.extra_range + self.skin;
-        domain.check_cutoff(cutoff)?;
-        let (bb_lo, bb_hi) = positions
-            .par_iter()
-            .fold(
-                || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-                |(mut lo, mut hi), p| {
+        // One fused pass (fixed chunks; min/max are exact, so the reduction order does
+        // not matter): bounding box, largest radius, and whether anything is invalid.
+        let empty = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3], 0.0f64, false);
+        let (bb_lo, bb_hi, r_max, bad) = positions
+            .par_chunks(CHUNK)
+            .zip(radii.par_chunks(CHUNK))
+            .map(|(xs, rs)| {
+                let (mut lo, mut hi, mut rm, mut bad) = empty;
+                for (p, &r) in xs.iter().zip(rs) {
                     for a in 0..3 {
                         lo[a] = lo[a].min(p[a]);
                         hi[a] = hi[a].max(p[a]);
                     }
-                    (lo, hi)
-                },
-            )
+                    rm = rm.max(r);
+                    bad |= !(r.is_finite() && r > 0.0)
+                        | !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite());
+                }
+                (lo, hi, rm, bad)
+            })
             .reduce(
-                || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-                |(l1, h1), (l2, h2)| {
+                || empty,
+                |(l1, h1, r1, b1), (l2, h2, r2, b2)| {
                     (
                         [l1[0].min(l2[0]), l1[1].min(l2[1]), l1[2].min(l2[2])],
                         [h1[0].max(h2[0]), h1[1].max(h2[1]), h1[2].max(h2[2])],
+                        r1.max(r2),
+                        b1 | b2,
                     )
                 },
             );
+        if bad {
+            if let Some(index) = radii.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
+                return Err(NeighborError::InvalidRadius {
+                    index,
+                    value: radii[index],
+                });
+            }
+            let index = positions
+                .iter()
+                .position(|p| !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()))
+                .unwrap_or(0);
+            return Err(NeighborError::NonFinitePosition { index });
+        }
+        let cutoff = 2.0 * r_max + self.extra_range + self.skin;
+        domain.check_cutoff(cutoff)?;
         let grid = Grid::new(domain, bb_lo, bb_hi, cutoff, n);
         let s = &mut self.scratch;
 
         s.cell_of.resize(n, 0);
         s.cell_of
-            .par_iter_mut()
-            .zip(positions.par_iter())
-            .with_min_len(CHUNK)
-            .for_each(|(c, &p)| *c = grid.linear(grid.coords(domain.wrap(p))) as u32);
+            .par_chunks_mut(CHUNK)
+            .zip(positions.par_chunks(CHUNK))
+            .for_each(|(cs, xs)| {
+                for (c, &p) in cs.iter_mut().zip(xs) {
+                    *c = grid.linear(grid.coords(domain.wrap(p))) as u32;
+                }
+            });
 
         // Stable counting sort by cell.
         let nc = grid.n_cells();
@@ -719,7 +740,7 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         self.stale = true;
         let (grid, cutoff) = self.bin(positions, radii, domain)?;
         let identity = self.compute_carry(ids)?;
-        self.search(positions, radii, &grid, domain)?;
+        self.search(&grid, domain, n)?;
         self.carry_history(identity);
         self.build_gather(n);
 
@@ -738,83 +759,118 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
 
     /// Cell-grid search: fills `pairs` and `row_start`; the previous pairs and history
     /// move to `scratch.old_*`.
-    fn search(
-        &mut self,
-        positions: &[Vec3],
-        radii: &[f64],
-        grid: &Grid,
-        domain: &Domain,
-    ) -> Result<(), NeighborError> {
-        let n = positions.len();
+    ///
+    /// Works in slot space (particles in cell order) with a half stencil: a particle
+    /// looks at later slots of its own cell and at the forward neighbour cells only, so
+    /// each candidate pair is examined once, from contiguous memory. The pairs found are
+    /// then put in `(i, j)` index order by a counting sort on `i` and a sort of each
+    /// (short) row on `j`.
+    fn search(&mut self, grid: &Grid, domain: &Domain, n: usize) -> Result<(), NeighborError> {
         let reach = self.extra_range + self.skin;
         let s = &mut self.scratch;
         let n_chunks = n.div_ceil(CHUNK);
         if s.chunk_pairs.len() < n_chunks {
             s.chunk_pairs.resize_with(n_chunks, Vec::new);
         }
+        self.row_start.clear();
         self.row_start.resize(n + 1, 0);
-        let (cell_of, cell_start, sorted, sorted_xr) =
-            (&s.cell_of, &s.cell_start, &s.sorted, &s.sorted_xr);
+        let (cell_start, sorted, sorted_xr) = (&s.cell_start, &s.sorted, &s.sorted_xr);
         let periodic = domain.any_periodic();
+        let cs = |cell: usize| cell_start[cell] as usize;
         s.chunk_pairs[..n_chunks]
             .par_iter_mut()
-            .zip(self.row_start[1..].par_chunks_mut(CHUNK))
             .enumerate()
-            .for_each(|(ci, (out, row_len))| {
+            .for_each(|(ci, out)| {
                 out.clear();
-                let i0 = ci * CHUNK;
-                for (di, len) in row_len.iter_mut().enumerate() {
-                    let i = i0 + di;
-                    let before = out.len();
-                    let c = grid.unlinear(cell_of[i] as usize);
-                    let (xr_i, ri) = (positions[i], radii[i]);
+                let s1 = ((ci + 1) * CHUNK).min(n);
+                for slot in ci * CHUNK..s1 {
+                    let i = sorted[slot];
+                    let q = sorted_xr[slot];
+                    let (xi, ri) = (Vec3::new(q[0], q[1], q[2]), q[3]);
+                    // Same arithmetic as binning, so the same cell.
+                    let c = grid.coords(domain.wrap(xi));
+                    let row = |y: usize, z: usize| grid.n[0] * (y + grid.n[1] * z);
+                    // Candidate slot ranges of the half stencil (at most 2 + 2 + 3 × 2).
+                    let mut ranges = [(0usize, 0usize); 10];
+                    let mut nr = 1;
+                    // Own row: later slots of the own cell, then the forward x cell.
+                    let own = row(c[1], c[2]);
+                    ranges[0] = (slot + 1, cs(own + c[0] + 1));
+                    match grid.forward(0, c[0]) {
+                        Some(fx) if fx == c[0] + 1 => ranges[0].1 = cs(own + fx + 1),
+                        Some(fx) => {
+                            ranges[1] = (cs(own + fx), cs(own + fx + 1));
+                            nr = 2;
+                        }
+                        None => {}
+                    }
                     let (xr, nxr) = grid.runs(0, c[0]);
-                    let (yr, nyr) = grid.runs(1, c[1]);
-                    let (zr, nzr) = grid.runs(2, c[2]);
-                    for z in zr[..nzr].iter().flat_map(|r| r[0]..=r[1]) {
-                        for y in yr[..nyr].iter().flat_map(|r| r[0]..=r[1]) {
-                            let base = grid.n[0] * (y + grid.n[1] * z);
-                            for run in &xr[..nxr] {
-                                let a = cell_start[base + run[0]] as usize;
-                                let b = cell_start[base + run[1] + 1] as usize;
-                                for slot in a..b {
-                                    let j = sorted[slot];
-                                    if j as usize <= i {
-                                        continue;
-                                    }
-                                    let q = sorted_xr[slot];
-                                    let mut d = Vec3::new(q[0], q[1], q[2]) - xr_i;
-                                    if periodic {
-                                        d = domain.min_image(d);
-                                    }
-                                    let cut = ri + q[3] + reach;
-                                    if d.norm_squared() < cut * cut {
-                                        out.push([i as u32, j]);
-                                    }
-                                }
+                    let mut add_row = |base: usize| {
+                        for r in &xr[..nxr] {
+                            ranges[nr] = (cs(base + r[0]), cs(base + r[1] + 1));
+                            nr += 1;
+                        }
+                    };
+                    // Forward y row (same z): all x neighbours.
+                    if let Some(fy) = grid.forward(1, c[1]) {
+                        add_row(row(fy, c[2]));
+                    }
+                    // Forward z layer: all y and x neighbours.
+                    if let Some(fz) = grid.forward(2, c[2]) {
+                        let (yr, nyr) = grid.runs(1, c[1]);
+                        for r in &yr[..nyr] {
+                            for y in r[0]..=r[1] {
+                                add_row(row(y, fz));
                             }
                         }
                     }
-                    out[before..].sort_unstable_by_key(|p| p[1]);
-                    *len = (out.len() - before) as u32;
+                    for &(a, b) in &ranges[..nr] {
+                        for t in a..b {
+                            let q = sorted_xr[t];
+                            let mut d = Vec3::new(q[0], q[1], q[2]) - xi;
+                            if periodic {
+                                d = domain.min_image(d);
+                            }
+                            let cut = ri + q[3] + reach;
+                            if d.norm_squared() < cut * cut {
+                                let j = sorted[t];
+                                out.push(if i < j { [i, j] } else { [j, i] });
+                            }
+                        }
+                    }
                 }
             });
-        // Prefix sum of row lengths and concatenation in chunk order.
-        self.row_start[0] = 0;
-        let mut total: usize = 0;
+        // Row lengths, overflow check.
+        let chunks = &s.chunk_pairs[..n_chunks];
+        let total: usize = chunks.iter().map(Vec::len).sum();
+        if total >= (1usize << 31) {
+            return Err(NeighborError::TooManyPairs { count: total });
+        }
+        for p in chunks.iter().flatten() {
+            self.row_start[p[0] as usize + 1] += 1;
+        }
         for i in 0..n {
-            total += self.row_start[i + 1] as usize;
-            if total >= (1usize << 31) {
-                return Err(NeighborError::TooManyPairs { count: total });
-            }
-            self.row_start[i + 1] = total as u32;
+            self.row_start[i + 1] += self.row_start[i];
         }
         std::mem::swap(&mut self.pairs, &mut s.old_pairs);
         std::mem::swap(&mut self.history, &mut s.old_history);
         self.pairs.clear();
-        self.pairs.reserve(total);
-        for chunk in &s.chunk_pairs[..n_chunks] {
-            self.pairs.extend_from_slice(chunk);
+        // Counting sort by i (in chunk order), then sort each short row by j.
+        self.pairs.resize(total, [0, 0]);
+        s.cursor.clear();
+        s.cursor.extend_from_slice(&self.row_start[..n]);
+        for p in chunks.iter().flatten() {
+            let c = &mut s.cursor[p[0] as usize];
+            self.pairs[*c as usize] = *p;
+            *c += 1;
+        }
+        let row_start = &self.row_start;
+        let mut rest: &mut [[u32; 2]] = &mut self.pairs;
+        for i in 0..n {
+            let len = (row_start[i + 1] - row_start[i]) as usize;
+            let (row, tail) = rest.split_at_mut(len);
+            row.sort_unstable_by_key(|p| p[1]);
+            rest = tail;
         }
         Ok(())
     }
@@ -1546,8 +1602,13 @@ mod tests {
             spring: [f64; 3],
             touched: bool,
         }
-        let (radius, a, skin) = (1e-3, 2.4e-3, 2e-4);
-        for n in [5_000usize, 20_000, 50_000] {
+        let (radius, skin) = (1e-3, 2e-4);
+        // 2.4 mm: the brief's lattice (gaps 0.4 mm > skin: few pairs); 2.05 mm: about as
+        // many pairs per particle as a settled bed.
+        for (a, n) in [2.4e-3, 2.05e-3]
+            .into_iter()
+            .flat_map(|a| [5_000usize, 20_000, 50_000].map(|n| (a, n)))
+        {
             let side = (n as f64).cbrt().ceil() as usize;
             let nz = n.div_ceil(side * side);
             let domain = Domain::new(
@@ -1615,10 +1676,11 @@ mod tests {
                     let check = t.elapsed() / 100;
                     assert!(!any);
                     println!(
-                        "N={n:6} threads={threads}: pairs/particle={:.2} first(unsorted)={:7.2?} \
+                        "spacing={:.2}mm N={n:6} threads={threads}: pairs/particle={:.2} first(unsorted)={:7.2?} \
                          cell_order+permute(3 arrays)={:6.2?} rebuild after permute={:6.2?} \
                          steady rebuild={:6.2?} ({:.0} ns/particle) steady rebuild ZST={:6.2?} \
                          needs_rebuild={:6.2?}",
+                        a * 1e3,
                         nl.len() as f64 / n as f64,
                         first,
                         sort,
