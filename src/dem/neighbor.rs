@@ -68,6 +68,29 @@ const PAIR_CHUNK: usize = 4096;
 /// Relative margin by which cells exceed the cutoff, so that float rounding in binning
 /// can never put two points closer than the cutoff two cells apart.
 const CELL_MARGIN: f64 = 1e-9;
+/// Above this ratio of largest to mean radius the grid is sized for the mean particle
+/// and searched with per-particle stencils (see [`NeighborList::rebuild`]).
+const WIDE_RATIO: f64 = 1.5;
+
+/// Per-chunk summary of the input, reduced in chunk order.
+#[derive(Debug, Clone, Copy)]
+struct ChunkStats {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    r_max: f64,
+    r_sum: f64,
+    bad: bool,
+}
+
+impl ChunkStats {
+    const EMPTY: ChunkStats = ChunkStats {
+        lo: [f64::INFINITY; 3],
+        hi: [f64::NEG_INFINITY; 3],
+        r_max: 0.0,
+        r_sum: 0.0,
+        bad: false,
+    };
+}
 
 /// Why a neighbour list could not be built.
 #[derive(Debug, Clone, PartialEq)]
@@ -223,6 +246,8 @@ struct Grid {
     n: [usize; 3],
     periodic: [bool; 3],
     width: f64,
+    /// Cells sized for the mean particle, per-particle stencils (wide distribution).
+    wide: bool,
 }
 
 impl Grid {
@@ -230,7 +255,14 @@ impl Grid {
     /// and the particles' bounding box on the others, coarsened if it would have more
     /// than `16 N + 4096` cells (a sparse scene: the per-rebuild cost of empty cells is
     /// bounded by O(N), at the price of more candidates per cell).
-    fn new(domain: &Domain, bb_lo: [f64; 3], bb_hi: [f64; 3], cutoff: f64, n_part: usize) -> Grid {
+    fn new(
+        domain: &Domain,
+        bb_lo: [f64; 3],
+        bb_hi: [f64; 3],
+        cutoff: f64,
+        n_part: usize,
+        wide: bool,
+    ) -> Grid {
         let cap = (16.0 * n_part as f64 + 4096.0).min(f64::from(u32::MAX - 1));
         let mut s = cutoff * (1.0 + CELL_MARGIN);
         if s.is_nan() || s <= 0.0 {
@@ -261,6 +293,7 @@ impl Grid {
                     n: nf.map(|v| v as usize),
                     periodic: per,
                     width: s,
+                    wide,
                 };
             }
             s *= 1.5;
@@ -310,6 +343,34 @@ impl Grid {
         }
     }
 
+    /// The cells within `k` cells of `c` along axis `a` (wrapped on periodic axes, clipped
+    /// otherwise; every cell once, all of them when `2k + 1` covers the axis), as up to
+    /// two runs `[first, last]` and the run count.
+    #[inline]
+    fn runs_k(&self, a: usize, c: usize, k: usize) -> ([[usize; 2]; 2], usize) {
+        let n = self.n[a];
+        if 2 * k + 1 >= n {
+            return ([[0, n - 1], [0, 0]], 1);
+        }
+        if !self.periodic[a] || (c >= k && c + k < n) {
+            return ([[c.saturating_sub(k), (c + k).min(n - 1)], [0, 0]], 1);
+        }
+        if c < k {
+            // Wraps below 0: [0, c + k] and [n - (k - c), n - 1].
+            ([[0, c + k], [n + c - k, n - 1]], 2)
+        } else {
+            // Wraps above n - 1: [0, c + k - n] and [c - k, n - 1].
+            ([[0, c + k - n], [c - k, n - 1]], 2)
+        }
+    }
+
+    /// Cells per axis a particle of search distance `d` (m) must look at on each side.
+    #[inline]
+    fn reach_cells(&self, d: f64) -> [usize; 3] {
+        let d = d * (1.0 + CELL_MARGIN);
+        [0, 1, 2].map(|a| ((d * self.inv_width[a]).ceil() as usize).max(1))
+    }
+
     /// True when cell indices wrap around on axis `a` (periodic with ≥ 3 cells, so that
     /// the cells at −1 and +1 differ).
     #[inline]
@@ -336,6 +397,8 @@ impl Grid {
 /// steady state).
 #[derive(Debug, Default)]
 struct Scratch<H> {
+    /// Per-chunk input summaries.
+    stats: Vec<ChunkStats>,
     /// Linear cell index of each particle.
     cell_of: Vec<u32>,
     /// Start of each cell in `sorted` (len cells + 1).
@@ -378,6 +441,7 @@ pub struct NeighborList<H> {
     domain: Option<Domain>,
     grid_dims: [usize; 3],
     cell_size: f64,
+    wide: bool,
     cutoff: f64,
     stale: bool,
     rebuilds: u64,
@@ -411,6 +475,7 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
             domain: None,
             grid_dims: [0; 3],
             cell_size: 0.0,
+            wide: false,
             cutoff: 0.0,
             stale: true,
             rebuilds: 0,
@@ -422,6 +487,7 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
             ref_pos: Vec::new(),
             ids: Vec::new(),
             scratch: Scratch {
+                stats: Vec::new(),
                 cell_of: Vec::new(),
                 cell_start: Vec::new(),
                 sorted: Vec::new(),
@@ -466,6 +532,15 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
     #[inline]
     pub fn cell_size(&self) -> f64 {
         self.cell_size
+    }
+
+    /// True when the last build treated the radii as a wide distribution (largest radius
+    /// above 1.5 × the mean): cells sized for the mean particle, each particle searching as many
+    /// cells as its own diameter needs and listing only partners no larger than itself.
+    /// False: cells sized for the largest particle, half stencil.
+    #[inline]
+    pub fn wide_distribution(&self) -> bool {
+        self.wide
     }
 
     /// Number of cells per axis of the last build.
@@ -629,34 +704,37 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         }
         // One fused pass (fixed chunks; min/max are exact, so the reduction order does
         // not matter): bounding box, largest radius, and whether anything is invalid.
-        let empty = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3], 0.0f64, false);
-        let (bb_lo, bb_hi, r_max, bad) = positions
+        // Fixed chunks, collected in order and reduced serially, so the result (the radius
+        // sum included) does not depend on the thread count.
+        positions
             .par_chunks(CHUNK)
             .zip(radii.par_chunks(CHUNK))
             .map(|(xs, rs)| {
-                let (mut lo, mut hi, mut rm, mut bad) = empty;
+                let mut st = ChunkStats::EMPTY;
                 for (p, &r) in xs.iter().zip(rs) {
                     for a in 0..3 {
-                        lo[a] = lo[a].min(p[a]);
-                        hi[a] = hi[a].max(p[a]);
+                        st.lo[a] = st.lo[a].min(p[a]);
+                        st.hi[a] = st.hi[a].max(p[a]);
                     }
-                    rm = rm.max(r);
-                    bad |= !(r.is_finite() && r > 0.0)
+                    st.r_max = st.r_max.max(r);
+                    st.r_sum += r;
+                    st.bad |= !(r.is_finite() && r > 0.0)
                         | !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite());
                 }
-                (lo, hi, rm, bad)
+                st
             })
-            .reduce(
-                || empty,
-                |(l1, h1, r1, b1), (l2, h2, r2, b2)| {
-                    (
-                        [l1[0].min(l2[0]), l1[1].min(l2[1]), l1[2].min(l2[2])],
-                        [h1[0].max(h2[0]), h1[1].max(h2[1]), h1[2].max(h2[2])],
-                        r1.max(r2),
-                        b1 | b2,
-                    )
-                },
-            );
+            .collect_into_vec(&mut self.scratch.stats);
+        let mut st = ChunkStats::EMPTY;
+        for c in &self.scratch.stats {
+            for a in 0..3 {
+                st.lo[a] = st.lo[a].min(c.lo[a]);
+                st.hi[a] = st.hi[a].max(c.hi[a]);
+            }
+            st.r_max = st.r_max.max(c.r_max);
+            st.r_sum += c.r_sum;
+            st.bad |= c.bad;
+        }
+        let (bb_lo, bb_hi, r_max, bad) = (st.lo, st.hi, st.r_max, st.bad);
         if bad {
             if let Some(index) = radii.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
                 return Err(NeighborError::InvalidRadius {
@@ -670,9 +748,15 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
                 .unwrap_or(0);
             return Err(NeighborError::NonFinitePosition { index });
         }
-        let cutoff = 2.0 * r_max + self.extra_range + self.skin;
+        let reach = self.extra_range + self.skin;
+        let cutoff = 2.0 * r_max + reach;
         domain.check_cutoff(cutoff)?;
-        let grid = Grid::new(domain, bb_lo, bb_hi, cutoff, n);
+        // Wide size distribution: cells sized for the mean particle, larger particles
+        // search more cells (see `search`). Narrow: cells sized for the largest.
+        let r_mean = if n > 0 { st.r_sum / n as f64 } else { 0.0 };
+        let wide = r_max > WIDE_RATIO * r_mean;
+        let cell_cutoff = if wide { 2.0 * r_mean + reach } else { cutoff };
+        let grid = Grid::new(domain, bb_lo, bb_hi, cell_cutoff, n, wide);
         let s = &mut self.scratch;
 
         s.cell_of.resize(n, 0);
@@ -752,6 +836,7 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         self.domain = Some(*domain);
         self.grid_dims = grid.n;
         self.cell_size = grid.width;
+        self.wide = grid.wide;
         self.cutoff = cutoff;
         self.stale = false;
         self.rebuilds += 1;
@@ -791,6 +876,46 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
                     // Same arithmetic as binning, so the same cell.
                     let c = grid.coords(domain.wrap(xi));
                     let row = |y: usize, z: usize| grid.n[0] * (y + grid.n[1] * z);
+                    // Tests candidate slot t, records the pair if within range.
+                    let check = |out: &mut Vec<[u32; 2]>, t: usize, q: [f64; 4]| {
+                        let mut d = Vec3::new(q[0], q[1], q[2]) - xi;
+                        if periodic {
+                            d = domain.min_image(d);
+                        }
+                        let cut = ri + q[3] + reach;
+                        if d.norm_squared() < cut * cut {
+                            let j = sorted[t];
+                            out.push(if i < j { [i, j] } else { [j, i] });
+                        }
+                    };
+                    if grid.wide {
+                        // Each pair is found once, by its larger particle (ties: the later
+                        // slot is found from the earlier), whose stencil covers
+                        // 2 r_i + reach >= r_i + r_j + reach.
+                        let k = grid.reach_cells(2.0 * ri + reach);
+                        let (xr, nxr) = grid.runs_k(0, c[0], k[0]);
+                        let (yr, nyr) = grid.runs_k(1, c[1], k[1]);
+                        let (zr, nzr) = grid.runs_k(2, c[2], k[2]);
+                        for zrun in &zr[..nzr] {
+                            for z in zrun[0]..=zrun[1] {
+                                for yrun in &yr[..nyr] {
+                                    for y in yrun[0]..=yrun[1] {
+                                        let base = row(y, z);
+                                        for xrun in &xr[..nxr] {
+                                            let (a, b) =
+                                                (cs(base + xrun[0]), cs(base + xrun[1] + 1));
+                                            for (t, &q) in (a..b).zip(&sorted_xr[a..b]) {
+                                                if q[3] < ri || (q[3] == ri && t > slot) {
+                                                    check(out, t, q);
+                                                }
+                                            }
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                        continue;
+                    }
                     // Candidate slot ranges of the half stencil (at most 2 + 2 + 3 × 2).
                     let mut ranges = [(0usize, 0usize); 10];
                     let mut nr = 1;
@@ -826,17 +951,8 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
                         }
                     }
                     for &(a, b) in &ranges[..nr] {
-                        for t in a..b {
-                            let q = sorted_xr[t];
-                            let mut d = Vec3::new(q[0], q[1], q[2]) - xi;
-                            if periodic {
-                                d = domain.min_image(d);
-                            }
-                            let cut = ri + q[3] + reach;
-                            if d.norm_squared() < cut * cut {
-                                let j = sorted[t];
-                                out.push(if i < j { [i, j] } else { [j, i] });
-                            }
+                        for (t, &q) in (a..b).zip(&sorted_xr[a..b]) {
+                            check(out, t, q);
                         }
                     }
                 }
@@ -1118,13 +1234,22 @@ mod tests {
     /// Random polydisperse particles (radius ratio 1:10) in `domain`, many of them at or
     /// just across the faces (also outside the box on periodic axes: not wrapped).
     fn random_particles(n: usize, seed: u64, domain: &Domain) -> (Vec<Vec3>, Vec<f64>) {
+        random_particles_ratio(n, seed, domain, 10.0)
+    }
+
+    /// As [`random_particles`], radii log-uniform in `[0.5 / ratio, 0.5]`.
+    fn random_particles_ratio(
+        n: usize,
+        seed: u64,
+        domain: &Domain,
+        ratio: f64,
+    ) -> (Vec<Vec3>, Vec<f64>) {
         let mut rng = Rng(seed);
         let (lo, hi, len) = (domain.lo(), domain.hi(), domain.lengths());
         let mut x = Vec::with_capacity(n);
         let mut r = Vec::with_capacity(n);
         for k in 0..n {
-            // Log-uniform radii in [0.05, 0.5].
-            r.push(0.05 * 10f64.powf(rng.f()));
+            r.push(0.5 / ratio * ratio.powf(rng.f()));
             let mut p = v(
                 rng.range(lo.x, hi.x),
                 rng.range(lo.y, hi.y),
@@ -1184,14 +1309,23 @@ mod tests {
         ];
         for (c, &(size, per)) in cases.iter().enumerate() {
             let domain = Domain::new(lo, lo + size, per).unwrap();
-            for (seed, n) in [(1u64, 1500usize), (2, 400), (3, 2)] {
-                let (x, mut r) = random_particles(n, seed * 100 + c as u64, &domain);
+            for (seed, n, ratio) in [
+                (1u64, 1500usize, 10.0),
+                (2, 400, 10.0),
+                (3, 2, 10.0),
+                (4, 1500, 1.2),
+                (5, 300, 1.0),
+            ] {
+                let (x, mut r) = random_particles_ratio(n, seed * 100 + c as u64, &domain, ratio);
                 r[0] = 0.5;
                 let mut nl = NeighborList::<u8>::new(0.1, 0.06).unwrap();
                 nl.rebuild(&x, &r, &ids(n), &domain).unwrap();
                 let want = brute(&x, &r, &domain, 0.16);
                 assert_eq!(nl.pairs(), want.as_slice(), "case {c} seed {seed}");
-                if c == 5 {
+                if n > 10 {
+                    assert_eq!(nl.wide_distribution(), ratio > 2.0, "case {c} seed {seed}");
+                }
+                if c == 5 && ratio < 1.5 {
                     assert_eq!(nl.grid_dims()[..2], [1, 1]);
                 }
                 assert_eq!(nl.history().len(), want.len());
@@ -1502,45 +1636,47 @@ mod tests {
         let domain =
             Domain::new(v(0.0, 0.0, 0.0), v(14.0, 14.0, 14.0), [true, true, false]).unwrap();
         let n = 12_000;
-        let (x, r) = random_particles(n, 99, &domain);
-        let mut id: Vec<u32> = (0..n as u32).map(|k| k * 7 + 3).collect();
-        id.reverse();
-        let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
-                let mut nl = NeighborList::<[f64; 2]>::new(0.1, 0.02).unwrap();
-                nl.rebuild(&x, &r, &id, &domain).unwrap();
-                for (k, h) in nl.history_mut().iter_mut().enumerate() {
-                    *h = [k as f64, -(k as f64)];
-                }
-                let perm = nl.cell_order(&x, &r, &domain).unwrap();
-                let (mut x2, mut r2, mut id2) = (x.clone(), r.clone(), id.clone());
-                apply_permutation(&perm, &mut x2);
-                apply_permutation(&perm, &mut r2);
-                apply_permutation(&perm, &mut id2);
-                nl.rebuild(&x2, &r2, &id2, &domain).unwrap();
-                let hist: Vec<[u64; 2]> = nl
-                    .history()
-                    .iter()
-                    .map(|h| [h[0].to_bits(), h[1].to_bits()])
-                    .collect();
-                (
-                    perm,
-                    nl.pairs().to_vec(),
-                    hist,
-                    nl.incident_offsets().to_vec(),
-                    nl.incident_entries().to_vec(),
-                    nl.needs_rebuild(&x2),
-                )
-            })
-        };
-        let one = run(1);
-        let two = run(2);
-        assert!(one.1.len() > 10_000);
-        assert_eq!(one, two);
+        for ratio in [10.0, 1.2] {
+            let (x, r) = random_particles_ratio(n, 99, &domain, ratio);
+            let mut id: Vec<u32> = (0..n as u32).map(|k| k * 7 + 3).collect();
+            id.reverse();
+            let run = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| {
+                    let mut nl = NeighborList::<[f64; 2]>::new(0.1, 0.02).unwrap();
+                    nl.rebuild(&x, &r, &id, &domain).unwrap();
+                    for (k, h) in nl.history_mut().iter_mut().enumerate() {
+                        *h = [k as f64, -(k as f64)];
+                    }
+                    let perm = nl.cell_order(&x, &r, &domain).unwrap();
+                    let (mut x2, mut r2, mut id2) = (x.clone(), r.clone(), id.clone());
+                    apply_permutation(&perm, &mut x2);
+                    apply_permutation(&perm, &mut r2);
+                    apply_permutation(&perm, &mut id2);
+                    nl.rebuild(&x2, &r2, &id2, &domain).unwrap();
+                    let hist: Vec<[u64; 2]> = nl
+                        .history()
+                        .iter()
+                        .map(|h| [h[0].to_bits(), h[1].to_bits()])
+                        .collect();
+                    (
+                        perm,
+                        nl.pairs().to_vec(),
+                        hist,
+                        nl.incident_offsets().to_vec(),
+                        nl.incident_entries().to_vec(),
+                        nl.needs_rebuild(&x2),
+                    )
+                })
+            };
+            let one = run(1);
+            let two = run(2);
+            assert!(one.1.len() > 5_000, "{}", one.1.len());
+            assert_eq!(one, two);
+        }
     }
 
     #[test]
