@@ -540,9 +540,10 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         self.cutoff
     }
 
-    /// Cell edge length of the last build (m, ≥ [`cutoff`](Self::cutoff); larger when the
-    /// grid was coarsened for a sparse system). On periodic axes the cells are stretched
-    /// to tile the period exactly.
+    /// Nominal cell edge length of the last build (m): ≥ [`cutoff`](Self::cutoff) for a
+    /// narrow size distribution, ≥ `2 r_mean + extra_range + skin` for a wide one (see
+    /// [`wide_distribution`](Self::wide_distribution)); larger when the grid was coarsened
+    /// for a sparse scene. On periodic axes the cells are stretched to tile the period.
     #[inline]
     pub fn cell_size(&self) -> f64 {
         self.cell_size
@@ -667,7 +668,7 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
                 } else {
                     p - p0
                 };
-                // `!(<=)` so a NaN position also asks for a rebuild (which then reports it).
+                // A NaN position also asks for a rebuild (which then reports it).
                 let d2 = d.norm_squared();
                 d2 > lim || d2.is_nan()
             })
@@ -716,10 +717,9 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         if n >= u32::MAX as usize {
             return Err(NeighborError::TooManyParticles { count: n });
         }
-        // One fused pass (fixed chunks; min/max are exact, so the reduction order does
-        // not matter): bounding box, largest radius, and whether anything is invalid.
-        // Fixed chunks, collected in order and reduced serially, so the result (the radius
-        // sum included) does not depend on the thread count.
+        // One fused pass: bounding box, largest radius, radius sum, and whether anything
+        // is invalid. Fixed chunks, collected in order and reduced serially, so the result
+        // (the radius sum included) does not depend on the thread count.
         positions
             .par_chunks(CHUNK)
             .zip(radii.par_chunks(CHUNK))
@@ -860,9 +860,12 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
     /// Cell-grid search: fills `pairs` and `row_start`; the previous pairs and history
     /// move to `scratch.old_*`.
     ///
-    /// Works in slot space (particles in cell order) with a half stencil: a particle
-    /// looks at later slots of its own cell and at the forward neighbour cells only, so
-    /// each candidate pair is examined once, from contiguous memory. The pairs found are
+    /// Works in slot space (particles in cell order). Narrow distribution: half stencil, a
+    /// particle looks at later slots of its own cell and at the forward neighbour cells
+    /// only, so each candidate pair is examined once, from contiguous memory. Wide: each
+    /// particle scans the cells its own diameter needs and keeps partners no larger than
+    /// itself (ties: later slots), so each pair is found once, by its larger particle.
+    /// The pairs found are
     /// then put in `(i, j)` index order by a counting sort on `i` and a sort of each
     /// (short) row on `j`.
     fn search(&mut self, grid: &Grid, domain: &Domain, n: usize) -> Result<(), NeighborError> {
