@@ -998,14 +998,10 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
             self.pairs[*c as usize] = *p;
             *c += 1;
         }
-        let row_start = &self.row_start;
-        let mut rest: &mut [[u32; 2]] = &mut self.pairs;
-        for i in 0..n {
-            let len = (row_start[i + 1] - row_start[i]) as usize;
-            let (row, tail) = rest.split_at_mut(len);
-            row.sort_unstable_by_key(|p| p[1]);
-            rest = tail;
-        }
+        // Rows are independent: sorting them in parallel cannot change the result.
+        self.pairs
+            .par_chunk_by_mut(|a, b| a[0] == b[0])
+            .for_each(|row| row.sort_unstable_by_key(|p| p[1]));
         Ok(())
     }
 
