@@ -432,11 +432,10 @@ struct Scratch<H> {
     /// id -> new index (dense ids) or (id, new index) sorted (sparse ids).
     id_table: Vec<u32>,
     id_sorted: Vec<(u32, u32)>,
-    /// Old pairs expressed in new indices, sorted by (i, j), and their old pair index.
+    /// Old pairs expressed in new indices with their old pair index, `[i, j, k_old]`,
+    /// sorted by (i, j); `rem_start` is the row start of each i during the counting sort.
     rem_start: Vec<u32>,
-    rem_entries: Vec<(u32, u32)>,
-    rem_pairs: Vec<[u32; 2]>,
-    rem_k: Vec<u32>,
+    rem: Vec<[u32; 3]>,
     /// Fill cursors for the gather lists.
     cursor: Vec<u32>,
 }
@@ -513,9 +512,7 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
                 id_table: Vec::new(),
                 id_sorted: Vec::new(),
                 rem_start: Vec::new(),
-                rem_entries: Vec::new(),
-                rem_pairs: Vec::new(),
-                rem_k: Vec::new(),
+                rem: Vec::new(),
                 cursor: Vec::new(),
             },
         })
@@ -1062,17 +1059,18 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         }
         self.history.resize(np, H::default());
         if identity {
-            let old_hist = &s.old_history;
+            let (old_pairs, old_hist) = (&s.old_pairs, &s.old_history);
             merge_history(
                 &self.pairs,
-                &s.old_pairs,
+                old_pairs.len(),
+                |o| key(old_pairs[o]),
                 |o| old_hist[o],
                 &mut self.history,
             );
             return;
         }
         // Express the old pairs in new indices and sort them by (i, j): counting sort by
-        // i, then sort each (short) row by j.
+        // i, then sort each (short) row by j, rows in parallel.
         let n = self.row_start.len() - 1;
         s.rem_start.clear();
         s.rem_start.resize(n + 1, 0);
@@ -1090,32 +1088,24 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
             s.rem_start[i + 1] += s.rem_start[i];
         }
         let m = s.rem_start[n] as usize;
-        s.rem_entries.clear();
-        s.rem_entries.resize(m, (0, 0));
-        s.cursor.clear();
-        s.cursor.extend_from_slice(&s.rem_start[..n]);
+        s.rem.clear();
+        s.rem.resize(m, [0; 3]);
         for (k, p) in s.old_pairs.iter().enumerate() {
             if let Some((a, b)) = mapped(p) {
-                let c = &mut s.cursor[a as usize];
-                s.rem_entries[*c as usize] = (b, k as u32);
+                let c = &mut s.rem_start[a as usize];
+                s.rem[*c as usize] = [a, b, k as u32];
                 *c += 1;
             }
         }
-        s.rem_pairs.clear();
-        s.rem_k.clear();
-        for i in 0..n {
-            let row = &mut s.rem_entries[s.rem_start[i] as usize..s.rem_start[i + 1] as usize];
-            row.sort_unstable();
-            for &(j, k) in row.iter() {
-                s.rem_pairs.push([i as u32, j]);
-                s.rem_k.push(k);
-            }
-        }
-        let (old_hist, rem_k) = (&s.old_history, &s.rem_k);
+        s.rem
+            .par_chunk_by_mut(|a, b| a[0] == b[0])
+            .for_each(|row| row.sort_unstable_by_key(|e| e[1]));
+        let (rem, old_hist) = (&s.rem, &s.old_history);
         merge_history(
             &self.pairs,
-            &s.rem_pairs,
-            |o| old_hist[rem_k[o] as usize],
+            rem.len(),
+            |o| key([rem[o][0], rem[o][1]]),
+            |o| old_hist[rem[o][2] as usize],
             &mut self.history,
         );
     }
@@ -1155,23 +1145,37 @@ fn key(p: [u32; 2]) -> u64 {
 }
 
 /// Merge-join of two (i, j)-sorted pair lists: `out[k]` = history of the old pair equal
-/// to `new[k]`, or default. Parallel over fixed chunks; each chunk finds its start in
-/// `old` by binary search, so the result does not depend on the thread count.
-fn merge_history<H, F>(new: &[[u32; 2]], old: &[[u32; 2]], old_hist: F, out: &mut [H])
+/// to `new[k]`, or default. The old list is given by its length, its keys
+/// ([`key`] of each pair, increasing) and its histories. Parallel over fixed chunks; each
+/// chunk finds its start in the old list by binary search, so the result does not depend
+/// on the thread count.
+fn merge_history<H, K, F>(new: &[[u32; 2]], old_len: usize, old_key: K, old_hist: F, out: &mut [H])
 where
     H: Copy + Default + Send,
+    K: Fn(usize) -> u64 + Sync,
     F: Fn(usize) -> H + Sync,
 {
     out.par_chunks_mut(PAIR_CHUNK)
         .zip(new.par_chunks(PAIR_CHUNK))
         .for_each(|(out, new)| {
-            let mut o = old.partition_point(|q| key(*q) < key(new[0]));
+            // First old entry with key >= the chunk's first key.
+            let first = key(new[0]);
+            let (mut lo, mut hi) = (0, old_len);
+            while lo < hi {
+                let mid = lo + (hi - lo) / 2;
+                if old_key(mid) < first {
+                    lo = mid + 1;
+                } else {
+                    hi = mid;
+                }
+            }
+            let mut o = lo;
             for (h, &p) in out.iter_mut().zip(new) {
                 let kp = key(p);
-                while o < old.len() && key(old[o]) < kp {
+                while o < old_len && old_key(o) < kp {
                     o += 1;
                 }
-                *h = if o < old.len() && key(old[o]) == kp {
+                *h = if o < old_len && old_key(o) == kp {
                     old_hist(o)
                 } else {
                     H::default()
