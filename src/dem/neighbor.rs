@@ -60,9 +60,12 @@
 //!   mostly large particles pays roughly as if that volume were filled with mean-sized
 //!   ones.
 //!
-//! Measured (release, 1 thread, loaded 2-core machine, min of repeats): ~80 ns/particle
-//! for a sparse lattice (0.15 pairs/particle), ~130–170 ns/particle for a dense bed
-//! (2.5 pairs/particle), flat from 5k to 50k particles; `needs_rebuild` ~2 ns/particle.
+//! Measured (release, shared 2-core machine, min of repeats; R = 1 mm, skin 0.2 mm,
+//! periodic x/y, `cargo test --release --lib neighbor::tests::timing -- --ignored
+//! --nocapture`): steady rebuild ~70–76 ns/particle on 1 thread for the jittered 2.4 mm
+//! lattice (0.15 pairs/particle), ~150–156 ns/particle for a 2.05 mm lattice
+//! (2.5 pairs/particle, like a settled bed), flat from 5k to 50k particles; ~1.65× faster
+//! on 2 threads at 50k. `needs_rebuild` ~2.2 ns/particle (1.9× on 2 threads).
 //! Sparse scenes (hoppers, funnels: a bounding box of many empty cells) are capped at
 //! `16 N + 4096` cells, beyond which cells grow.
 //!
