@@ -87,6 +87,7 @@ fn test(
         mode: PairMode::Impact,
         dt_s: plan.dt_s,
         max_time_s: 0.01,
+        skin_m: 0.05 * R,
     }
 }
 
@@ -256,6 +257,74 @@ fn jkr_pull_off_force_is_three_pi_gamma_r_star() {
         assert!(
             (got / expected - 1.0).abs() < 0.02,
             "{partner:?}: {got} vs {expected}"
+        );
+    }
+}
+
+#[test]
+fn jkr_contact_survives_neighbour_rebuilds() {
+    // With a skin of 1 nm the neighbour list is rebuilt nearly every step while
+    // the pair is pulled through the neck (negative overlap). If a rebuild lost
+    // the contact history, the "not yet touched" rule would drop the contact at
+    // δ = 0, where the JKR force is only (8/3)πΓR* = 0.89 × the pull-off
+    // force (LAMMPS has lost JKR contacts at rebuilds this way).
+    let gamma = 0.05;
+    for partner in PARTNERS {
+        let mut t = test(
+            partner,
+            params(0.9, 0.5, 0.0, gamma),
+            NormalChoice::Jkr,
+            RollingChoice::None,
+            0.01,
+        );
+        t.mode = PairMode::Separation {
+            pull_speed_m_s: 1e-4,
+        };
+        t.max_time_s = 1.0;
+        t.skin_m = 1e-9;
+        let (m, _) = run_pair(&t).unwrap();
+        assert!(
+            m.rebuilds > m.steps / 10,
+            "{partner:?}: only {} rebuilds in {} steps",
+            m.rebuilds,
+            m.steps
+        );
+        let (_, rs, _) = effective(partner);
+        let expected = 3.0 * PI * gamma * rs;
+        let got = m.pull_off_force_n.unwrap();
+        assert!(
+            (got / expected - 1.0).abs() < 0.02,
+            "{partner:?}: {got} vs {expected}"
+        );
+    }
+}
+
+#[test]
+fn adhered_pair_rests_at_the_jkr_equilibrium_overlap() {
+    // JKR at zero load: a0 = (9πΓR*²/E*)^{1/3}, δ0 = a0²/R* − √(4πΓa0/E*)
+    // (Johnson, Kendall & Roberts 1971 with work of adhesion 2Γ).
+    let gamma = 0.05;
+    for partner in PARTNERS {
+        let mut t = test(
+            partner,
+            params(0.1, 0.5, 0.0, gamma),
+            NormalChoice::Jkr,
+            RollingChoice::None,
+            0.01,
+        );
+        t.max_time_s = 0.01;
+        let (m, _) = run_pair(&t).unwrap();
+        assert!(
+            m.captured,
+            "{partner:?}: an adhered pair at 1 cm/s must stick: {m:?}"
+        );
+        let (_, rs, es) = effective(partner);
+        let a0 = (9.0 * PI * gamma * rs * rs / es).cbrt();
+        let d0 = a0 * a0 / rs - (4.0 * PI * gamma * a0 / es).sqrt();
+        assert!(
+            (m.final_overlap_m / d0 - 1.0).abs() < 0.01,
+            "{partner:?}: {} vs {d0}",
+            m.final_overlap_m
         );
     }
 }

@@ -16,10 +16,10 @@ use crate::dem::contact::normal_jkr::{pull_off_force_n, separation_overlap_m};
 use crate::dem::contact::PairCoefficients;
 use crate::dem::domain::{Domain, DomainError};
 use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::material::{harmonic, hertz_contact_time_s, hertz_max_overlap_m};
 use crate::dem::particles::{ParticleInit, Particles};
 use crate::dem::simulation::{ContactSetup, SetupError, Simulation, SimulationSetup, World};
 use crate::dem::vec3::Vec3;
-use crate::dem::material::{harmonic, hertz_contact_time_s, hertz_max_overlap_m};
 use crate::dem::walls::{Wall, WallError};
 use crate::manifest::scene::{PairMode as ManifestPairMode, PairScene, Partner as ManifestPartner};
 use crate::manifest::Experiment;
@@ -78,6 +78,9 @@ pub struct PairTest {
     pub dt_s: f64,
     /// Give up after this much simulated time, s.
     pub max_time_s: f64,
+    /// Verlet skin, m (the manifest runner uses 5 % of the radius; tests use
+    /// a tiny skin to force a neighbour rebuild nearly every step).
+    pub skin_m: f64,
 }
 
 /// What a pair test measured (the `measurements` of result.json).
@@ -100,11 +103,16 @@ pub struct PairMeasurements {
     pub rebound_angular_velocity_rad_s: f64,
     /// Largest tensile contact force during separation, N (separation mode).
     pub pull_off_force_n: Option<f64>,
+    /// Overlap at the end of the run, m: the resting overlap of a captured
+    /// (e.g. adhered) pair.
+    pub final_overlap_m: f64,
     /// The contact had not ended by `max_time_s` (the particle was captured,
     /// e.g. e → 0 or adhesion): duration and rebound are those at that time.
     pub captured: bool,
     /// Steps simulated.
     pub steps: u64,
+    /// Neighbour-list rebuilds during the run.
+    pub rebuilds: u64,
 }
 
 /// Why a pair test failed.
@@ -208,7 +216,7 @@ pub fn run_pair(test: &PairTest) -> Result<(PairMeasurements, String), PairError
             .gravity
             .then(|| Vec3::new(0.0, 0.0, -STANDARD_GRAVITY_M_S2)),
         dt_s: test.dt_s,
-        skin_m: 0.05 * r,
+        skin_m: test.skin_m,
         health: HealthLimits::default(),
     };
     let mut sim = Simulation::new(world, &setup)?;
@@ -321,7 +329,9 @@ fn measure_impact(
     m.captured = in_contact(sim) || end.is_none();
     let end = end.filter(|_| !m.captured).unwrap_or(sim.world().time_s);
     let p = &sim.world().particles;
-    let (_, n, v) = contact_state(p, partner_r, wall);
+    m.rebuilds = sim.stats().rebuilds;
+    let (final_overlap, n, v) = contact_state(p, partner_r, wall);
+    m.final_overlap_m = final_overlap;
     m.contact_duration_s = end - start;
     m.rebound_normal_velocity_m_s = v.dot(&n);
     m.restitution = -m.rebound_normal_velocity_m_s / approach_n;
@@ -364,6 +374,7 @@ fn measure_separation(
         let f = p.force[index_of(p, MOVING_ID)].z;
         tension = tension.max(-f);
         if m.steps > 1 && !in_contact(sim) {
+            m.rebuilds = sim.stats().rebuilds;
             m.pull_off_force_n = Some(tension);
             m.contact_duration_s = sim.world().time_s;
             return Ok(m);
@@ -379,7 +390,12 @@ fn measure_separation(
 /// speed; JKR pull-off 3πΓR*).
 pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError> {
     let (partner, walls): (Partner, Vec<&str>) = match &scene.partner {
-        ManifestPartner::Particle { radius_m } => (Partner::Particle { radius_m: *radius_m }, vec![]),
+        ManifestPartner::Particle { radius_m } => (
+            Partner::Particle {
+                radius_m: *radius_m,
+            },
+            vec![],
+        ),
         ManifestPartner::Wall { material } => (Partner::Wall, vec![material.as_str()]),
     };
     let contact = physics::contact_setup(exp, &walls);
@@ -405,6 +421,7 @@ pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError>
         },
         dt_s: plan.dt_s,
         max_time_s: scene.max_time_s,
+        skin_m: 0.05 * scene.radius_m,
     };
     let (m, kernel) = run_pair(&test)?;
     let mut result = RunResult::new(exp, kernel);
@@ -422,13 +439,26 @@ pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError>
         put("theory_pull_off_force_n", pull_off_force_n(&coef, r_star));
     } else {
         put("captured", f64::from(u8::from(m.captured)));
+        put("final_overlap_m", m.final_overlap_m);
         put("restitution", m.restitution);
         put("rebound_normal_velocity_m_s", m.rebound_normal_velocity_m_s);
-        put("rebound_tangential_velocity_m_s", m.rebound_tangential_velocity_m_s);
-        put("rebound_angular_velocity_rad_s", m.rebound_angular_velocity_rad_s);
+        put(
+            "rebound_tangential_velocity_m_s",
+            m.rebound_tangential_velocity_m_s,
+        );
+        put(
+            "rebound_angular_velocity_rad_s",
+            m.rebound_angular_velocity_rad_s,
+        );
         let v = scene.normal_velocity_m_s;
-        put("theory_hertz_contact_duration_s", hertz_contact_time_s(m_star, r_star, coef.e_star, v));
-        put("theory_hertz_max_overlap_m", hertz_max_overlap_m(m_star, r_star, coef.e_star, v));
+        put(
+            "theory_hertz_contact_duration_s",
+            hertz_contact_time_s(m_star, r_star, coef.e_star, v),
+        );
+        put(
+            "theory_hertz_max_overlap_m",
+            hertz_max_overlap_m(m_star, r_star, coef.e_star, v),
+        );
     }
     Ok(result)
 }
@@ -444,9 +474,19 @@ fn effective_pair(test: &PairTest) -> (f64, f64, PairCoefficients) {
             harmonic(mass(test.radius_m), mass(radius_m)),
             harmonic(test.radius_m, radius_m),
         ),
-        Partner::Wall => (c.wall_materials[0].0, c.wall_materials[0].1, mass(test.radius_m), test.radius_m),
+        Partner::Wall => (
+            c.wall_materials[0].0,
+            c.wall_materials[0].1,
+            mass(test.radius_m),
+            test.radius_m,
+        ),
     };
-    let coef = PairCoefficients::new(&c.particle_material, &partner_material, &params, c.clip_tensile)
-        .expect("validated manifest parameters");
+    let coef = PairCoefficients::new(
+        &c.particle_material,
+        &partner_material,
+        &params,
+        c.clip_tensile,
+    )
+    .expect("validated manifest parameters");
     (m_star, r_star, coef)
 }
