@@ -3,9 +3,9 @@
 //! checks (non-finite state, overlap bound, domain exit, energy growth in
 //! closed undriven systems) run throughout; a test fails if any trips.
 
-mod common;
+mod dem_support;
 
-use common::*;
+use dem_support::*;
 use repose::dem::health::HealthCause;
 use repose::dem::simulation::{NormalChoice, RollingChoice, Simulation, World};
 use repose::dem::vec3::Vec3;
@@ -276,11 +276,11 @@ fn drum_at_200_rpm_keeps_every_particle_inside() {
     let walls = vec![
         Wall::cylinder(Vec3::new(0.0, -5e-3, 0.0), Vec3::y(), 20e-3, 10e-3, 0)
             .unwrap()
-            .with_motion(spin.clone())
+            .with_motion(spin)
             .unwrap(),
         Wall::disk(Vec3::new(0.0, -5e-3, 0.0), Vec3::y(), 20e-3, 0)
             .unwrap()
-            .with_motion(spin.clone())
+            .with_motion(spin)
             .unwrap(),
         Wall::disk(Vec3::new(0.0, 5e-3, 0.0), Vec3::y(), 20e-3, 0)
             .unwrap()

@@ -123,7 +123,7 @@ impl PairCoefficients {
             "must be finite and >= 0",
         )?;
         for m in [a, b] {
-            if !(m.youngs_modulus_pa > 0.0) {
+            if m.youngs_modulus_pa.is_nan() || m.youngs_modulus_pa <= 0.0 {
                 return Err(ParameterError {
                     name: "youngs_modulus_pa",
                     value: m.youngs_modulus_pa,
@@ -228,6 +228,9 @@ pub trait NormalModel: Send + Sync + 'static {
     type History: Copy + Default + Send + Sync + std::fmt::Debug;
     /// Name recorded in results (`hertz`, `jkr`).
     const NAME: &'static str;
+    /// Whether the model can attract (then surface energy turns into kinetic
+    /// energy and the closed-system energy check does not apply).
+    const ADHESIVE: bool;
     /// How far beyond touching (m, ≥ 0) this model can still act for a contact
     /// of effective radius `r_star_m`; the neighbour search widens by this.
     fn reach_m(c: &PairCoefficients, r_star_m: f64) -> f64;

@@ -10,6 +10,7 @@ pub struct Hertz;
 impl NormalModel for Hertz {
     type History = ();
     const NAME: &'static str = "hertz";
+    const ADHESIVE: bool = false;
 
     #[inline(always)]
     fn reach_m(_: &PairCoefficients, _: f64) -> f64 {

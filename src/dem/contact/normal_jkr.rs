@@ -77,6 +77,7 @@ fn contact_radius(c: f64, r_star: f64, overlap: f64, ac: f64, guess: f64) -> f64
 impl NormalModel for Jkr {
     type History = f64;
     const NAME: &'static str = "jkr";
+    const ADHESIVE: bool = true;
 
     fn reach_m(coef: &PairCoefficients, r_star_m: f64) -> f64 {
         -separation_overlap_m(coef, r_star_m)
