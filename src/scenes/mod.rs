@@ -5,6 +5,7 @@
 
 pub mod pair;
 pub mod physics;
+pub mod protocol;
 
 use crate::manifest::{Experiment, Scene};
 use crate::store::RunResult;
