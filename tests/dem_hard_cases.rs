@@ -202,9 +202,15 @@ fn size_ratio_one_to_ten() {
     assert!(p.position.iter().all(|x| x.z > 0.0));
 }
 
-/// Drops one sphere (no gravity, 1 m/s down) at horizontal distance `rho`
-/// from the axis onto a wall; returns its final velocity.
-fn strike(wall: Wall, rho: f64, z0: f64) -> Vec3 {
+/// One sphere (E = 10 MPa, e = 0.5, μ = 0.3, no gravity, step designed for
+/// 1 m/s) among `walls` in the box `lo`..`hi`.
+fn single_sphere(
+    position: Vec3,
+    velocity: Vec3,
+    walls: Vec<Wall>,
+    lo: Vec3,
+    hi: Vec3,
+) -> (Simulation, f64) {
     let m = material(1e7, 0.3);
     let c = contact(
         NormalChoice::Hertz,
@@ -214,19 +220,28 @@ fn strike(wall: Wall, rho: f64, z0: f64) -> Vec3 {
     );
     let dt = auto_dt(&c, R, 2500.0, 1.0);
     let p = [repose::dem::particles::ParticleInit {
-        position: Vec3::new(rho, 0.0, z0),
-        velocity: Vec3::new(0.0, 0.0, -1.0),
+        position,
+        velocity,
         angular_velocity: Vec3::zeros(),
         radius_m: R,
     }];
-    let w = world(
-        &p,
-        2500.0,
+    let w = world(&p, 2500.0, walls, lo, hi);
+    (
+        Simulation::new(w, &setup(c, 2500.0, false, dt, 0.1 * R)).unwrap(),
+        dt,
+    )
+}
+
+/// Drops one sphere (no gravity, 1 m/s down) at horizontal distance `rho`
+/// from the axis onto a wall; returns its final velocity.
+fn strike(wall: Wall, rho: f64, z0: f64) -> Vec3 {
+    let (mut sim, dt) = single_sphere(
+        Vec3::new(rho, 0.0, z0),
+        Vec3::new(0.0, 0.0, -1.0),
         vec![wall],
         Vec3::new(-0.1, -0.1, -0.1),
         Vec3::new(0.1, 0.1, 0.1),
     );
-    let mut sim = Simulation::new(w, &setup(c, 2500.0, false, dt, 0.1 * R)).unwrap();
     let e0 = kinetic(sim.world());
     run_until(&mut sim, 0.02, dt);
     assert!(
@@ -325,28 +340,13 @@ fn drum_at_200_rpm_keeps_every_particle_inside() {
 fn impact_far_beyond_the_design_speed_is_refused_or_survives() {
     // The step is designed for 1 m/s; a 30 m/s impact either stays physical
     // (no energy gain) or is stopped by the overlap bound — never NaN.
-    let m = material(1e7, 0.3);
-    let c = contact(
-        NormalChoice::Hertz,
-        RollingChoice::None,
-        m,
-        params(0.5, 0.3, 0.0, 0.0),
-    );
-    let dt = auto_dt(&c, R, 2500.0, 1.0);
-    let p = [repose::dem::particles::ParticleInit {
-        position: Vec3::new(0.0, 0.0, 1.1 * R),
-        velocity: Vec3::new(0.0, 0.0, -30.0),
-        angular_velocity: Vec3::zeros(),
-        radius_m: R,
-    }];
-    let w = world(
-        &p,
-        2500.0,
+    let (mut sim, dt) = single_sphere(
+        Vec3::new(0.0, 0.0, 1.1 * R),
+        Vec3::new(0.0, 0.0, -30.0),
         floor(),
         Vec3::new(-0.1, -0.1, -0.01),
         Vec3::new(0.1, 0.1, 0.1),
     );
-    let mut sim = Simulation::new(w, &setup(c, 2500.0, false, dt, 0.1 * R)).unwrap();
     let e0 = kinetic(sim.world());
     match sim.advance((0.001 / dt) as u64) {
         Ok(()) => {
@@ -395,28 +395,13 @@ fn an_unstable_step_is_stopped_with_particle_step_and_cause() {
 
 #[test]
 fn leaving_the_domain_is_reported() {
-    let m = material(1e7, 0.3);
-    let c = contact(
-        NormalChoice::Hertz,
-        RollingChoice::None,
-        m,
-        params(0.5, 0.3, 0.0, 0.0),
-    );
-    let dt = auto_dt(&c, R, 2500.0, 1.0);
-    let p = [repose::dem::particles::ParticleInit {
-        position: Vec3::new(0.0, 0.0, 0.0),
-        velocity: Vec3::new(1.0, 0.0, 0.0),
-        angular_velocity: Vec3::zeros(),
-        radius_m: R,
-    }];
-    let w = world(
-        &p,
-        2500.0,
+    let (mut sim, dt) = single_sphere(
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
         vec![],
         Vec3::new(-0.01, -0.01, -0.01),
         Vec3::new(0.01, 0.01, 0.01),
     );
-    let mut sim = Simulation::new(w, &setup(c, 2500.0, false, dt, 0.1 * R)).unwrap();
     let e = sim.advance(1_000_000).unwrap_err();
     assert!(matches!(e.cause, HealthCause::LeftDomain { .. }), "{e}");
     assert_eq!(e.particle_id, 0);

@@ -232,27 +232,34 @@ fn oblique_sliding_impacts_match_rigid_body_closed_forms() {
     }
 }
 
+/// Quasi-static JKR separation (Γ = 0.05 J/m², pulled at 0.1 mm/s) with the
+/// given Verlet skin; returns the measurements and the expected 3πΓR*.
+fn pull_off(partner: Partner, skin_m: f64) -> (PairMeasurements, f64) {
+    let gamma = 0.05;
+    let mut t = test(
+        partner,
+        params(0.9, 0.5, 0.0, gamma),
+        NormalChoice::Jkr,
+        RollingChoice::None,
+        0.01,
+    );
+    t.mode = PairMode::Separation {
+        pull_speed_m_s: 1e-4,
+    };
+    t.max_time_s = 1.0;
+    t.skin_m = skin_m;
+    let (m, kernel) = run_pair(&t).unwrap();
+    assert!(kernel.starts_with("jkr"), "{kernel}");
+    let (_, rs, _) = effective(partner);
+    (m, 3.0 * PI * gamma * rs)
+}
+
 #[test]
 fn jkr_pull_off_force_is_three_pi_gamma_r_star() {
     // JKR (Johnson, Kendall & Roberts 1971) with work of adhesion 2Γ: the
     // largest tensile force is 3πΓR* (LAMMPS and EDEM agree, ../shared/bench).
-    let gamma = 0.05;
     for partner in PARTNERS {
-        let mut t = test(
-            partner,
-            params(0.9, 0.5, 0.0, gamma),
-            NormalChoice::Jkr,
-            RollingChoice::None,
-            0.01,
-        );
-        t.mode = PairMode::Separation {
-            pull_speed_m_s: 1e-4,
-        };
-        t.max_time_s = 1.0;
-        let (m, kernel) = run_pair(&t).unwrap();
-        assert!(kernel.starts_with("jkr"), "{kernel}");
-        let (_, rs, _) = effective(partner);
-        let expected = 3.0 * PI * gamma * rs;
+        let (m, expected) = pull_off(partner, 0.05 * R);
         let got = m.pull_off_force_n.unwrap();
         assert!(
             (got / expected - 1.0).abs() < 0.02,
@@ -263,34 +270,19 @@ fn jkr_pull_off_force_is_three_pi_gamma_r_star() {
 
 #[test]
 fn jkr_contact_survives_neighbour_rebuilds() {
-    // With a skin of 1 nm the neighbour list is rebuilt nearly every step while
+    // With a skin of 1 nm the neighbour list is rebuilt every few steps while
     // the pair is pulled through the neck (negative overlap). If a rebuild lost
     // the contact history, the "not yet touched" rule would drop the contact at
     // δ = 0, where the JKR force is only (8/3)πΓR* = 0.89 × the pull-off
     // force (LAMMPS has lost JKR contacts at rebuilds this way).
-    let gamma = 0.05;
     for partner in PARTNERS {
-        let mut t = test(
-            partner,
-            params(0.9, 0.5, 0.0, gamma),
-            NormalChoice::Jkr,
-            RollingChoice::None,
-            0.01,
-        );
-        t.mode = PairMode::Separation {
-            pull_speed_m_s: 1e-4,
-        };
-        t.max_time_s = 1.0;
-        t.skin_m = 1e-9;
-        let (m, _) = run_pair(&t).unwrap();
+        let (m, expected) = pull_off(partner, 1e-9);
         assert!(
             m.rebuilds > m.steps / 10,
             "{partner:?}: only {} rebuilds in {} steps",
             m.rebuilds,
             m.steps
         );
-        let (_, rs, _) = effective(partner);
-        let expected = 3.0 * PI * gamma * rs;
         let got = m.pull_off_force_n.unwrap();
         assert!(
             (got / expected - 1.0).abs() < 0.02,
