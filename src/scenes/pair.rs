@@ -16,17 +16,25 @@ use crate::dem::contact::normal_jkr::{pull_off_force_n, separation_overlap_m};
 use crate::dem::contact::PairCoefficients;
 use crate::dem::domain::{Domain, DomainError};
 use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::material::{harmonic, hertz_contact_time_s, hertz_max_overlap_m};
 use crate::dem::particles::{ParticleInit, Particles};
 use crate::dem::simulation::{ContactSetup, SetupError, Simulation, SimulationSetup, World};
 use crate::dem::vec3::Vec3;
-use crate::dem::material::{harmonic, hertz_contact_time_s, hertz_max_overlap_m};
 use crate::dem::walls::{Wall, WallError};
+use crate::log::{FrameSchedule, LogError, LogOptions, Recorder, RunLog};
 use crate::manifest::scene::{PairMode as ManifestPairMode, PairScene, Partner as ManifestPartner};
 use crate::manifest::Experiment;
 use crate::store::RunResult;
+use std::path::Path;
 
 /// Standard gravity used when a pair test asks for gravity, m/s².
 pub const STANDARD_GRAVITY_M_S2: f64 = 9.81;
+
+/// Frames a pair run logs over its expected duration (approach plus elastic
+/// Hertz contact time, or the pull-off travel): every k-th step with
+/// k = expected steps / this (at least 1). Longer runs (captured particles)
+/// thin out by [`FrameSchedule`]'s doubling.
+pub const PAIR_FRAMES: u64 = 200;
 
 /// What the moving particle meets.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -125,6 +133,9 @@ pub enum PairError {
     /// The contact did not end within `max_time_s`.
     #[error("pair scene: the contact did not end within max_time_s = {0} s")]
     Timeout(f64),
+    /// The run log could not be written.
+    #[error(transparent)]
+    Log(#[from] LogError),
 }
 
 /// Stable ids of the moving particle and the partner particle (indices change
@@ -141,6 +152,16 @@ fn index_of(p: &Particles, id: u32) -> usize {
 
 /// Runs the test and measures it. Returns the measurements and the kernel name.
 pub fn run_pair(test: &PairTest) -> Result<(PairMeasurements, String), PairError> {
+    run_pair_logged(test, None)
+}
+
+/// [`run_pair`], logging [`PAIR_FRAMES`] frames (particles, wall, engine
+/// traces) over the expected duration into `log` when given; the initial and
+/// final states are always frames.
+pub fn run_pair_logged(
+    test: &PairTest,
+    log: Option<&mut RunLog>,
+) -> Result<(PairMeasurements, String), PairError> {
     let r = test.radius_m;
     let (partner_r, walls) = match test.partner {
         Partner::Particle { radius_m } => (radius_m, vec![]),
@@ -213,13 +234,50 @@ pub fn run_pair(test: &PairTest) -> Result<(PairMeasurements, String), PairError
     };
     let mut sim = Simulation::new(world, &setup)?;
     let kernel = sim.kernel_name();
+    let expected_steps = (expected_duration_s(test, reach) / test.dt_s).ceil() as u64;
+    let mut rec =
+        log.map(|log| Recorder::new(log, FrameSchedule::new(expected_steps, PAIR_FRAMES)));
+    if let Some(r) = rec.as_mut() {
+        r.step(&sim)?;
+    }
     let m = match test.mode {
-        PairMode::Impact => measure_impact(&mut sim, test, partner_r)?,
+        PairMode::Impact => measure_impact(&mut sim, test, partner_r, &mut rec)?,
         PairMode::Separation { pull_speed_m_s } => {
-            measure_separation(&mut sim, test, pull_speed_m_s)?
+            measure_separation(&mut sim, test, pull_speed_m_s, &mut rec)?
         }
     };
+    if let Some(r) = rec {
+        r.finish(&sim)?;
+    }
     Ok((m, kernel))
+}
+
+/// How long the test should take (s): the approach over the start gap plus the
+/// elastic Hertz contact time for an impact; the pull-off travel (pre-load plus
+/// JKR reach) for a separation; `max_time_s` if that is not finite and positive.
+fn expected_duration_s(test: &PairTest, reach: f64) -> f64 {
+    let r = test.radius_m;
+    let t = match test.mode {
+        PairMode::Impact => {
+            let v = test.normal_velocity_m_s;
+            let (m_star, r_star, coef) = effective_pair(test);
+            0.01 * r / v + hertz_contact_time_s(m_star, r_star, coef.e_star, v)
+        }
+        PairMode::Separation { pull_speed_m_s } => (1e-3 * r + reach) / pull_speed_m_s,
+    };
+    if t.is_finite() && t > 0.0 {
+        t.min(test.max_time_s)
+    } else {
+        test.max_time_s
+    }
+}
+
+/// Records after a step when a recorder is given.
+fn record(rec: &mut Option<Recorder<'_>>, sim: &Simulation) -> Result<(), LogError> {
+    match rec {
+        Some(r) => r.step(sim),
+        None => Ok(()),
+    }
 }
 
 /// Extra separation (m) over which a JKR contact of this test stays alive.
@@ -273,6 +331,7 @@ fn measure_impact(
     sim: &mut Simulation,
     test: &PairTest,
     partner_r: f64,
+    rec: &mut Option<Recorder<'_>>,
 ) -> Result<PairMeasurements, PairError> {
     let wall = test.partner == Partner::Wall;
     let dt = test.dt_s;
@@ -292,6 +351,7 @@ fn measure_impact(
         let (_, n_before, v_before) = contact_state(&sim.world().particles, partner_r, wall);
         sim.advance(1)?;
         m.steps += 1;
+        record(rec, sim)?;
         let p = &sim.world().particles;
         let (overlap, n, _) = contact_state(p, partner_r, wall);
         let t = sim.world().time_s;
@@ -335,6 +395,7 @@ fn measure_separation(
     sim: &mut Simulation,
     test: &PairTest,
     pull_speed: f64,
+    rec: &mut Option<Recorder<'_>>,
 ) -> Result<PairMeasurements, PairError> {
     let dt = test.dt_s;
     let max_steps = (test.max_time_s / dt).ceil() as u64;
@@ -360,6 +421,7 @@ fn measure_separation(
         }
         sim.advance(1)?;
         m.steps += 1;
+        record(rec, sim)?;
         let p = &sim.world().particles;
         let f = p.force[index_of(p, MOVING_ID)].z;
         tension = tension.max(-f);
@@ -376,10 +438,21 @@ fn measure_separation(
 /// automatic time step from its `time_step` settings, and the measurements
 /// named as in result.json, with the closed-form references beside them
 /// (`theory_*`: elastic Hertz duration and maximum overlap at the approach
-/// speed; JKR pull-off 3πΓR*).
-pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError> {
+/// speed; JKR pull-off 3πΓR*). With `log`, the run's MCAP log is written
+/// there (see [`run_pair_logged`]), particles coloured red at the largest
+/// initial speed.
+pub fn run(
+    exp: &Experiment,
+    scene: &PairScene,
+    log: Option<&Path>,
+) -> Result<RunResult, SceneError> {
     let (partner, walls): (Partner, Vec<&str>) = match &scene.partner {
-        ManifestPartner::Particle { radius_m } => (Partner::Particle { radius_m: *radius_m }, vec![]),
+        ManifestPartner::Particle { radius_m } => (
+            Partner::Particle {
+                radius_m: *radius_m,
+            },
+            vec![],
+        ),
         ManifestPartner::Wall { material } => (Partner::Wall, vec![material.as_str()]),
     };
     let contact = physics::contact_setup(exp, &walls);
@@ -406,7 +479,26 @@ pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError>
         dt_s: plan.dt_s,
         max_time_s: scene.max_time_s,
     };
-    let (m, kernel) = run_pair(&test)?;
+    let (m, kernel) = match log {
+        Some(path) => {
+            let speed = [
+                test.normal_velocity_m_s,
+                test.tangential_velocity_m_s.abs(),
+                scene.pull_speed_m_s.unwrap_or(0.0),
+            ]
+            .into_iter()
+            .fold(0.0, f64::max);
+            let options = LogOptions {
+                speed_scale_m_s: if speed > 0.0 { speed } else { 1.0 },
+                ..LogOptions::default()
+            };
+            let mut log = RunLog::create(path, exp, options)?;
+            let done = run_pair_logged(&test, Some(&mut log))?;
+            log.finish()?;
+            done
+        }
+        None => run_pair(&test)?,
+    };
     let mut result = RunResult::new(exp, kernel);
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
@@ -424,11 +516,23 @@ pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError>
         put("captured", f64::from(u8::from(m.captured)));
         put("restitution", m.restitution);
         put("rebound_normal_velocity_m_s", m.rebound_normal_velocity_m_s);
-        put("rebound_tangential_velocity_m_s", m.rebound_tangential_velocity_m_s);
-        put("rebound_angular_velocity_rad_s", m.rebound_angular_velocity_rad_s);
+        put(
+            "rebound_tangential_velocity_m_s",
+            m.rebound_tangential_velocity_m_s,
+        );
+        put(
+            "rebound_angular_velocity_rad_s",
+            m.rebound_angular_velocity_rad_s,
+        );
         let v = scene.normal_velocity_m_s;
-        put("theory_hertz_contact_duration_s", hertz_contact_time_s(m_star, r_star, coef.e_star, v));
-        put("theory_hertz_max_overlap_m", hertz_max_overlap_m(m_star, r_star, coef.e_star, v));
+        put(
+            "theory_hertz_contact_duration_s",
+            hertz_contact_time_s(m_star, r_star, coef.e_star, v),
+        );
+        put(
+            "theory_hertz_max_overlap_m",
+            hertz_max_overlap_m(m_star, r_star, coef.e_star, v),
+        );
     }
     Ok(result)
 }
@@ -444,9 +548,19 @@ fn effective_pair(test: &PairTest) -> (f64, f64, PairCoefficients) {
             harmonic(mass(test.radius_m), mass(radius_m)),
             harmonic(test.radius_m, radius_m),
         ),
-        Partner::Wall => (c.wall_materials[0].0, c.wall_materials[0].1, mass(test.radius_m), test.radius_m),
+        Partner::Wall => (
+            c.wall_materials[0].0,
+            c.wall_materials[0].1,
+            mass(test.radius_m),
+            test.radius_m,
+        ),
     };
-    let coef = PairCoefficients::new(&c.particle_material, &partner_material, &params, c.clip_tensile)
-        .expect("validated manifest parameters");
+    let coef = PairCoefficients::new(
+        &c.particle_material,
+        &partner_material,
+        &params,
+        c.clip_tensile,
+    )
+    .expect("validated manifest parameters");
     (m_star, r_star, coef)
 }
