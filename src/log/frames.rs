@@ -300,11 +300,11 @@ impl FrameSchedule {
 
     /// True when `step` is a frame; counts it.
     pub fn due(&mut self, step: u64) -> bool {
-        if step % self.stride != 0 {
+        if !step.is_multiple_of(self.stride) {
             return false;
         }
         self.frames += 1;
-        if self.frames >= 2 * self.target && self.frames % self.target == 0 {
+        if self.frames >= 2 * self.target && self.frames.is_multiple_of(self.target) {
             self.stride *= 2;
         }
         true
