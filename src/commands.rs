@@ -6,6 +6,7 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
+use crate::log::{inspect, InspectError};
 use crate::manifest::{read_document, read_experiment, ContentId, DocumentKind, ManifestError};
 use crate::scenes::run_experiment;
 use crate::store::{CacheOutcome, RunError, RunSummary, Store, StoreError};
@@ -65,6 +66,9 @@ pub enum CommandError {
         /// Where it is recorded.
         error_path: PathBuf,
     },
+    /// `inspect` found a corrupt or mismatched log, or could not read it.
+    #[error(transparent)]
+    Inspect(#[from] InspectError),
     /// Writing the report failed (e.g. a closed pipe).
     #[error("cannot write output: {0}")]
     Output(#[from] io::Error),
@@ -77,6 +81,7 @@ impl CommandError {
             CommandError::Manifest { error, .. } => error.is_invalid_input(),
             CommandError::ValidationFailed { .. } => true,
             CommandError::Store(e) => e.is_invalid_input(),
+            CommandError::Inspect(e) => e.is_invalid_input(),
             CommandError::RunFailed { .. } | CommandError::Output(_) => false,
         };
         if invalid {
@@ -163,7 +168,9 @@ pub fn run(store_root: &Path, manifest: &Path, out: &mut dyn Write) -> Result<()
     let store = Store::open(store_root)?;
     let id = experiment.id();
     let dir = store.run_dir(&id);
-    let (result, outcome) = match store.run_cached(&experiment, |e, _dir| run_experiment(e)) {
+    let (result, outcome) = match store.run_cached(&experiment, |e, dir| {
+        run_experiment(e, Some(&dir.mcap_path()))
+    }) {
         Ok(done) => done,
         Err(RunError::Invalid(errors)) => {
             return Err(CommandError::Manifest {
@@ -290,4 +297,11 @@ pub fn runs_show(store_root: &Path, prefix: &str, out: &mut dyn Write) -> Result
 
 fn pretty<T: serde::Serialize>(value: &T) -> String {
     serde_json::to_string_pretty(value).unwrap_or_else(|e| format!("(cannot display: {e})"))
+}
+
+/// `repose inspect FILE`: checks a run log (every byte, the embedded manifest
+/// against its id and against `<store>/<id>/manifest.json`) and reports its
+/// channels, message counts and time range.
+pub fn inspect(store_root: &Path, file: &Path, out: &mut dyn Write) -> Result<(), CommandError> {
+    Ok(inspect::report(file, store_root, out)?)
 }

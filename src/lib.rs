@@ -4,6 +4,7 @@
 //! Module map (dependencies point downward only):
 //! - [`commands`]: one function per CLI subcommand (the binary only parses arguments).
 //! - [`scenes`]: runs an experiment's scene and produces its result.
+//! - [`log`]: MCAP run logs for Foxglove (writing, and `repose inspect`).
 //! - [`store`]: the content-addressed run store (`runs/<id>/`), atomic writes,
 //!   caching, lineage records.
 //! - [`manifest`]: the experiment model (experiments and studies), validation,
@@ -12,6 +13,7 @@
 
 pub mod commands;
 pub mod dem;
+pub mod log;
 pub mod manifest;
 pub mod scenes;
 pub mod store;

@@ -45,6 +45,11 @@ enum Command {
         /// Experiment manifest.
         manifest: PathBuf,
     },
+    /// Check a run log (run.mcap) and list its channels, counts, times and manifest.
+    Inspect {
+        /// The MCAP file.
+        file: PathBuf,
+    },
     /// Inspect the run store.
     Runs {
         #[command(subcommand)]
@@ -71,6 +76,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             commands::validate(&files, kind, &mut out, &mut io::stderr())
         }
         Command::Run { manifest } => commands::run(&cli.store, &manifest, &mut out),
+        Command::Inspect { file } => commands::inspect(&cli.store, &file, &mut out),
         Command::Runs {
             command: RunsCommand::List,
         } => commands::runs_list(&cli.store, &mut out),

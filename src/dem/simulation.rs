@@ -443,7 +443,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             self.rebuild(world)?;
         }
         self.forces(world)?;
-        if self.energy_check && world.step % ENERGY_CHECK_INTERVAL == 0 {
+        if self.energy_check && world.step.is_multiple_of(ENERGY_CHECK_INTERVAL) {
             self.check_energy(world)?;
         }
         Ok(())

@@ -7,6 +7,9 @@ pub mod pair;
 pub mod physics;
 pub mod protocol;
 
+use std::path::Path;
+
+use crate::log::LogError;
 use crate::manifest::{Experiment, Scene};
 use crate::store::RunResult;
 
@@ -25,14 +28,22 @@ pub enum SceneError {
     /// The pair scene failed.
     #[error(transparent)]
     Pair(#[from] pair::PairError),
+    /// The run log could not be written.
+    #[error(transparent)]
+    Log(#[from] LogError),
 }
 
-/// Runs the experiment's scene and returns its result. The lab scenes are
-/// simulated from issue 4 on; until then they return
-/// [`SceneError::NotYetSimulated`] (the store records it in error.json).
-pub fn run_experiment(experiment: &Experiment) -> Result<RunResult, SceneError> {
+/// Runs the experiment's scene and returns its result; with `log`, also writes
+/// the run's MCAP log there (atomically: the file appears only complete, and
+/// only when the run succeeds). The lab scenes are simulated from issue 4 on;
+/// until then they return [`SceneError::NotYetSimulated`] (the store records it
+/// in error.json).
+pub fn run_experiment(
+    experiment: &Experiment,
+    log: Option<&Path>,
+) -> Result<RunResult, SceneError> {
     match &experiment.scene {
-        Scene::Pair(scene) => pair::run(experiment, scene),
+        Scene::Pair(scene) => pair::run(experiment, scene, log),
         other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
     }
 }

@@ -21,12 +21,20 @@ use crate::dem::particles::{ParticleInit, Particles};
 use crate::dem::simulation::{ContactSetup, SetupError, Simulation, SimulationSetup, World};
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::{Wall, WallError};
+use crate::log::{FrameSchedule, LogError, LogOptions, Recorder, RunLog};
 use crate::manifest::scene::{PairMode as ManifestPairMode, PairScene, Partner as ManifestPartner};
 use crate::manifest::Experiment;
 use crate::store::RunResult;
+use std::path::Path;
 
 /// Standard gravity used when a pair test asks for gravity, m/s².
 pub const STANDARD_GRAVITY_M_S2: f64 = 9.81;
+
+/// Frames a pair run logs over its expected duration (approach plus elastic
+/// Hertz contact time, or the pull-off travel): every k-th step with
+/// k = expected steps / this (at least 1). Longer runs (captured particles)
+/// thin out by [`FrameSchedule`]'s doubling.
+pub const PAIR_FRAMES: u64 = 200;
 
 /// What the moving particle meets.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -133,6 +141,9 @@ pub enum PairError {
     /// The contact did not end within `max_time_s`.
     #[error("pair scene: the contact did not end within max_time_s = {0} s")]
     Timeout(f64),
+    /// The run log could not be written.
+    #[error(transparent)]
+    Log(#[from] LogError),
 }
 
 /// Stable ids of the moving particle and the partner particle (indices change
@@ -149,6 +160,16 @@ fn index_of(p: &Particles, id: u32) -> usize {
 
 /// Runs the test and measures it. Returns the measurements and the kernel name.
 pub fn run_pair(test: &PairTest) -> Result<(PairMeasurements, String), PairError> {
+    run_pair_logged(test, None)
+}
+
+/// [`run_pair`], logging [`PAIR_FRAMES`] frames (particles, wall, engine
+/// traces) over the expected duration into `log` when given; the initial and
+/// final states are always frames.
+pub fn run_pair_logged(
+    test: &PairTest,
+    log: Option<&mut RunLog>,
+) -> Result<(PairMeasurements, String), PairError> {
     let r = test.radius_m;
     let (partner_r, walls) = match test.partner {
         Partner::Particle { radius_m } => (radius_m, vec![]),
@@ -221,13 +242,50 @@ pub fn run_pair(test: &PairTest) -> Result<(PairMeasurements, String), PairError
     };
     let mut sim = Simulation::new(world, &setup)?;
     let kernel = sim.kernel_name();
+    let expected_steps = (expected_duration_s(test, reach) / test.dt_s).ceil() as u64;
+    let mut rec =
+        log.map(|log| Recorder::new(log, FrameSchedule::new(expected_steps, PAIR_FRAMES)));
+    if let Some(r) = rec.as_mut() {
+        r.step(&sim)?;
+    }
     let m = match test.mode {
-        PairMode::Impact => measure_impact(&mut sim, test, partner_r)?,
+        PairMode::Impact => measure_impact(&mut sim, test, partner_r, &mut rec)?,
         PairMode::Separation { pull_speed_m_s } => {
-            measure_separation(&mut sim, test, pull_speed_m_s)?
+            measure_separation(&mut sim, test, pull_speed_m_s, &mut rec)?
         }
     };
+    if let Some(r) = rec {
+        r.finish(&sim)?;
+    }
     Ok((m, kernel))
+}
+
+/// How long the test should take (s): the approach over the start gap plus the
+/// elastic Hertz contact time for an impact; the pull-off travel (pre-load plus
+/// JKR reach) for a separation; `max_time_s` if that is not finite and positive.
+fn expected_duration_s(test: &PairTest, reach: f64) -> f64 {
+    let r = test.radius_m;
+    let t = match test.mode {
+        PairMode::Impact => {
+            let v = test.normal_velocity_m_s;
+            let (m_star, r_star, coef) = effective_pair(test);
+            0.01 * r / v + hertz_contact_time_s(m_star, r_star, coef.e_star, v)
+        }
+        PairMode::Separation { pull_speed_m_s } => (1e-3 * r + reach) / pull_speed_m_s,
+    };
+    if t.is_finite() && t > 0.0 {
+        t.min(test.max_time_s)
+    } else {
+        test.max_time_s
+    }
+}
+
+/// Records after a step when a recorder is given.
+fn record(rec: &mut Option<Recorder<'_>>, sim: &Simulation) -> Result<(), LogError> {
+    match rec {
+        Some(r) => r.step(sim),
+        None => Ok(()),
+    }
 }
 
 /// Extra separation (m) over which a JKR contact of this test stays alive.
@@ -281,6 +339,7 @@ fn measure_impact(
     sim: &mut Simulation,
     test: &PairTest,
     partner_r: f64,
+    rec: &mut Option<Recorder<'_>>,
 ) -> Result<PairMeasurements, PairError> {
     let wall = test.partner == Partner::Wall;
     let dt = test.dt_s;
@@ -300,6 +359,7 @@ fn measure_impact(
         let (_, n_before, v_before) = contact_state(&sim.world().particles, partner_r, wall);
         sim.advance(1)?;
         m.steps += 1;
+        record(rec, sim)?;
         let p = &sim.world().particles;
         let (overlap, n, _) = contact_state(p, partner_r, wall);
         let t = sim.world().time_s;
@@ -345,6 +405,7 @@ fn measure_separation(
     sim: &mut Simulation,
     test: &PairTest,
     pull_speed: f64,
+    rec: &mut Option<Recorder<'_>>,
 ) -> Result<PairMeasurements, PairError> {
     let dt = test.dt_s;
     let max_steps = (test.max_time_s / dt).ceil() as u64;
@@ -370,6 +431,7 @@ fn measure_separation(
         }
         sim.advance(1)?;
         m.steps += 1;
+        record(rec, sim)?;
         let p = &sim.world().particles;
         let f = p.force[index_of(p, MOVING_ID)].z;
         tension = tension.max(-f);
@@ -387,8 +449,14 @@ fn measure_separation(
 /// automatic time step from its `time_step` settings, and the measurements
 /// named as in result.json, with the closed-form references beside them
 /// (`theory_*`: elastic Hertz duration and maximum overlap at the approach
-/// speed; JKR pull-off 3πΓR*).
-pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError> {
+/// speed; JKR pull-off 3πΓR*). With `log`, the run's MCAP log is written
+/// there (see [`run_pair_logged`]), particles coloured red at the largest
+/// initial speed.
+pub fn run(
+    exp: &Experiment,
+    scene: &PairScene,
+    log: Option<&Path>,
+) -> Result<RunResult, SceneError> {
     let (partner, walls): (Partner, Vec<&str>) = match &scene.partner {
         ManifestPartner::Particle { radius_m } => (
             Partner::Particle {
@@ -423,7 +491,26 @@ pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError>
         max_time_s: scene.max_time_s,
         skin_m: 0.05 * scene.radius_m,
     };
-    let (m, kernel) = run_pair(&test)?;
+    let (m, kernel) = match log {
+        Some(path) => {
+            let speed = [
+                test.normal_velocity_m_s,
+                test.tangential_velocity_m_s.abs(),
+                scene.pull_speed_m_s.unwrap_or(0.0),
+            ]
+            .into_iter()
+            .fold(0.0, f64::max);
+            let options = LogOptions {
+                speed_scale_m_s: if speed > 0.0 { speed } else { 1.0 },
+                ..LogOptions::default()
+            };
+            let mut log = RunLog::create(path, exp, options)?;
+            let done = run_pair_logged(&test, Some(&mut log))?;
+            log.finish()?;
+            done
+        }
+        None => run_pair(&test)?,
+    };
     let mut result = RunResult::new(exp, kernel);
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);

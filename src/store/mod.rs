@@ -25,7 +25,7 @@ use std::time::Instant;
 
 use serde::de::DeserializeOwned;
 
-pub use atomic::{write_atomic, TEMP_PREFIX};
+pub use atomic::{write_atomic, AtomicFile, TEMP_PREFIX};
 pub use lineage::{InputRef, Lineage};
 pub use lookup::RunSummary;
 pub use result::{ErrorRecord, RunResult, TimingRecord, Trace};
