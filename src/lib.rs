@@ -18,5 +18,6 @@ pub mod commands;
 pub mod dem;
 pub mod manifest;
 pub mod measure;
+pub mod packing;
 pub mod scenes;
 pub mod store;
