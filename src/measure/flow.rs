@@ -55,8 +55,8 @@ fn check_trace(samples: &[DischargeSample]) -> Result<(), MeasureError> {
     Ok(())
 }
 
-/// yan2015's FR at each discharging time in `times_s` (s after `t_open_s`, each
-/// > 0): discharged count / time. The count is taken from the sample at or before
+/// yan2015's FR at each discharging time in `times_s` (s after `t_open_s`, all
+/// positive): discharged count / time. The count is taken from the sample at or before
 /// `t_open_s + t` and should be zero at the opening; the trace must cover every
 /// requested time.
 pub fn flow_rates(

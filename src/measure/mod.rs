@@ -15,7 +15,7 @@
 //! - [`fit`]: least-squares lines, R², angle of a slope.
 //! - [`pile`]: he2019 pile profile angle (left, right, mean) and cai2024's
 //!   tan(angle) = 2H/D.
-//! - [`slice`]: yan2015 ortho-slice angles (xz and yz slabs, four angles).
+//! - [`ortho`]: yan2015 ortho-slice angles (xz and yz slabs, four angles).
 //! - [`drum`]: rotating-drum free-surface angle.
 //! - [`baffle`]: he2019 §3.6.1 baffle-lift slope.
 //! - [`flow`]: yan2015 discharge flow rate and mean speed in a window.
@@ -25,10 +25,10 @@ pub mod baffle;
 pub mod drum;
 pub mod fit;
 pub mod flow;
+pub mod ortho;
 pub mod pile;
 pub mod profile;
 pub mod series;
-pub mod slice;
 #[cfg(test)]
 mod synthetic;
 

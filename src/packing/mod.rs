@@ -4,7 +4,7 @@
 //! Everything random draws from a `rand_chacha::ChaCha8Rng` seeded by the caller
 //! (the manifest's packing seed), so the same seed gives the same particles, bit
 //! for bit. Insertion never creates an overlap: every new sphere is checked against
-//! the existing and the already inserted ones through a cell grid ([`grid`]) and lies
+//! the existing and the already inserted ones through a cell grid and lies
 //! inside its region with the requested clearance ([`region`]).
 //!
 //! - [`distribution`]: monodisperse, weighted list, log-normal from d10/d50/d90.
