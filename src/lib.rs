@@ -9,11 +9,17 @@
 //!   caching, lineage records.
 //! - [`manifest`]: the experiment model (experiments and studies), validation,
 //!   canonical JSON and sha256 ids.
+//! - [`measure`]: angles, profiles and flow rates as pure functions of particle
+//!   snapshots (synthetic-pile tested).
+//! - [`packing`]: size distributions, non-overlapping insertion, rate factories,
+//!   coarse-graining rules.
 //! - [`dem`]: the soft-sphere DEM engine; knows nothing of studies, manifests or files.
 
 pub mod commands;
 pub mod dem;
 pub mod log;
 pub mod manifest;
+pub mod measure;
+pub mod packing;
 pub mod scenes;
 pub mod store;
