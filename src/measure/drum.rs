@@ -100,7 +100,7 @@ pub fn drum_surface_angle(
         .zip(radii)
         .filter(|(p, _)| {
             spec.y_window_m
-                .map_or(true, |(lo, hi)| p.y >= lo && p.y <= hi)
+                .is_none_or(|(lo, hi)| p.y >= lo && p.y <= hi)
         })
         .map(|(p, &r)| (p.x - cx, p.z - cz, r))
         .collect();

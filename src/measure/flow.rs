@@ -142,7 +142,7 @@ pub fn window_mean_speed(
         let in_z = p.z >= zlo && p.z <= zhi;
         let in_cyl = window
             .cylinder
-            .map_or(true, |([cx, cy], r)| (p.x - cx).hypot(p.y - cy) <= r);
+            .is_none_or(|([cx, cy], r)| (p.x - cx).hypot(p.y - cy) <= r);
         if in_z && in_cyl {
             sum += v.norm();
             n += 1;
