@@ -287,6 +287,7 @@ fn drum_at_200_rpm_keeps_every_particle_inside() {
         axis_dir: Vec3::y(),
         rpm: 200.0,
         start_s: 0.0,
+        end_s: f64::INFINITY,
     };
     let walls = vec![
         Wall::cylinder(Vec3::new(0.0, -5e-3, 0.0), Vec3::y(), 20e-3, 10e-3, 0)

@@ -177,6 +177,7 @@ fn drum_world() -> (World, SimulationSetup) {
             axis_dir: Vec3::y(),
             rpm: 30.0,
             start_s: 0.0,
+            end_s: f64::INFINITY,
         })
         .unwrap();
     let params = PairParameters {

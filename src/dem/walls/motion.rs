@@ -34,11 +34,13 @@ pub enum Motion {
         /// Time the motion stops (s); `>= start_s`, may be infinite.
         end_s: f64,
     },
-    /// Rotation about a fixed world axis at a constant rate, from `start_s` on.
+    /// Rotation about a fixed world axis at a constant rate inside the window
+    /// `[start_s, end_s)` (a drum that turns, then stops and stands).
     ///
-    /// Angle at time t: `ω · max(t − start_s, 0)` (rad), `ω = rpm · 2π / 60`,
-    /// right-handed about `axis_dir`; material velocity `ω axis_dir × (p − axis_point)`
-    /// for `t >= start_s`, else zero.
+    /// Angle at time t: `ω · clamp(t − start_s, 0, end_s − start_s)` (rad),
+    /// `ω = rpm · 2π / 60`, right-handed about `axis_dir`; material velocity
+    /// `ω axis_dir × (p − axis_point)` for `start_s <= t < end_s`, else zero.
+    /// `end_s` may be `f64::INFINITY`.
     Rotate {
         /// A point on the rotation axis (m, world frame).
         axis_point: Vec3,
@@ -49,6 +51,8 @@ pub enum Motion {
         rpm: f64,
         /// Time the rotation starts (s).
         start_s: f64,
+        /// Time the rotation stops (s); `>= start_s`, may be infinite.
+        end_s: f64,
     },
 }
 
@@ -65,13 +69,7 @@ impl Motion {
             } => {
                 check_finite_vec("motion.velocity_m_s", velocity_m_s)?;
                 check_finite("motion.start_s", start_s)?;
-                if end_s.is_nan() || end_s < start_s {
-                    return Err(WallError::OutOfRange {
-                        field: "motion.end_s",
-                        value: end_s,
-                        allowed: ">= motion.start_s (may be +infinity)",
-                    });
-                }
+                check_end(start_s, end_s)?;
                 Ok(self)
             }
             Motion::Rotate {
@@ -79,16 +77,19 @@ impl Motion {
                 axis_dir,
                 rpm,
                 start_s,
+                end_s,
             } => {
                 check_finite_vec("motion.axis_point", axis_point)?;
                 let axis_dir = check_unit("motion.axis_dir", axis_dir)?;
                 check_finite("motion.rpm", rpm)?;
                 check_finite("motion.start_s", start_s)?;
+                check_end(start_s, end_s)?;
                 Ok(Motion::Rotate {
                     axis_point,
                     axis_dir,
                     rpm,
                     start_s,
+                    end_s,
                 })
             }
         }
@@ -121,8 +122,9 @@ impl Motion {
                 axis_dir,
                 rpm,
                 start_s,
+                end_s,
             } => {
-                let angle = rpm_to_rad_s(rpm) * (t - start_s).max(0.0);
+                let angle = rpm_to_rad_s(rpm) * (t - start_s).clamp(0.0, end_s - start_s);
                 let rotation = Rotation3::from_axis_angle(&Unit::new_unchecked(axis_dir), angle);
                 // x_w = a + R (x_b − a) = R x_b + (a − R a)
                 WallPose {
@@ -153,8 +155,13 @@ impl Motion {
                 axis_dir,
                 rpm,
                 start_s,
+                end_s,
             } => {
-                let omega = if t >= start_s { rpm_to_rad_s(rpm) } else { 0.0 };
+                let omega = if t >= start_s && t < end_s {
+                    rpm_to_rad_s(rpm)
+                } else {
+                    0.0
+                };
                 WallVelocity {
                     linear_m_s: Vec3::zeros(),
                     angular_rad_s: axis_dir * omega,
@@ -163,6 +170,18 @@ impl Motion {
             }
         }
     }
+}
+
+/// `end_s` must not be NaN and not before `start_s` (it may be +∞).
+fn check_end(start_s: f64, end_s: f64) -> Result<(), WallError> {
+    if end_s.is_nan() || end_s < start_s {
+        return Err(WallError::OutOfRange {
+            field: "motion.end_s",
+            value: end_s,
+            allowed: ">= motion.start_s (may be +infinity)",
+        });
+    }
+    Ok(())
 }
 
 /// Converts revolutions per minute to rad/s: `rpm · 2π / 60`.

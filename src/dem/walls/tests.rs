@@ -349,6 +349,7 @@ fn rotating_drum_keeps_geometry_and_has_surface_velocity() {
         axis_dir: v(0.0, 0.0, 3.0),
         rpm: 30.0,
         start_s: 0.1,
+        end_s: f64::INFINITY,
     };
     close(rpm_to_rad_s(30.0), PI, 1e-15);
     let w = drum_cylinder().with_motion(motion).unwrap();
@@ -391,6 +392,7 @@ fn rotating_rectangle_after_a_quarter_turn() {
         axis_dir: v(0.0, 0.0, 1.0),
         rpm: 15.0,
         start_s: 0.0,
+        end_s: f64::INFINITY,
     })
     .unwrap();
     let pose = w.pose_at(1.0);
@@ -424,6 +426,7 @@ fn placed_wall_equals_body_frame_computation() {
         axis_dir: v(1.0, 2.0, 0.5),
         rpm: 47.0,
         start_s: 0.2,
+        end_s: f64::INFINITY,
     };
     let shapes = [
         *Wall::cone_frustum(v(0.1, 0.0, 0.2), v(0.2, 0.3, 1.0), 0.1, 0.7, 0.9, 0)
@@ -605,6 +608,7 @@ fn constructors_reject_bad_input_naming_the_field() {
         axis_dir,
         rpm,
         start_s: 0.0,
+        end_s: f64::INFINITY,
     };
     assert_eq!(motion_field(rot(o, 10.0)), "motion.axis_dir");
     assert_eq!(motion_field(rot(z, f64::NAN)), "motion.rpm");
@@ -764,4 +768,33 @@ fn closest_point_is_on_surface_and_is_the_true_minimum() {
             );
         }
     }
+}
+
+#[test]
+fn rotation_stops_at_the_end_of_its_window() {
+    // 60 rpm = 2π rad/s from t = 1 s to t = 1.25 s: a quarter turn, then rest.
+    let motion = Motion::Rotate {
+        axis_point: Vec3::zeros(),
+        axis_dir: Vec3::y(),
+        rpm: 60.0,
+        start_s: 1.0,
+        end_s: 1.25,
+    }
+    .validated()
+    .unwrap();
+    let quarter = motion.pose_at(1.25).to_world(Vec3::x());
+    let later = motion.pose_at(9.0).to_world(Vec3::x());
+    assert!((quarter - later).norm() < 1e-12);
+    assert!((quarter - Vec3::new(0.0, 0.0, -1.0)).norm() < 1e-12, "{quarter:?}");
+    assert!(motion.velocity_at(1.1).angular_rad_s.norm() > 6.28);
+    assert_eq!(motion.velocity_at(1.25).angular_rad_s, Vec3::zeros());
+    assert_eq!(motion.velocity_at(0.5).angular_rad_s, Vec3::zeros());
+    let bad = Motion::Rotate {
+        axis_point: Vec3::zeros(),
+        axis_dir: Vec3::y(),
+        rpm: 60.0,
+        start_s: 1.0,
+        end_s: 0.5,
+    };
+    assert_eq!(bad.validated().unwrap_err().field(), "motion.end_s");
 }
