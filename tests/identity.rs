@@ -288,6 +288,9 @@ fn scene() -> impl Strategy<Value = Scene> {
             rpm: f[3],
             rotation_time_s: f[4],
             standing_time_s: f[5],
+            periodic_slice_m: None,
+            settle_max_s: f[0],
+            sample_interval_s: f[1],
             wall_material: w,
         })
     });

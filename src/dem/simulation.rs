@@ -29,7 +29,7 @@ use crate::dem::material::{harmonic, ElasticMaterial};
 use crate::dem::neighbor::{NeighborError, NeighborList};
 use crate::dem::particles::{ParticleInit, Particles};
 use crate::dem::vec3::Vec3;
-use crate::dem::walls::{PlacedWall, Wall};
+use crate::dem::walls::{Motion, PlacedWall, Wall, WallError};
 use rayon::prelude::*;
 
 /// Everything the engine simulates: particles, walls, the domain and the clock.
@@ -243,6 +243,20 @@ impl Simulation {
         &mut self.world.particles
     }
 
+    /// Changes wall `wall`'s motion between steps (e.g. start a drum once its
+    /// bed has settled, with a rotation window from now on).
+    pub fn set_wall_motion(&mut self, wall: usize, motion: Motion) -> Result<(), WallError> {
+        let Some(slot) = self.world.walls.get_mut(wall) else {
+            return Err(WallError::OutOfRange {
+                field: "wall",
+                value: wall as f64,
+                allowed: "an index of World::walls",
+            });
+        };
+        *slot = (*slot).with_motion(motion)?;
+        Ok(())
+    }
+
     /// The kernel's name, e.g. `hertz+mindlin+cdt+gravity+open`, for results.
     pub fn kernel_name(&self) -> String {
         self.kernel.name()
@@ -339,7 +353,8 @@ struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> {
     angular_estimate: Vec<Vec3>,
     stats: StepStats,
     limits: HealthLimits,
-    /// Energy check enabled (closed, undriven, non-cohesive) and its reference, J.
+    /// Energy check enabled (non-cohesive; skipped while any wall moves) and
+    /// its reference, J.
     energy_reference: Option<f64>,
     energy_check: bool,
     rebuilds_since_sort: u32,
@@ -403,7 +418,6 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .any(|c| c.surface_energy_j_m2 > 0.0);
         let neighbors =
             NeighborList::new(setup.skin_m, pair_reach).map_err(SetupError::Neighbor)?;
-        let driven = world.walls.iter().any(|w| !w.motion().is_static());
         let wall_slots = world.walls.len().max(1);
         let mut stepper = Self {
             particle_particle,
@@ -422,7 +436,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             stats: StepStats::default(),
             limits: setup.health,
             energy_reference: None,
-            energy_check: !(driven || cohesive && N::ADHESIVE),
+            energy_check: !(cohesive && N::ADHESIVE),
             rebuilds_since_sort: 0,
             _boundary: std::marker::PhantomData,
         };
@@ -798,6 +812,11 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     }
 
     fn check_energy(&mut self, world: &World) -> Result<(), HealthError> {
+        if world.walls.iter().any(|w| !w.motion().is_static()) {
+            // Driven: moving walls do work on the particles.
+            self.energy_reference = None;
+            return Ok(());
+        }
         let e = self.mechanical_energy(world);
         let Some(reference) = self.energy_reference else {
             self.energy_reference = Some(e);

@@ -200,6 +200,21 @@ pub struct DrumScene {
     pub rotation_time_s: f64,
     /// Standing time after the drum stops, s, ≥ 0.
     pub standing_time_s: f64,
+    /// Thickness of an axially periodic slice simulated instead of the whole
+    /// drum, m, in (0, length_m]; absent: the full drum with its two end caps.
+    /// A slice has no end walls, so it leaves out their friction, which in a
+    /// real drum steepens the surface near the caps; it costs length / slice
+    /// times fewer particles. `repose tradeoff` measures the angle difference.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub periodic_slice_m: Option<f64>,
+    /// Longest time the poured bed may take to come to rest before the drum
+    /// starts, s, > 0 (it starts earlier once the mean kinetic energy per
+    /// particle stays below 1e-6 of m g d for 0.05 s); default 1.
+    #[serde(default = "default_drum_settle_max_s")]
+    pub settle_max_s: f64,
+    /// Interval between angle samples and log frames, s, > 0; default 0.02.
+    #[serde(default = "default_drum_sample_interval_s")]
+    pub sample_interval_s: f64,
     /// Drum wall material name.
     pub wall_material: String,
 }
@@ -257,4 +272,12 @@ pub struct StaticPileScene {
     pub funnel_material: String,
     /// Disk wall material name.
     pub disk_material: String,
+}
+
+fn default_drum_settle_max_s() -> f64 {
+    1.0
+}
+
+fn default_drum_sample_interval_s() -> f64 {
+    0.02
 }

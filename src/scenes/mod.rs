@@ -3,6 +3,7 @@
 //! [`run_experiment`] is the runner `repose run` hands to
 //! [`crate::store::Store::run_cached`].
 
+pub mod drum;
 pub mod pair;
 pub mod physics;
 pub mod protocol;
@@ -28,6 +29,9 @@ pub enum SceneError {
     /// The pair scene failed.
     #[error(transparent)]
     Pair(#[from] pair::PairError),
+    /// The drum scene failed.
+    #[error(transparent)]
+    Drum(#[from] drum::DrumError),
     /// The run log could not be written.
     #[error(transparent)]
     Log(#[from] LogError),
@@ -44,6 +48,7 @@ pub fn run_experiment(
 ) -> Result<RunResult, SceneError> {
     match &experiment.scene {
         Scene::Pair(scene) => pair::run(experiment, scene, log),
+        Scene::Drum(scene) => drum::run(experiment, scene, log),
         other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
     }
 }

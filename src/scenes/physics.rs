@@ -1,5 +1,6 @@
 //! Translating an experiment's materials, contact parameters and time-step
-//! settings into the engine's types: the one place manifests meet `dem`.
+//! settings into the engine's and the packing module's types: the one place
+//! manifests meet `dem`.
 
 use crate::dem::contact::PairParameters;
 use crate::dem::material::{effective_youngs_modulus, ElasticMaterial};
@@ -8,8 +9,11 @@ use crate::dem::timestep::{
     choose_time_step, StiffestContact, TimeStepError, TimeStepPlan, TimeStepRequest,
 };
 use crate::manifest::{
-    Experiment, NormalModel, PairParams, RollingModel, WallMaterial, WallStiffness,
+    Experiment, NormalModel, PairParams, RollingModel, SizeDistribution, WallMaterial,
+    WallStiffness,
 };
+use crate::packing::distribution::SizeDistribution as PackingSizes;
+use crate::packing::PackingError;
 use std::f64::consts::PI;
 
 /// The particle material as the engine sees it.
@@ -112,4 +116,50 @@ pub fn time_step(
         stiffest,
         requested_dt_s: None,
     })
+}
+
+/// The particle size distribution of the manifest as the packing module's
+/// (diameters; d10/d50/d90 become a truncated log-normal).
+pub fn size_distribution(exp: &Experiment) -> PackingSizes {
+    match &exp.material.particle.size {
+        SizeDistribution::Monodisperse { radius_m } => PackingSizes::Mono {
+            diameter_m: 2.0 * radius_m,
+        },
+        SizeDistribution::List { radii_m, weights } => PackingSizes::Discrete {
+            diameters_m: radii_m.iter().map(|r| 2.0 * r).collect(),
+            weights: weights.clone(),
+        },
+        SizeDistribution::D10D50D90 {
+            d10_m,
+            d50_m,
+            d90_m,
+        } => PackingSizes::LogNormal {
+            d10_m: *d10_m,
+            d50_m: *d50_m,
+            d90_m: *d90_m,
+        },
+    }
+}
+
+/// Smallest diameter that can be drawn and a representative diameter (the
+/// number-weighted mean of a list, d50 of a log-normal), m.
+pub fn diameter_bounds(sizes: &PackingSizes) -> Result<(f64, f64), PackingError> {
+    let d_min = sizes.sampler()?.min_diameter();
+    let d_mean = match sizes {
+        PackingSizes::Mono { diameter_m } => *diameter_m,
+        PackingSizes::Discrete {
+            diameters_m,
+            weights,
+        } => {
+            let total: f64 = weights.iter().sum();
+            diameters_m
+                .iter()
+                .zip(weights)
+                .map(|(d, w)| d * w)
+                .sum::<f64>()
+                / total
+        }
+        PackingSizes::LogNormal { d50_m, .. } => *d50_m,
+    };
+    Ok((d_min, d_mean))
 }

@@ -165,6 +165,18 @@ fn check_drum(c: &mut Checker, path: &str, s: &DrumScene) {
     c.positive(&join(path, "rpm"), s.rpm);
     c.positive(&join(path, "rotation_time_s"), s.rotation_time_s);
     c.non_negative(&join(path, "standing_time_s"), s.standing_time_s);
+    if let Some(slice) = s.periodic_slice_m {
+        c.positive(&join(path, "periodic_slice_m"), slice);
+        if slice.is_finite() && s.length_m.is_finite() && slice > s.length_m {
+            c.fail(
+                &join(path, "periodic_slice_m"),
+                number(slice),
+                format!("must be <= length_m = {}", number(s.length_m)),
+            );
+        }
+    }
+    c.positive(&join(path, "settle_max_s"), s.settle_max_s);
+    c.positive(&join(path, "sample_interval_s"), s.sample_interval_s);
 }
 
 fn check_hopper(c: &mut Checker, path: &str, s: &HopperScene) {

@@ -1,0 +1,341 @@
+//! The `drum` scene: a horizontal rotating cylinder (he2019 §3.6.2: ID 45 mm,
+//! length 100 mm, 30 % fill, 60 rpm for 5 s then 2 s standing; cai2024:
+//! 100 × 100 mm, 25 %, 50 rpm).
+//!
+//! Geometry: the drum axis is the y axis through the origin, gravity −z. The
+//! full drum is a cylinder with two rotating end caps; with
+//! `periodic_slice_m` only a slice of that thickness is simulated, periodic
+//! along y, with no end caps (the cylinder extends past the periodic box so
+//! its rims are never felt).
+//!
+//! Protocol: particles are placed without overlap (seeded by the packing seed)
+//! in the square inscribed in the drum's cross-section, as many as fill
+//! `fill_fraction` of the drum volume at a bulk solid fraction of
+//! [`BULK_SOLID_FRACTION`]; they settle (`settle`, at most `settle_max_s`,
+//! ending once the mean kinetic energy per particle stays below
+//! [`REST_ENERGY_FRACTION`] · m g d for [`REST_HOLD_S`]); the drum turns at
+//! `rpm` for `rotation_time_s` (`rotate`) and then stands for
+//! `standing_time_s` (`stand`).
+//!
+//! Measurement ([`crate::measure::drum`]): the free-surface angle every
+//! `sample_interval_s`; the dynamic angle is the mean (± standard deviation)
+//! over the second half of the rotation (the first half is spin-up and is
+//! not averaged); the static angle is measured at the end of standing.
+
+use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::{physics, SceneError};
+use crate::dem::domain::Domain;
+use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::particles::Particles;
+use crate::dem::simulation::{Simulation, SimulationSetup, World};
+use crate::dem::vec3::Vec3;
+use crate::dem::walls::{Motion, Wall};
+use crate::log::{LogOptions, RunLog};
+use crate::manifest::scene::DrumScene;
+use crate::manifest::Experiment;
+use crate::measure::drum::{drum_surface_angle, DrumSpec};
+use crate::measure::series::mean_std;
+use crate::packing::place::{place_lattice, place_random, FillTarget, PlacementSpec};
+use crate::packing::region::Region;
+use crate::packing::PackingError;
+use crate::store::RunResult;
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// Solid fraction of the poured bed used to turn the bulk fill fraction into a
+/// particle count (random loose packing of spheres, ≈ 0.60).
+pub const BULK_SOLID_FRACTION: f64 = 0.6;
+/// The bed is at rest when its mean kinetic energy per particle is below this
+/// fraction of m g d (the energy of lifting a mean particle by one diameter).
+pub const REST_ENERGY_FRACTION: f64 = 1e-6;
+/// How long the bed must stay at rest before the drum starts, s.
+pub const REST_HOLD_S: f64 = 0.05;
+/// Lattice spacing factor used when random placement cannot reach the count.
+const LATTICE_SPACING: f64 = 1.05;
+
+/// Why a drum run failed beyond the engine's own errors.
+#[derive(Debug, thiserror::Error)]
+pub enum DrumError {
+    /// The particles do not fit the insertion region.
+    #[error("drum fill: {0}")]
+    Packing(#[from] PackingError),
+    /// The engine refused the setup.
+    #[error("drum: {0}")]
+    Setup(#[from] crate::dem::simulation::SetupError),
+    /// The simulation became unhealthy.
+    #[error(transparent)]
+    Health(#[from] HealthError),
+    /// A wall could not be built.
+    #[error("drum wall: {0}")]
+    Wall(#[from] crate::dem::walls::WallError),
+    /// The domain could not be built.
+    #[error("drum domain: {0}")]
+    Domain(#[from] crate::dem::domain::DomainError),
+    /// No angle could be measured at the end of standing.
+    #[error("drum: static angle not measurable: {0}")]
+    Angle(#[from] crate::measure::MeasureError),
+}
+
+/// Samples traces, angles and log frames while the drum runs.
+struct DrumSampler<'a> {
+    traces: Traces,
+    spec: DrumSpec,
+    log: Option<&'a mut RunLog>,
+    /// Dynamic-angle window (simulated time, s); set when rotation starts.
+    dynamic_window: Option<(f64, f64)>,
+    dynamic: Vec<f64>,
+}
+
+impl Sampler for DrumSampler<'_> {
+    type Error = SceneError;
+
+    fn sample(&mut self, _phase: &'static str, sim: &mut Simulation) -> Result<(), SceneError> {
+        let w = sim.world();
+        let t = w.time_s;
+        self.traces.push_engine_state(sim);
+        if let Ok(a) = drum_surface_angle(&w.particles.position, &w.particles.radius, &self.spec) {
+            self.traces.push("angle", "deg", t, a.angle_deg);
+            if let Some((from, to)) = self.dynamic_window {
+                if t >= from && t <= to {
+                    self.dynamic.push(a.angle_deg);
+                }
+            }
+            if let Some(log) = self.log.as_deref_mut() {
+                log.angle(
+                    t,
+                    &crate::log::AngleSample {
+                        left_deg: a.angle_deg,
+                        right_deg: a.angle_deg,
+                        mean_deg: a.angle_deg,
+                        fit_r2: a.r2,
+                    },
+                )?;
+            }
+        }
+        if let Some(log) = self.log.as_deref_mut() {
+            log.record(sim)?;
+        }
+        Ok(())
+    }
+}
+
+impl From<HealthError> for SceneError {
+    fn from(e: HealthError) -> Self {
+        SceneError::Drum(DrumError::Health(e))
+    }
+}
+
+/// Runs a `drum` experiment (see the module docs); with `log`, writes its MCAP
+/// log there.
+pub fn run(
+    exp: &Experiment,
+    scene: &DrumScene,
+    log: Option<&Path>,
+) -> Result<RunResult, SceneError> {
+    let contact = physics::contact_setup(exp, &[scene.wall_material.as_str()]);
+    let rho = exp.material.particle.density_kg_m3;
+    let sizes = physics::size_distribution(exp);
+    let (d_min, d_mean) =
+        physics::diameter_bounds(&sizes).map_err(|e| SceneError::Drum(e.into()))?;
+    let plan = physics::time_step(exp, &contact, 0.5 * d_min)?;
+    let r_drum = 0.5 * scene.inner_diameter_m;
+    let length = scene.periodic_slice_m.unwrap_or(scene.length_m);
+
+    let world = build_world(exp, scene, &sizes, d_mean).map_err(SceneError::Drum)?;
+    let particle_count = world.particles.len();
+    let setup = SimulationSetup {
+        contact,
+        density_kg_m3: rho,
+        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -9.81)),
+        dt_s: plan.dt_s,
+        skin_m: 0.1 * d_mean,
+        health: HealthLimits::default(),
+    };
+    let mut sim = Simulation::new(world, &setup).map_err(|e| SceneError::Drum(e.into()))?;
+
+    let mut log_file = match log {
+        Some(path) => Some(RunLog::create(
+            path,
+            exp,
+            LogOptions {
+                speed_scale_m_s: r_drum * scene.rpm * 2.0 * PI / 60.0,
+                ..LogOptions::default()
+            },
+        )?),
+        None => None,
+    };
+    let mut sampler = DrumSampler {
+        traces: Traces::default(),
+        spec: DrumSpec::new([0.0, 0.0], r_drum, d_mean),
+        log: log_file.as_mut(),
+        dynamic_window: None,
+        dynamic: Vec::new(),
+    };
+    let mut progress = Progress::new(!std::io::IsTerminal::is_terminal(&std::io::stderr()));
+    let mass = rho * PI / 6.0 * d_mean.powi(3);
+    let settle = Phase {
+        name: "settle",
+        max_duration_s: scene.settle_max_s,
+        settle: Some(SettleCriterion {
+            mean_kinetic_energy_j: REST_ENERGY_FRACTION * mass * 9.81 * d_mean,
+            hold_s: REST_HOLD_S,
+        }),
+    };
+    let dt = plan.dt_s;
+    let every = scene.sample_interval_s;
+    let settled = run_phase(&mut sim, &settle, dt, every, &mut sampler, &mut progress)?;
+
+    let start = sim.world().time_s;
+    let end = start + scene.rotation_time_s;
+    let spin = Motion::Rotate {
+        axis_point: Vec3::zeros(),
+        axis_dir: Vec3::y(),
+        rpm: scene.rpm,
+        start_s: start,
+        end_s: end,
+    };
+    for k in 0..sim.world().walls.len() {
+        sim.set_wall_motion(k, spin)
+            .map_err(|e| SceneError::Drum(e.into()))?;
+    }
+    sampler.dynamic_window = Some((start + 0.5 * scene.rotation_time_s, end));
+    let rotate = Phase {
+        name: "rotate",
+        max_duration_s: scene.rotation_time_s,
+        settle: None,
+    };
+    run_phase(&mut sim, &rotate, dt, every, &mut sampler, &mut progress)?;
+    let stand = Phase {
+        name: "stand",
+        max_duration_s: scene.standing_time_s,
+        settle: None,
+    };
+    run_phase(&mut sim, &stand, dt, every, &mut sampler, &mut progress)?;
+
+    let w = sim.world();
+    let last = drum_surface_angle(&w.particles.position, &w.particles.radius, &sampler.spec)
+        .map_err(|e| SceneError::Drum(e.into()))?;
+    let dynamic = mean_std(&sampler.dynamic).ok();
+    let kernel = sim.kernel_name();
+    let steps = w.step;
+    let traces = std::mem::take(&mut sampler.traces);
+    drop(sampler);
+    if let Some(log) = log_file {
+        log.finish()?;
+    }
+
+    let mut result = RunResult::new(exp, kernel);
+    result.traces = traces.into_map();
+    let mut put = |k: &str, v: f64| {
+        result.measurements.insert(k.to_string(), v);
+    };
+    put("particles", particle_count as f64);
+    put("dt_s", dt);
+    put("steps", steps as f64);
+    put("simulated_length_m", length);
+    put("rotation_start_s", start);
+    put(
+        "settled_before_rotation",
+        f64::from(u8::from(settled.settled)),
+    );
+    put("static_angle_deg", last.angle_deg);
+    put("static_angle_r2", last.r2);
+    put("static_angle_points", last.points as f64);
+    if let Some(d) = dynamic {
+        put("dynamic_angle_deg", d.mean);
+        put("dynamic_angle_std_deg", d.std);
+        put("dynamic_angle_samples", d.n as f64);
+    }
+    result.headline_angle_deg = Some(dynamic.map_or(last.angle_deg, |d| d.mean));
+    Ok(result)
+}
+
+/// Walls, domain and the placed particles.
+fn build_world(
+    exp: &Experiment,
+    scene: &DrumScene,
+    sizes: &crate::packing::distribution::SizeDistribution,
+    d_mean: f64,
+) -> Result<World, DrumError> {
+    let r_drum = 0.5 * scene.inner_diameter_m;
+    let margin = 4.0 * d_mean;
+    let (length, periodic) = match scene.periodic_slice_m {
+        Some(slice) => (slice, true),
+        None => (scene.length_m, false),
+    };
+    let half = 0.5 * length;
+    let mut walls = Vec::new();
+    if periodic {
+        // Longer than the periodic box so the rims never touch a particle.
+        let extra = 2.0 * margin;
+        walls.push(Wall::cylinder(
+            Vec3::new(0.0, -half - extra, 0.0),
+            Vec3::y(),
+            r_drum,
+            length + 2.0 * extra,
+            0,
+        )?);
+    } else {
+        walls.push(Wall::cylinder(
+            Vec3::new(0.0, -half, 0.0),
+            Vec3::y(),
+            r_drum,
+            length,
+            0,
+        )?);
+        walls.push(Wall::disk(
+            Vec3::new(0.0, -half, 0.0),
+            Vec3::y(),
+            r_drum,
+            0,
+        )?);
+        walls.push(Wall::disk(Vec3::new(0.0, half, 0.0), Vec3::y(), r_drum, 0)?);
+    }
+    let (y_lo, y_hi) = if periodic {
+        (-half, half)
+    } else {
+        (-half - margin, half + margin)
+    };
+    let extent = r_drum + margin;
+    let domain = Domain::new(
+        Vec3::new(-extent, y_lo, -extent),
+        Vec3::new(extent, y_hi, extent),
+        [false, periodic, false],
+    )?;
+
+    // The square inscribed in the cross-section; the clearance keeps spheres
+    // off the walls and off the periodic faces (no overlaps across them).
+    let side = r_drum / 2f64.sqrt();
+    let region = Region::Box {
+        min_m: Vec3::new(-side, -half, -side),
+        max_m: Vec3::new(side, half, side),
+    };
+    let drum_volume = PI * r_drum * r_drum * length;
+    let particle_volume = PI / 6.0 * d_mean.powi(3);
+    let count = (scene.fill_fraction * drum_volume * BULK_SOLID_FRACTION / particle_volume).round()
+        as usize;
+    let spec = PlacementSpec {
+        region,
+        sizes: sizes.clone(),
+        target: FillTarget::Count(count),
+        seed: exp.seeds.packing_seed,
+        clearance_m: 0.05 * d_mean,
+        velocity_m_s: Vec3::zeros(),
+    };
+    let placed = match place_random(&spec) {
+        Ok(p) => p,
+        Err(PackingError::RegionFull { .. }) => place_lattice(&spec, LATTICE_SPACING)?,
+        Err(e) => return Err(e.into()),
+    };
+    let mut particles = Particles::default();
+    for p in &placed.particles {
+        particles.push(p, exp.material.particle.density_kg_m3);
+    }
+    Ok(World {
+        particles,
+        walls,
+        domain,
+        time_s: 0.0,
+        step: 0,
+    })
+}

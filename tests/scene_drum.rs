@@ -1,0 +1,60 @@
+//! The drum scene end to end on a small periodic slice: a physical ordering
+//! that a broken scene, measurement or contact law would violate, and the
+//! result's bookkeeping.
+
+use repose::manifest::{parse_experiment, Experiment};
+use repose::scenes::run_experiment;
+
+/// A 30 mm drum slice of 1 mm glass-like spheres (soft: E = 5 MPa), 30 rpm.
+fn drum(mu: f64, mu_r: f64) -> Experiment {
+    let text = format!(
+        r#"{{
+  "schema_version": 1, "physics_version": 1, "profile": "smoke",
+  "scene": {{ "kind": "drum", "inner_diameter_m": 0.03, "length_m": 0.1, "fill_fraction": 0.3,
+             "rpm": 30, "rotation_time_s": 1.0, "standing_time_s": 0.2, "wall_material": "steel",
+             "periodic_slice_m": 0.006, "settle_max_s": 0.3, "sample_interval_s": 0.02 }},
+  "material": {{ "particle": {{ "density_kg_m3": 2500, "youngs_modulus_pa": 5e6, "poisson_ratio": 0.3,
+                              "size": {{ "kind": "monodisperse", "radius_m": 0.001 }} }},
+                 "walls": {{ "steel": {{ "youngs_modulus_pa": 2e11, "poisson_ratio": 0.3, "density_kg_m3": 7850 }} }} }},
+  "contact": {{ "model": {{ "normal": "hertz", "rolling": "cdt" }},
+               "particle_particle": {{ "restitution": 0.5, "static_friction": {mu}, "rolling_friction": {mu_r}, "surface_energy_j_m2": 0 }},
+               "particle_wall": {{ "steel": {{ "restitution": 0.5, "static_friction": 0.8, "rolling_friction": 0.1, "surface_energy_j_m2": 0 }} }} }},
+  "seeds": {{ "design_seed": 0, "sample_index": 0, "packing_seed": 7 }},
+  "time_step": {{ "rayleigh_fraction": 0.2, "design_impact_speed_m_s": 0.3 }}
+}}"#
+    );
+    parse_experiment(&text).unwrap()
+}
+
+#[test]
+fn rougher_particles_stand_steeper_in_the_drum() {
+    // Every angle-of-repose study (yan2015 Fig. 10, cai2024 Table 1) finds the
+    // angle growing with sliding and rolling friction; 0.1/0.0 against 0.8/0.3
+    // must differ by several degrees.
+    let smooth = run_experiment(&drum(0.1, 0.0), None).unwrap();
+    let rough = run_experiment(&drum(0.8, 0.3), None).unwrap();
+    let angle = |r: &repose::store::RunResult| r.measurements["dynamic_angle_deg"];
+    eprintln!(
+        "dynamic angle: smooth {:.2}, rough {:.2}",
+        angle(&smooth),
+        angle(&rough)
+    );
+    assert!(
+        angle(&rough) > angle(&smooth) + 5.0,
+        "rough {} vs smooth {}",
+        angle(&rough),
+        angle(&smooth)
+    );
+    for r in [&smooth, &rough] {
+        assert!(
+            r.kernel.starts_with("hertz+mindlin+cdt+gravity+periodic"),
+            "{}",
+            r.kernel
+        );
+        assert!(r.measurements["dynamic_angle_samples"] >= 20.0);
+        assert!(r.measurements["particles"] > 100.0);
+        assert!(r.traces.contains_key("angle") && r.traces.contains_key("kinetic_energy"));
+        let a = angle(r);
+        assert!(a > 5.0 && a < 70.0, "implausible dynamic angle {a}");
+    }
+}
