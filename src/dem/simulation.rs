@@ -422,7 +422,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             stats: StepStats::default(),
             limits: setup.health,
             energy_reference: None,
-            energy_check: !driven && !(cohesive && N::NAME == Jkr::NAME),
+            energy_check: !(driven || (cohesive && N::NAME == Jkr::NAME)),
             rebuilds_since_sort: 0,
             _boundary: std::marker::PhantomData,
         };

@@ -16,10 +16,10 @@ use crate::dem::contact::normal_jkr::{pull_off_force_n, separation_overlap_m};
 use crate::dem::contact::PairCoefficients;
 use crate::dem::domain::{Domain, DomainError};
 use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::material::{harmonic, hertz_contact_time_s, hertz_max_overlap_m};
 use crate::dem::particles::{ParticleInit, Particles};
 use crate::dem::simulation::{ContactSetup, SetupError, Simulation, SimulationSetup, World};
 use crate::dem::vec3::Vec3;
-use crate::dem::material::{harmonic, hertz_contact_time_s, hertz_max_overlap_m};
 use crate::dem::walls::{Wall, WallError};
 use crate::manifest::scene::{PairMode as ManifestPairMode, PairScene, Partner as ManifestPartner};
 use crate::manifest::Experiment;
@@ -379,7 +379,12 @@ fn measure_separation(
 /// speed; JKR pull-off 3πΓR*).
 pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError> {
     let (partner, walls): (Partner, Vec<&str>) = match &scene.partner {
-        ManifestPartner::Particle { radius_m } => (Partner::Particle { radius_m: *radius_m }, vec![]),
+        ManifestPartner::Particle { radius_m } => (
+            Partner::Particle {
+                radius_m: *radius_m,
+            },
+            vec![],
+        ),
         ManifestPartner::Wall { material } => (Partner::Wall, vec![material.as_str()]),
     };
     let contact = physics::contact_setup(exp, &walls);
@@ -424,11 +429,23 @@ pub fn run(exp: &Experiment, scene: &PairScene) -> Result<RunResult, SceneError>
         put("captured", f64::from(u8::from(m.captured)));
         put("restitution", m.restitution);
         put("rebound_normal_velocity_m_s", m.rebound_normal_velocity_m_s);
-        put("rebound_tangential_velocity_m_s", m.rebound_tangential_velocity_m_s);
-        put("rebound_angular_velocity_rad_s", m.rebound_angular_velocity_rad_s);
+        put(
+            "rebound_tangential_velocity_m_s",
+            m.rebound_tangential_velocity_m_s,
+        );
+        put(
+            "rebound_angular_velocity_rad_s",
+            m.rebound_angular_velocity_rad_s,
+        );
         let v = scene.normal_velocity_m_s;
-        put("theory_hertz_contact_duration_s", hertz_contact_time_s(m_star, r_star, coef.e_star, v));
-        put("theory_hertz_max_overlap_m", hertz_max_overlap_m(m_star, r_star, coef.e_star, v));
+        put(
+            "theory_hertz_contact_duration_s",
+            hertz_contact_time_s(m_star, r_star, coef.e_star, v),
+        );
+        put(
+            "theory_hertz_max_overlap_m",
+            hertz_max_overlap_m(m_star, r_star, coef.e_star, v),
+        );
     }
     Ok(result)
 }
@@ -444,9 +461,19 @@ fn effective_pair(test: &PairTest) -> (f64, f64, PairCoefficients) {
             harmonic(mass(test.radius_m), mass(radius_m)),
             harmonic(test.radius_m, radius_m),
         ),
-        Partner::Wall => (c.wall_materials[0].0, c.wall_materials[0].1, mass(test.radius_m), test.radius_m),
+        Partner::Wall => (
+            c.wall_materials[0].0,
+            c.wall_materials[0].1,
+            mass(test.radius_m),
+            test.radius_m,
+        ),
     };
-    let coef = PairCoefficients::new(&c.particle_material, &partner_material, &params, c.clip_tensile)
-        .expect("validated manifest parameters");
+    let coef = PairCoefficients::new(
+        &c.particle_material,
+        &partner_material,
+        &params,
+        c.clip_tensile,
+    )
+    .expect("validated manifest parameters");
     (m_star, r_star, coef)
 }

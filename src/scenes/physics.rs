@@ -4,8 +4,12 @@
 use crate::dem::contact::PairParameters;
 use crate::dem::material::{effective_youngs_modulus, ElasticMaterial};
 use crate::dem::simulation::{ContactSetup, NormalChoice, RollingChoice};
-use crate::dem::timestep::{choose_time_step, StiffestContact, TimeStepError, TimeStepPlan, TimeStepRequest};
-use crate::manifest::{Experiment, NormalModel, PairParams, RollingModel, WallMaterial, WallStiffness};
+use crate::dem::timestep::{
+    choose_time_step, StiffestContact, TimeStepError, TimeStepPlan, TimeStepRequest,
+};
+use crate::manifest::{
+    Experiment, NormalModel, PairParams, RollingModel, WallMaterial, WallStiffness,
+};
 use std::f64::consts::PI;
 
 /// The particle material as the engine sees it.
@@ -68,7 +72,11 @@ pub fn contact_setup(exp: &Experiment, walls: &[&str]) -> ContactSetup {
 /// The time step for particles no smaller than `min_radius_m`: the manifest's
 /// Rayleigh fraction and design impact speed, resolving both particle–particle
 /// and particle–wall contacts (see [`crate::dem::timestep`]).
-pub fn time_step(exp: &Experiment, setup: &ContactSetup, min_radius_m: f64) -> Result<TimeStepPlan, TimeStepError> {
+pub fn time_step(
+    exp: &Experiment,
+    setup: &ContactSetup,
+    min_radius_m: f64,
+) -> Result<TimeStepPlan, TimeStepError> {
     let rho = exp.material.particle.density_kg_m3;
     let mass = rho * 4.0 / 3.0 * PI * min_radius_m.powi(3);
     let particle = setup.particle_material;
@@ -89,7 +97,9 @@ pub fn time_step(exp: &Experiment, setup: &ContactSetup, min_radius_m: f64) -> R
         })
         .chain(std::iter::once(pp))
         .min_by(|a, b| {
-            let key = |s: &StiffestContact| s.m_star_kg * s.m_star_kg / (s.r_star_m * s.e_star_pa * s.e_star_pa);
+            let key = |s: &StiffestContact| {
+                s.m_star_kg * s.m_star_kg / (s.r_star_m * s.e_star_pa * s.e_star_pa)
+            };
             key(a).total_cmp(&key(b))
         })
         .unwrap_or(pp);

@@ -123,7 +123,7 @@ impl PairCoefficients {
             "must be finite and >= 0",
         )?;
         for m in [a, b] {
-            if !(m.youngs_modulus_pa > 0.0) {
+            if m.youngs_modulus_pa.is_nan() || m.youngs_modulus_pa <= 0.0 {
                 return Err(ParameterError {
                     name: "youngs_modulus_pa",
                     value: m.youngs_modulus_pa,
