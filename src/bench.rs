@@ -176,6 +176,13 @@ pub struct VariantReport {
     pub segment_mps: Vec<f64>,
     /// Median of `segment_mps`.
     pub median_mps: f64,
+    /// Throughput of each segment per CPU second of the process (all its
+    /// threads), million particle-steps per CPU second; empty where the CPU
+    /// clock (`/proc/self/stat`) is unavailable. On a shared machine this is
+    /// less sensitive than wall time to other processes' load.
+    pub segment_cpu_mps: Vec<f64>,
+    /// Median of `segment_cpu_mps` (0 when empty).
+    pub median_cpu_mps: f64,
     /// Force-carrying particle pairs per particle at the end.
     pub pairs_per_particle: f64,
     /// Particle contacts per particle (2 × pairs per particle).
@@ -376,16 +383,23 @@ fn time_variant(
         let warmup_s = t1.elapsed().as_secs_f64();
         let rebuilds_before = sim.stats().rebuilds;
         let mut segment_mps = Vec::with_capacity(options.segments);
+        let mut segment_cpu_mps = Vec::with_capacity(options.segments);
+        let work = n_part * steps as f64 / 1e6;
         for k in 0..options.segments {
-            let t = Instant::now();
+            let (t, cpu) = (Instant::now(), process_cpu_s());
             sim.advance(steps)?;
-            let mps = n_part * steps as f64 / t.elapsed().as_secs_f64() / 1e6;
+            let mps = work / t.elapsed().as_secs_f64();
+            let cpu_mps = cpu
+                .zip(process_cpu_s())
+                .map(|(a, b)| work / (b - a).max(1e-2));
             writeln!(
                 progress,
-                "  {kernel}, {threads} thread(s), segment {}: {mps:.2} M particle-steps/s",
-                k + 1
+                "  {kernel}, {threads} thread(s), segment {}: {mps:.2} M particle-steps/s, {:.2} per CPU s",
+                k + 1,
+                cpu_mps.unwrap_or(0.0)
             )?;
             segment_mps.push(mps);
+            segment_cpu_mps.extend(cpu_mps);
         }
         let timed_s =
             n_part * steps as f64 / 1e6 * segment_mps.iter().map(|m| 1.0 / m).sum::<f64>();
@@ -396,6 +410,12 @@ fn time_variant(
             segment_steps: steps,
             median_mps: median(&segment_mps),
             segment_mps,
+            median_cpu_mps: if segment_cpu_mps.is_empty() {
+                0.0
+            } else {
+                median(&segment_cpu_mps)
+            },
+            segment_cpu_mps,
             pairs_per_particle: s.contacts as f64 / n_part,
             contacts_per_particle: 2.0 * s.contacts as f64 / n_part,
             wall_contacts_per_particle: s.wall_contacts as f64 / n_part,
@@ -405,6 +425,18 @@ fn time_variant(
             timed_s,
         })
     })
+}
+
+/// User + system CPU time of this process (all threads), s, from
+/// `/proc/self/stat` (clock ticks of 1/100 s); `None` where unavailable.
+fn process_cpu_s() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let mut fields = rest.split_whitespace().skip(11);
+    let utime: f64 = fields.next()?.parse().ok()?;
+    let stime: f64 = fields.next()?.parse().ok()?;
+    Some((utime + stime) / 100.0)
 }
 
 /// Median of a non-empty list (mean of the middle two for even lengths).
@@ -436,12 +468,13 @@ impl BenchReport {
         )?;
         writeln!(
             out,
-            "{:<34} {:>3} {:>6}  {:<23} {:>7} {:>7} {:>7} {:>6} {:>5} {:>8} {:>8}",
+            "{:<34} {:>3} {:>6}  {:<23} {:>7} {:>7} {:>7} {:>7} {:>6} {:>5} {:>8} {:>8}",
             "kernel",
             "thr",
             "steps",
             "segments Mps/s",
             "median",
+            "cpu Mps",
             "pairs/p",
             "cont/p",
             "wall/p",
@@ -453,12 +486,13 @@ impl BenchReport {
             let segs: Vec<String> = v.segment_mps.iter().map(|m| format!("{m:.2}")).collect();
             writeln!(
                 out,
-                "{:<34} {:>3} {:>6}  {:<23} {:>7.2} {:>7.3} {:>7.3} {:>6.3} {:>5} {:>8.2} {:>8.2}",
+                "{:<34} {:>3} {:>6}  {:<23} {:>7.2} {:>7.2} {:>7.3} {:>7.3} {:>6.3} {:>5} {:>8.2} {:>8.2}",
                 v.kernel,
                 v.threads,
                 v.segment_steps,
                 segs.join(" "),
                 v.median_mps,
+                v.median_cpu_mps,
                 v.pairs_per_particle,
                 v.contacts_per_particle,
                 v.wall_contacts_per_particle,

@@ -26,7 +26,7 @@ use crate::dem::domain::Domain;
 use crate::dem::effects::{BodyForce, Boundary, Gravity, NoGravity, Open, Periodic};
 use crate::dem::health::{HealthCause, HealthError, HealthLimits, ENERGY_CHECK_INTERVAL};
 use crate::dem::material::{harmonic, ElasticMaterial};
-use crate::dem::neighbor::{NeighborError, NeighborList};
+use crate::dem::neighbor::{apply_permutation, NeighborError, NeighborList};
 use crate::dem::particles::{ParticleInit, Particles};
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::{PlacedWall, Wall};
@@ -155,6 +155,29 @@ pub struct StepStats {
     pub max_overlap_ratio: f64,
     /// Neighbour-list rebuilds so far.
     pub rebuilds: u64,
+}
+
+/// What the pair kernel reads first of a particle, packed in one 32-byte
+/// record: centre (m) and radius (m). Enough to reject a listed pair that does
+/// not touch.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+struct Sphere {
+    x: Vec3,
+    r: f64,
+}
+
+/// What the contact laws read of a touching particle, packed in one 64-byte
+/// record: the full-step velocity estimates v½ + ½dt·F/m (m/s) and
+/// ω½ + ½dt·T/I (rad/s) (see [`Stepper::kick_and_drift`]), the mass (kg) and
+/// the inverse radius (1/m, for overlap ratios).
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+struct Motion {
+    v: Vec3,
+    w: Vec3,
+    m: f64,
+    inv_r: f64,
 }
 
 /// The force a pair exerts, stored per pair and gathered per particle.
@@ -333,10 +356,10 @@ struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> {
     /// `max(walls, 1)`, so per-particle chunks are never empty.
     wall_slots: usize,
     placed: Vec<PlacedWall>,
-    /// Full-step velocity estimates v½ + ½dt·F/m (m/s) and ω½ + ½dt·T/I
-    /// (rad/s) that the contact laws see (see [`Stepper::kick_and_drift`]).
-    velocity_estimate: Vec<Vec3>,
-    angular_estimate: Vec<Vec3>,
+    /// Per particle (same index order as the world's particles): packed
+    /// copies of what the force stages read, refreshed by every drift.
+    spheres: Vec<Sphere>,
+    motion: Vec<Motion>,
     stats: StepStats,
     limits: HealthLimits,
     /// Energy check enabled (closed, undriven, non-cohesive) and its reference, J.
@@ -417,8 +440,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             wall_history: vec![ContactHistory::default(); world.particles.len() * wall_slots],
             wall_slots,
             placed: Vec::new(),
-            velocity_estimate: world.particles.velocity.clone(),
-            angular_estimate: world.particles.angular_velocity.clone(),
+            spheres: Vec::new(),
+            motion: Vec::new(),
             stats: StepStats::default(),
             limits: setup.health,
             energy_reference: None,
@@ -429,6 +452,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         stepper
             .sort_and_rebuild(world)
             .map_err(SetupError::Neighbor)?;
+        stepper.pack(world);
         stepper.forces(world).map_err(SetupError::Health)?;
         Ok(stepper)
     }
@@ -436,10 +460,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     /// One velocity-Verlet step: half kick and drift, forces at the new
     /// positions (damping sees the half-step velocities, as in LAMMPS), half kick.
     fn step(&mut self, world: &mut World) -> Result<(), HealthError> {
-        self.kick_and_drift(world)?;
+        let moved = self.kick_and_drift(world)?;
         world.time_s += self.dt;
         world.step += 1;
-        if self.neighbors.needs_rebuild(&world.particles.position) {
+        if moved || self.neighbors.is_stale(world.particles.len()) {
             self.rebuild(world)?;
         }
         self.forces(world)?;
@@ -453,38 +477,54 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     /// contact laws use, `v½ + ½dt·F_old/m`: damping evaluated with the
     /// half-step velocity alone lags by dt/2 and makes the restitution error
     /// first order in dt (4 % at e = 0.1 with 50 steps per contact); the
-    /// estimate makes it second order.
-    fn kick_and_drift(&mut self, world: &mut World) -> Result<(), HealthError> {
+    /// estimate makes it second order. Fills the packed [`Sphere`] and
+    /// [`Motion`] records, and returns whether some particle moved more than
+    /// half the skin since the last neighbour build (the neighbour list's own
+    /// test, fused into this pass).
+    fn kick_and_drift(&mut self, world: &mut World) -> Result<bool, HealthError> {
         let dt = self.dt;
         let domain = world.domain;
         let p = &mut world.particles;
-        self.velocity_estimate.resize(p.len(), Vec3::zeros());
-        self.angular_estimate.resize(p.len(), Vec3::zeros());
-        let left = p
+        self.spheres.resize(p.len(), Sphere::default());
+        self.motion.resize(p.len(), Motion::default());
+        let reference = self.neighbors.reference_positions();
+        let limit_sq = self.neighbors.rebuild_distance_sq();
+        let (left, moved) = p
             .position
             .par_iter_mut()
             .zip(p.velocity.par_iter_mut())
             .zip(p.angular_velocity.par_iter_mut())
             .zip(p.force.par_iter().zip(p.torque.par_iter()))
             .zip(p.mass.par_iter().zip(p.radius.par_iter()))
-            .zip(
-                self.velocity_estimate
-                    .par_iter_mut()
-                    .zip(self.angular_estimate.par_iter_mut()),
-            )
+            .zip(self.spheres.par_iter_mut().zip(self.motion.par_iter_mut()))
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
-            .filter_map(|(i, (((((x, v), w), (f, t)), (m, r)), (ve, we)))| {
-                let dv = f * (0.5 * dt / m);
-                let dw = t * (0.5 * dt / (0.4 * m * r * r));
-                *v += dv;
-                *w += dw;
-                *ve = *v + dv;
-                *we = *w + dw;
-                *x = B::wrap(&domain, *x + *v * dt);
-                (!domain.contains(*x)).then_some(i)
-            })
-            .min();
+            .map(
+                |(i, (((((x, v), w), (f, t)), (&m, &r)), (sphere, motion)))| {
+                    let dv = f * (0.5 * dt / m);
+                    let dw = t * (0.5 * dt / (0.4 * m * r * r));
+                    *v += dv;
+                    *w += dw;
+                    *x = B::wrap(&domain, *x + *v * dt);
+                    *sphere = Sphere { x: *x, r };
+                    *motion = Motion {
+                        v: *v + dv,
+                        w: *w + dw,
+                        m,
+                        inv_r: 1.0 / r,
+                    };
+                    // A NaN position also asks for a rebuild (which then reports it).
+                    let moved = reference.get(i).is_none_or(|x0| {
+                        let d2 = B::separation(&domain, *x - x0).norm_squared();
+                        d2 > limit_sq || d2.is_nan()
+                    });
+                    ((!domain.contains(*x)).then_some(i), moved)
+                },
+            )
+            .reduce(
+                || (None, false),
+                |a, b| (min_option(a.0, b.0), a.1 || b.1),
+            );
         match left {
             Some(i) => Err(self.health(
                 world,
@@ -493,8 +533,29 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                     position: world.particles.position[i],
                 },
             )),
-            None => Ok(()),
+            None => Ok(moved),
         }
+    }
+
+    /// Fills the packed records from the particles with the velocities
+    /// themselves as estimates (no force history yet: at setup and after
+    /// particles were added or removed).
+    fn pack(&mut self, world: &World) {
+        let p = &world.particles;
+        self.spheres.clear();
+        self.spheres.extend(
+            p.position
+                .iter()
+                .zip(&p.radius)
+                .map(|(&x, &r)| Sphere { x, r }),
+        );
+        self.motion.clear();
+        self.motion.extend((0..p.len()).map(|i| Motion {
+            v: p.velocity[i],
+            w: p.angular_velocity[i],
+            m: p.mass[i],
+            inv_r: 1.0 / p.radius[i],
+        }));
     }
 
     fn health(&self, world: &World, index: usize, cause: HealthCause) -> HealthError {
@@ -540,6 +601,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .neighbors
             .cell_order(&p.position, &p.radius, &world.domain)?;
         p.permute(&order);
+        if self.spheres.len() == order.len() && self.motion.len() == order.len() {
+            apply_permutation(&order, &mut self.spheres);
+            apply_permutation(&order, &mut self.motion);
+        }
         let slots = self.wall_slots;
         let old = std::mem::take(&mut self.wall_history);
         self.wall_history = order
@@ -598,8 +663,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
 
     /// Returns the number of force-carrying contacts and (worst overlap ratio, pair index).
     fn pair_forces(&mut self, world: &World) -> (usize, (f64, usize)) {
-        let p = &world.particles;
-        let (vel, ang) = (&self.velocity_estimate, &self.angular_estimate);
+        let (spheres, motion) = (&self.spheres, &self.motion);
         let domain = world.domain;
         let coef = self.particle_particle;
         let dt = self.dt;
@@ -612,51 +676,53 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .zip(self.pair_forces.par_iter_mut())
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
-            .map(|(k, ((&[i, j], h), out))| {
-                let (i, j) = (i as usize, j as usize);
-                let (ri, rj) = (p.radius[i], p.radius[j]);
-                let d = B::separation(&domain, p.position[i] - p.position[j]);
-                let dist_sq = d.norm_squared();
-                let touch = ri + rj;
-                let r_star = harmonic(ri, rj);
-                let limit = touch + reach;
-                if dist_sq >= limit * limit {
-                    *h = ContactHistory::default();
-                    *out = PairForce::default();
-                    return (0, (0.0, k));
-                }
-                let dist = dist_sq.sqrt();
-                let n = d / dist;
-                let overlap = touch - dist;
-                let arm_i = ri - 0.5 * overlap;
-                let arm_j = rj - 0.5 * overlap;
-                let (wi, wj) = (ang[i], ang[j]);
-                let motion = RelativeMotion {
-                    velocity: vel[i] - vel[j] - (wi * arm_i + wj * arm_j).cross(&n),
-                    angular_velocity: wi - wj,
-                };
-                let geometry = ContactGeometry {
-                    normal: n,
-                    overlap_m: overlap,
-                    r_star_m: r_star,
-                    m_star_kg: harmonic(p.mass[i], p.mass[j]),
-                };
-                match evaluate::<N, R>(&coef, &geometry, &motion, dt, h) {
-                    Some(c) => {
-                        let lever = n.cross(&c.tangential_force);
-                        *out = PairForce {
-                            force_on_first: c.force,
-                            torque_first: c.rolling_torque - lever * arm_i,
-                            torque_second: -c.rolling_torque - lever * arm_j,
-                        };
-                        (1, (overlap.max(0.0) / ri.min(rj), k))
-                    }
-                    None => {
+            .fold(
+                || (0, (0.0, usize::MAX)),
+                |acc, (k, ((&[i, j], h), out))| {
+                    let (si, sj) = (&spheres[i as usize], &spheres[j as usize]);
+                    let d = B::separation(&domain, si.x - sj.x);
+                    let dist_sq = d.norm_squared();
+                    let touch = si.r + sj.r;
+                    let limit = touch + reach;
+                    if dist_sq >= limit * limit {
+                        *h = ContactHistory::default();
                         *out = PairForce::default();
-                        (0, (0.0, k))
+                        return acc;
                     }
-                }
-            })
+                    let (mi, mj) = (&motion[i as usize], &motion[j as usize]);
+                    let dist = dist_sq.sqrt();
+                    let n = d * (1.0 / dist);
+                    let overlap = touch - dist;
+                    let arm_i = si.r - 0.5 * overlap;
+                    let arm_j = sj.r - 0.5 * overlap;
+                    let relative = RelativeMotion {
+                        velocity: mi.v - mj.v - (mi.w * arm_i + mj.w * arm_j).cross(&n),
+                        angular_velocity: mi.w - mj.w,
+                    };
+                    let geometry = ContactGeometry {
+                        normal: n,
+                        overlap_m: overlap,
+                        r_star_m: harmonic(si.r, sj.r),
+                        m_star_kg: harmonic(mi.m, mj.m),
+                    };
+                    match evaluate::<N, R>(&coef, &geometry, &relative, dt, h) {
+                        Some(c) => {
+                            let lever = n.cross(&c.tangential_force);
+                            *out = PairForce {
+                                force_on_first: c.force,
+                                torque_first: c.rolling_torque - lever * arm_i,
+                                torque_second: -c.rolling_torque - lever * arm_j,
+                            };
+                            let ratio = overlap.max(0.0) * mi.inv_r.max(mj.inv_r);
+                            (acc.0 + 1, worse(acc.1, (ratio, k)))
+                        }
+                        None => {
+                            *out = PairForce::default();
+                            acc
+                        }
+                    }
+                },
+            )
             .reduce(
                 || (0, (0.0, usize::MAX)),
                 |a, b| (a.0 + b.0, worse(a.1, b.1)),
@@ -685,20 +751,13 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .zip(p.velocity.par_iter_mut())
             .zip(p.angular_velocity.par_iter_mut())
             .zip(self.wall_history.par_chunks_mut(slots))
-            .zip(
-                p.position
-                    .par_iter()
-                    .zip(p.radius.par_iter().zip(p.mass.par_iter())),
-            )
-            .zip(
-                self.velocity_estimate
-                    .par_iter()
-                    .zip(self.angular_estimate.par_iter()),
-            )
+            .zip(self.spheres.par_iter().zip(self.motion.par_iter()))
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
             .map(
-                |(i, ((((((f, t), v), w), hist), (x, (&r, &m))), (ve, we)))| {
+                |(i, (((((f, t), v), w), hist), (sphere, motion)))| {
+                    let (x, r, m) = (&sphere.x, sphere.r, motion.m);
+                    let (ve, we) = (&motion.v, &motion.w);
                     let mut force = g * m;
                     let mut torque = Vec3::zeros();
                     for e in neighbors.incident(i) {
@@ -888,6 +947,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Step
         self.energy_reference = None;
         self.sort_and_rebuild(world)
             .map_err(|e| self.neighbor_failure(world, e))?;
+        self.pack(world);
         self.forces(world)
     }
 }
