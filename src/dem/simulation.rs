@@ -184,8 +184,8 @@ struct Motion {
 #[derive(Clone, Copy, Debug, Default)]
 struct PairForce {
     force_on_first: Vec3,
-    torque_first: Vec3,
-    torque_second: Vec3,
+    /// Torque on the first and on the second particle, N·m.
+    torque: [Vec3; 2],
 }
 
 /// The monomorphised kernel behind a [`Simulation`].
@@ -710,8 +710,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                             let lever = n.cross(&c.tangential_force);
                             *out = PairForce {
                                 force_on_first: c.force,
-                                torque_first: c.rolling_torque - lever * arm_i,
-                                torque_second: -c.rolling_torque - lever * arm_j,
+                                torque: [
+                                    c.rolling_torque - lever * arm_i,
+                                    -c.rolling_torque - lever * arm_j,
+                                ],
                             };
                             let ratio = overlap.max(0.0) * mi.inv_r.max(mj.inv_r);
                             (acc.0 + 1, worse(acc.1, (ratio, k)))
@@ -760,15 +762,11 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                     let (ve, we) = (&motion.v, &motion.w);
                     let mut force = g * m;
                     let mut torque = Vec3::zeros();
+                    // Branch-free: x + (−1)·f is bit-identical to x − f.
                     for e in neighbors.incident(i) {
                         let pf = &buffer[e.pair()];
-                        if e.is_first() {
-                            force += pf.force_on_first;
-                            torque += pf.torque_first;
-                        } else {
-                            force -= pf.force_on_first;
-                            torque += pf.torque_second;
-                        }
+                        force += pf.force_on_first * e.sign();
+                        torque += pf.torque[usize::from(!e.is_first())];
                     }
                     let mut contacts = 0;
                     let mut worst = (0.0, usize::MAX);
