@@ -19,10 +19,52 @@
 //!
 //! # Measured
 //!
-//! See the section "Measured" at the end of this documentation: numbers are
-//! measured side by side with LIGGGHTS 3.8.0 (Debian package) on the same
-//! 2-vCPU machine in the same time window; quote ratios, since the machine is
-//! shared and noisy.
+//! Side by side with LIGGGHTS 3.8.0 (Debian package `liggghts`, serial, the
+//! decks of `../shared/bench/liggghts`, settled restart, one LIGGGHTS run
+//! before and one after each repose run, same window), on the shared 2-vCPU
+//! AMD EPYC builder, 2026-11-21 12:24–12:42. Load average 2.9–3.7 throughout:
+//! other builds kept about one core busy, so LIGGGHTS ran at 3.2–4.2 Mps/s here
+//! against 4.6–6.1 in `../shared/bench/README.md`, and **a second repose thread
+//! got no second core** (the process used ≈ 1.0 CPU-second per second on 2
+//! threads: its CPU-time throughput equals its wall throughput), so the
+//! 2-thread column measures oversubscription, not scaling. Mps/s = million
+//! particle-steps per second, median of 3 timed segments; "cpu" = per
+//! CPU-second of the process (repose: `/proc/self/stat`; LIGGGHTS: the
+//! decks' `cpu_ticks.sh`).
+//!
+//! | N      | repose 1 thr (cpu) | repose 2 thr (cpu) | LIGGGHTS (cpu)          | ratio 1 thr, wall (cpu) |
+//! |--------|--------------------|--------------------|-------------------------|-------------------------|
+//! | 5,120  | 4.69 (5.12)        | 5.33 (5.43)        | 3.88 / 4.24 (4.19/4.57) | 1.16 (1.17)             |
+//! | 20,480 | 3.84 (4.07)        | 4.58 (4.61)        | 3.51 / 3.77 (3.85/3.78) | 1.05 (1.07)             |
+//! | 50,000 | 3.84 (3.86)        | 3.80 (3.82)        | 3.21 / 3.21 (3.23/3.23) | 1.20 (1.20)             |
+//!
+//! Settled bed (end of the timed part): 2.27–2.28 force-carrying pairs per
+//! particle (4.53–4.57 contacts per particle; LIGGGHTS `c_zmean` 4.52), 0.051
+//! wall contacts per particle, 3.4 listed pairs per particle. Rebuilds: every
+//! 160–300 steps (LIGGGHTS: every ~400). Settling (2 threads, untimed): 18 s,
+//! 92 s, 160 s.
+//!
+//! Cost of each effect, N = 5,120, 1 thread, same settled bed (rebuild
+//! counts differ because the bed moves differently under each law):
+//!
+//! | kernel                         | Mps/s (cpu)  | relative | LIGGGHTS      |
+//! |--------------------------------|--------------|----------|---------------|
+//! | hertz + no rolling             | 5.91 (5.95)  | 1.00     | `off`: 4.48   |
+//! | hertz + CDT (the deck)         | 5.10 (5.23)  | 0.86     | `cdt`: 4.33   |
+//! | hertz + EPSD                   | 4.91 (5.32)  | 0.83     | (1)           |
+//! | JKR, Γ = 0 + no rolling        | 3.14 (3.18)  | 0.53     |               |
+//! | JKR, Γ = 0 + CDT               | 3.05 (3.05)  | 0.52     |               |
+//! | JKR, Γ = 0 + EPSD              | 3.22 (3.29)  | 0.54     |               |
+//!
+//! (1) LIGGGHTS `epsd2` cannot start from the CDT restart (its wall history
+//! has another size). Rolling resistance costs 14–17 %; JKR at Γ = 0 costs
+//! about 45 %: its contact radius comes from a Newton solve and a
+//! `powf(2/3)` per contact even when Γ = 0.
+//!
+//! Per-stage cost (N = 5,120, 1 thread, instrumented build): drift 15,
+//! rebuild 1.5, pair forces 131, gather + walls + kick 41, energy check 1 ns
+//! per particle-step; the pair kernel is latency-bound (≈ 55 ns per touching
+//! pair: one dependent chain of 5 square roots and 4 divisions per contact).
 
 use std::io::Write;
 use std::time::Instant;

@@ -3,7 +3,7 @@
 //!
 //! Module map (dependencies point downward only):
 //! - [`commands`]: one function per CLI subcommand (the binary only parses arguments).
-//! - [`bench`]: the engine throughput benchmark (`repose bench`).
+//! - [`mod@bench`]: the engine throughput benchmark (`repose bench`).
 //! - [`scenes`]: runs an experiment's scene and produces its result.
 //! - [`store`]: the content-addressed run store (`runs/<id>/`), atomic writes,
 //!   caching, lineage records.

@@ -514,17 +514,17 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                         inv_r: 1.0 / r,
                     };
                     // A NaN position also asks for a rebuild (which then reports it).
-                    let moved = reference.get(i).is_none_or(|x0| {
-                        let d2 = B::separation(&domain, *x - x0).norm_squared();
-                        d2 > limit_sq || d2.is_nan()
-                    });
+                    let moved = match reference.get(i) {
+                        Some(x0) => {
+                            let d2 = B::separation(&domain, *x - x0).norm_squared();
+                            d2 > limit_sq || d2.is_nan()
+                        }
+                        None => true,
+                    };
                     ((!domain.contains(*x)).then_some(i), moved)
                 },
             )
-            .reduce(
-                || (None, false),
-                |a, b| (min_option(a.0, b.0), a.1 || b.1),
-            );
+            .reduce(|| (None, false), |a, b| (min_option(a.0, b.0), a.1 || b.1));
         match left {
             Some(i) => Err(self.health(
                 world,
@@ -756,58 +756,56 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .zip(self.spheres.par_iter().zip(self.motion.par_iter()))
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
-            .map(
-                |(i, (((((f, t), v), w), hist), (sphere, motion)))| {
-                    let (x, r, m) = (&sphere.x, sphere.r, motion.m);
-                    let (ve, we) = (&motion.v, &motion.w);
-                    let mut force = g * m;
-                    let mut torque = Vec3::zeros();
-                    // Branch-free: x + (−1)·f is bit-identical to x − f.
-                    for e in neighbors.incident(i) {
-                        let pf = &buffer[e.pair()];
-                        force += pf.force_on_first * e.sign();
-                        torque += pf.torque[usize::from(!e.is_first())];
+            .map(|(i, (((((f, t), v), w), hist), (sphere, motion)))| {
+                let (x, r, m) = (&sphere.x, sphere.r, motion.m);
+                let (ve, we) = (&motion.v, &motion.w);
+                let mut force = g * m;
+                let mut torque = Vec3::zeros();
+                // Branch-free: x + (−1)·f is bit-identical to x − f.
+                for e in neighbors.incident(i) {
+                    let pf = &buffer[e.pair()];
+                    force += pf.force_on_first * e.sign();
+                    torque += pf.torque[usize::from(!e.is_first())];
+                }
+                let mut contacts = 0;
+                let mut worst = (0.0, usize::MAX);
+                for (k, wall) in placed.iter().enumerate() {
+                    let Some(wc) = wall.contact(*x, r, wall_reach[k]) else {
+                        hist[k] = ContactHistory::default();
+                        continue;
+                    };
+                    let n = wc.normal;
+                    let arm = r - 0.5 * wc.overlap_m;
+                    let motion = RelativeMotion {
+                        velocity: ve - (we * arm).cross(&n) - wc.velocity,
+                        angular_velocity: *we,
+                    };
+                    let geometry = ContactGeometry {
+                        normal: n,
+                        overlap_m: wc.overlap_m,
+                        r_star_m: r,
+                        m_star_kg: m,
+                    };
+                    if let Some(c) =
+                        evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k])
+                    {
+                        force += c.force;
+                        torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
+                        contacts += 1;
+                        worst = worse(worst, (wc.overlap_m.max(0.0) / r, i * slots + k));
                     }
-                    let mut contacts = 0;
-                    let mut worst = (0.0, usize::MAX);
-                    for (k, wall) in placed.iter().enumerate() {
-                        let Some(wc) = wall.contact(*x, r, wall_reach[k]) else {
-                            hist[k] = ContactHistory::default();
-                            continue;
-                        };
-                        let n = wc.normal;
-                        let arm = r - 0.5 * wc.overlap_m;
-                        let motion = RelativeMotion {
-                            velocity: ve - (we * arm).cross(&n) - wc.velocity,
-                            angular_velocity: *we,
-                        };
-                        let geometry = ContactGeometry {
-                            normal: n,
-                            overlap_m: wc.overlap_m,
-                            r_star_m: r,
-                            m_star_kg: m,
-                        };
-                        if let Some(c) =
-                            evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k])
-                        {
-                            force += c.force;
-                            torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
-                            contacts += 1;
-                            worst = worse(worst, (wc.overlap_m.max(0.0) / r, i * slots + k));
-                        }
-                    }
-                    *f = force;
-                    *t = torque;
-                    *v += force * (0.5 * dt / m);
-                    *w += torque * (0.5 * dt / (0.4 * m * r * r));
-                    let finite = x
-                        .iter()
-                        .chain(v.iter())
-                        .chain(w.iter())
-                        .all(|c| c.is_finite());
-                    (contacts, worst, (!finite).then_some(i))
-                },
-            )
+                }
+                *f = force;
+                *t = torque;
+                *v += force * (0.5 * dt / m);
+                *w += torque * (0.5 * dt / (0.4 * m * r * r));
+                let finite = x
+                    .iter()
+                    .chain(v.iter())
+                    .chain(w.iter())
+                    .all(|c| c.is_finite());
+                (contacts, worst, (!finite).then_some(i))
+            })
             .reduce(
                 || (0, (0.0, usize::MAX), None),
                 |a, b| (a.0 + b.0, worse(a.1, b.1), min_option(a.2, b.2)),
