@@ -6,6 +6,7 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
+use crate::bench::{self, BenchError, BenchOptions};
 use crate::log::{inspect, InspectError};
 use crate::manifest::{read_document, read_experiment, ContentId, DocumentKind, ManifestError};
 use crate::scenes::run_experiment;
@@ -72,6 +73,9 @@ pub enum CommandError {
     /// Writing the report failed (e.g. a closed pipe).
     #[error("cannot write output: {0}")]
     Output(#[from] io::Error),
+    /// The benchmark failed or its options are invalid.
+    #[error("bench: {0}")]
+    Bench(#[from] BenchError),
 }
 
 impl CommandError {
@@ -82,6 +86,7 @@ impl CommandError {
             CommandError::ValidationFailed { .. } => true,
             CommandError::Store(e) => e.is_invalid_input(),
             CommandError::Inspect(e) => e.is_invalid_input(),
+            CommandError::Bench(e) => e.is_invalid_input(),
             CommandError::RunFailed { .. } | CommandError::Output(_) => false,
         };
         if invalid {
@@ -217,6 +222,23 @@ pub fn run(store_root: &Path, manifest: &Path, out: &mut dyn Write) -> Result<()
     }
     for (name, value) in &result.measurements {
         writeln!(out, "  {name} = {value}")?;
+    }
+    Ok(())
+}
+
+/// `repose bench`: settles the benchmark bed and times each variant; the table
+/// (or JSON with `json`) goes to `out`, progress to `progress`.
+pub fn bench(
+    options: &BenchOptions,
+    json: bool,
+    out: &mut dyn Write,
+    progress: &mut (dyn Write + Send),
+) -> Result<(), CommandError> {
+    let report = bench::run(options, progress)?;
+    if json {
+        writeln!(out, "{}", pretty(&report))?;
+    } else {
+        report.write_table(out)?;
     }
     Ok(())
 }

@@ -3,6 +3,7 @@
 //!
 //! Module map (dependencies point downward only):
 //! - [`commands`]: one function per CLI subcommand (the binary only parses arguments).
+//! - [`mod@bench`]: the engine throughput benchmark (`repose bench`).
 //! - [`scenes`]: runs an experiment's scene and produces its result.
 //! - [`log`]: MCAP run logs for Foxglove (writing, and `repose inspect`).
 //! - [`store`]: the content-addressed run store (`runs/<id>/`), atomic writes,
@@ -15,6 +16,7 @@
 //!   coarse-graining rules.
 //! - [`dem`]: the soft-sphere DEM engine; knows nothing of studies, manifests or files.
 
+pub mod bench;
 pub mod commands;
 pub mod dem;
 pub mod log;

@@ -7,7 +7,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use repose::bench::BenchOptions;
 use repose::commands::{self, CommandError, KindArg};
+use repose::dem::simulation::{NormalChoice, RollingChoice};
 use repose::store::{DEFAULT_STORE, STORE_ENV};
 
 /// Reproducible calibration of DEM particle parameters against angle-of-repose tests.
@@ -50,11 +52,98 @@ enum Command {
         /// The MCAP file.
         file: PathBuf,
     },
+    /// Time the engine on the dense-bed benchmark of ../shared/bench (settle, warm up,
+    /// timed segments); progress on stderr.
+    Bench(BenchArgs),
     /// Inspect the run store.
     Runs {
         #[command(subcommand)]
         command: RunsCommand,
     },
+}
+
+/// Options of `repose bench`.
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Lattice side: N = n*n*20 spheres (16, 32, 50 give 5,120, 20,480, 50,000).
+    #[arg(long, default_value_t = 16)]
+    n: usize,
+    /// Thread counts to time, comma-separated (each in its own pool).
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    threads: Vec<usize>,
+    /// Steps per timed segment [default: the deck's, 6000 / 2000 / 1000 for n = 16 / 32 / 50].
+    #[arg(long)]
+    steps: Option<u64>,
+    /// Timed segments per variant.
+    #[arg(long, default_value_t = 3)]
+    segments: usize,
+    /// Warm-up steps before timing.
+    #[arg(long, default_value_t = 500)]
+    warmup: u64,
+    /// Settling steps [default: the deck's, 20000; 16000 for n >= 50].
+    #[arg(long)]
+    settle: Option<u64>,
+    /// Rolling models to time, comma-separated.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "cdt")]
+    rolling: Vec<RollingArg>,
+    /// Normal models to time, comma-separated (JKR with zero surface energy).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "hertz")]
+    normal: Vec<NormalArg>,
+    /// Seed of the lattice jitter.
+    #[arg(long, default_value_t = 15_485_863)]
+    seed: u64,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// No progress on stderr.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Rolling-resistance model on the command line.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum RollingArg {
+    None,
+    Cdt,
+    Epsd,
+}
+
+/// Normal model on the command line.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum NormalArg {
+    Hertz,
+    Jkr,
+}
+
+impl BenchArgs {
+    fn options(&self) -> BenchOptions {
+        BenchOptions {
+            n: self.n,
+            threads: self.threads.clone(),
+            steps: self.steps,
+            segments: self.segments,
+            warmup: self.warmup,
+            settle: self.settle,
+            normals: self
+                .normal
+                .iter()
+                .map(|m| match m {
+                    NormalArg::Hertz => NormalChoice::Hertz,
+                    NormalArg::Jkr => NormalChoice::Jkr,
+                })
+                .collect(),
+            rollings: self
+                .rolling
+                .iter()
+                .map(|m| match m {
+                    RollingArg::None => RollingChoice::None,
+                    RollingArg::Cdt => RollingChoice::Cdt,
+                    RollingArg::Epsd => RollingChoice::Epsd,
+                })
+                .collect(),
+            seed: self.seed,
+        }
+    }
 }
 
 #[derive(Subcommand)]
@@ -77,6 +166,14 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         }
         Command::Run { manifest } => commands::run(&cli.store, &manifest, &mut out),
         Command::Inspect { file } => commands::inspect(&cli.store, &file, &mut out),
+        Command::Bench(args) => {
+            let mut progress: Box<dyn io::Write + Send> = if args.quiet {
+                Box::new(io::sink())
+            } else {
+                Box::new(io::stderr())
+            };
+            commands::bench(&args.options(), args.json, &mut out, &mut progress)
+        }
         Command::Runs {
             command: RunsCommand::List,
         } => commands::runs_list(&cli.store, &mut out),

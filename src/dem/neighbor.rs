@@ -657,10 +657,10 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         let Some(domain) = self.domain else {
             return true;
         };
-        if self.stale || positions.len() != self.ref_pos.len() {
+        if self.is_stale(positions.len()) {
             return true;
         }
-        let lim = 0.25 * self.skin * self.skin;
+        let lim = self.rebuild_distance_sq();
         let moved = |a: &[Vec3], b: &[Vec3]| {
             a.iter().zip(b).any(|(p0, p)| {
                 let d = if domain.any_periodic() {
@@ -681,6 +681,31 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
                 .zip(positions.par_chunks(4 * CHUNK))
                 .any(|(a, b)| moved(a, b))
         }
+    }
+
+    /// True when the list must be rebuilt whatever the particles did: never built,
+    /// invalidated, or built for a different number of particles than `n`. A caller
+    /// that tracks displacements itself (e.g. fused into its drift loop) rebuilds when
+    /// this is true or some particle moved farther than
+    /// `√`[`rebuild_distance_sq`](Self::rebuild_distance_sq) (minimum image) from its
+    /// [`reference_positions`](Self::reference_positions) entry — exactly the test of
+    /// [`needs_rebuild`](Self::needs_rebuild).
+    #[inline]
+    pub fn is_stale(&self, n: usize) -> bool {
+        self.domain.is_none() || self.stale || n != self.ref_pos.len()
+    }
+
+    /// `(skin / 2)²` (m²): a displacement whose square exceeds this since the last
+    /// build (or is NaN) asks for a rebuild.
+    #[inline]
+    pub fn rebuild_distance_sq(&self) -> f64 {
+        0.25 * self.skin * self.skin
+    }
+
+    /// The positions (m) of the last build, by particle index.
+    #[inline]
+    pub fn reference_positions(&self) -> &[Vec3] {
+        &self.ref_pos
     }
 
     /// A permutation sorting particles by grid cell (x fastest, then y, then z; ties by

@@ -26,10 +26,10 @@ use crate::dem::domain::Domain;
 use crate::dem::effects::{BodyForce, Boundary, Gravity, NoGravity, Open, Periodic};
 use crate::dem::health::{HealthCause, HealthError, HealthLimits, ENERGY_CHECK_INTERVAL};
 use crate::dem::material::{harmonic, ElasticMaterial};
-use crate::dem::neighbor::{NeighborError, NeighborList};
+use crate::dem::neighbor::{apply_permutation, NeighborError, NeighborList};
 use crate::dem::particles::{ParticleInit, Particles};
 use crate::dem::vec3::Vec3;
-use crate::dem::walls::{Motion, PlacedWall, Wall, WallError};
+use crate::dem::walls::{Motion as WallMotion, PlacedWall, Wall, WallError};
 use rayon::prelude::*;
 
 /// Everything the engine simulates: particles, walls, the domain and the clock.
@@ -157,12 +157,35 @@ pub struct StepStats {
     pub rebuilds: u64,
 }
 
+/// What the pair kernel reads first of a particle, packed in one 32-byte
+/// record: centre (m) and radius (m). Enough to reject a listed pair that does
+/// not touch.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+struct Sphere {
+    x: Vec3,
+    r: f64,
+}
+
+/// What the contact laws read of a touching particle, packed in one 64-byte
+/// record: the full-step velocity estimates v½ + ½dt·F/m (m/s) and
+/// ω½ + ½dt·T/I (rad/s) (see [`Stepper::kick_and_drift`]), the mass (kg) and
+/// the inverse radius (1/m, for overlap ratios).
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+struct Motion {
+    v: Vec3,
+    w: Vec3,
+    m: f64,
+    inv_r: f64,
+}
+
 /// The force a pair exerts, stored per pair and gathered per particle.
 #[derive(Clone, Copy, Debug, Default)]
 struct PairForce {
     force_on_first: Vec3,
-    torque_first: Vec3,
-    torque_second: Vec3,
+    /// Torque on the first and on the second particle, N·m.
+    torque: [Vec3; 2],
 }
 
 /// The monomorphised kernel behind a [`Simulation`].
@@ -245,7 +268,7 @@ impl Simulation {
 
     /// Changes wall `wall`'s motion between steps (e.g. start a drum once its
     /// bed has settled, with a rotation window from now on).
-    pub fn set_wall_motion(&mut self, wall: usize, motion: Motion) -> Result<(), WallError> {
+    pub fn set_wall_motion(&mut self, wall: usize, motion: WallMotion) -> Result<(), WallError> {
         let Some(slot) = self.world.walls.get_mut(wall) else {
             return Err(WallError::OutOfRange {
                 field: "wall",
@@ -347,10 +370,10 @@ struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> {
     /// `max(walls, 1)`, so per-particle chunks are never empty.
     wall_slots: usize,
     placed: Vec<PlacedWall>,
-    /// Full-step velocity estimates v½ + ½dt·F/m (m/s) and ω½ + ½dt·T/I
-    /// (rad/s) that the contact laws see (see [`Stepper::kick_and_drift`]).
-    velocity_estimate: Vec<Vec3>,
-    angular_estimate: Vec<Vec3>,
+    /// Per particle (same index order as the world's particles): packed
+    /// copies of what the force stages read, refreshed by every drift.
+    spheres: Vec<Sphere>,
+    motion: Vec<Motion>,
     stats: StepStats,
     limits: HealthLimits,
     /// Energy check enabled (non-cohesive; skipped while any wall moves) and
@@ -431,8 +454,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             wall_history: vec![ContactHistory::default(); world.particles.len() * wall_slots],
             wall_slots,
             placed: Vec::new(),
-            velocity_estimate: world.particles.velocity.clone(),
-            angular_estimate: world.particles.angular_velocity.clone(),
+            spheres: Vec::new(),
+            motion: Vec::new(),
             stats: StepStats::default(),
             limits: setup.health,
             energy_reference: None,
@@ -443,6 +466,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         stepper
             .sort_and_rebuild(world)
             .map_err(SetupError::Neighbor)?;
+        stepper.pack(world);
         stepper.forces(world).map_err(SetupError::Health)?;
         Ok(stepper)
     }
@@ -450,10 +474,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     /// One velocity-Verlet step: half kick and drift, forces at the new
     /// positions (damping sees the half-step velocities, as in LAMMPS), half kick.
     fn step(&mut self, world: &mut World) -> Result<(), HealthError> {
-        self.kick_and_drift(world)?;
+        let moved = self.kick_and_drift(world)?;
         world.time_s += self.dt;
         world.step += 1;
-        if self.neighbors.needs_rebuild(&world.particles.position) {
+        if moved || self.neighbors.is_stale(world.particles.len()) {
             self.rebuild(world)?;
         }
         self.forces(world)?;
@@ -467,38 +491,54 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     /// contact laws use, `v½ + ½dt·F_old/m`: damping evaluated with the
     /// half-step velocity alone lags by dt/2 and makes the restitution error
     /// first order in dt (4 % at e = 0.1 with 50 steps per contact); the
-    /// estimate makes it second order.
-    fn kick_and_drift(&mut self, world: &mut World) -> Result<(), HealthError> {
+    /// estimate makes it second order. Fills the packed [`Sphere`] and
+    /// [`Motion`] records, and returns whether some particle moved more than
+    /// half the skin since the last neighbour build (the neighbour list's own
+    /// test, fused into this pass).
+    fn kick_and_drift(&mut self, world: &mut World) -> Result<bool, HealthError> {
         let dt = self.dt;
         let domain = world.domain;
         let p = &mut world.particles;
-        self.velocity_estimate.resize(p.len(), Vec3::zeros());
-        self.angular_estimate.resize(p.len(), Vec3::zeros());
-        let left = p
+        self.spheres.resize(p.len(), Sphere::default());
+        self.motion.resize(p.len(), Motion::default());
+        let reference = self.neighbors.reference_positions();
+        let limit_sq = self.neighbors.rebuild_distance_sq();
+        let (left, moved) = p
             .position
             .par_iter_mut()
             .zip(p.velocity.par_iter_mut())
             .zip(p.angular_velocity.par_iter_mut())
             .zip(p.force.par_iter().zip(p.torque.par_iter()))
             .zip(p.mass.par_iter().zip(p.radius.par_iter()))
-            .zip(
-                self.velocity_estimate
-                    .par_iter_mut()
-                    .zip(self.angular_estimate.par_iter_mut()),
-            )
+            .zip(self.spheres.par_iter_mut().zip(self.motion.par_iter_mut()))
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
-            .filter_map(|(i, (((((x, v), w), (f, t)), (m, r)), (ve, we)))| {
-                let dv = f * (0.5 * dt / m);
-                let dw = t * (0.5 * dt / (0.4 * m * r * r));
-                *v += dv;
-                *w += dw;
-                *ve = *v + dv;
-                *we = *w + dw;
-                *x = B::wrap(&domain, *x + *v * dt);
-                (!domain.contains(*x)).then_some(i)
-            })
-            .min();
+            .map(
+                |(i, (((((x, v), w), (f, t)), (&m, &r)), (sphere, motion)))| {
+                    let dv = f * (0.5 * dt / m);
+                    let dw = t * (0.5 * dt / (0.4 * m * r * r));
+                    *v += dv;
+                    *w += dw;
+                    *x = B::wrap(&domain, *x + *v * dt);
+                    *sphere = Sphere { x: *x, r };
+                    *motion = Motion {
+                        v: *v + dv,
+                        w: *w + dw,
+                        m,
+                        inv_r: 1.0 / r,
+                    };
+                    // A NaN position also asks for a rebuild (which then reports it).
+                    let moved = match reference.get(i) {
+                        Some(x0) => {
+                            let d2 = B::separation(&domain, *x - x0).norm_squared();
+                            d2 > limit_sq || d2.is_nan()
+                        }
+                        None => true,
+                    };
+                    ((!domain.contains(*x)).then_some(i), moved)
+                },
+            )
+            .reduce(|| (None, false), |a, b| (min_option(a.0, b.0), a.1 || b.1));
         match left {
             Some(i) => Err(self.health(
                 world,
@@ -507,8 +547,29 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                     position: world.particles.position[i],
                 },
             )),
-            None => Ok(()),
+            None => Ok(moved),
         }
+    }
+
+    /// Fills the packed records from the particles with the velocities
+    /// themselves as estimates (no force history yet: at setup and after
+    /// particles were added or removed).
+    fn pack(&mut self, world: &World) {
+        let p = &world.particles;
+        self.spheres.clear();
+        self.spheres.extend(
+            p.position
+                .iter()
+                .zip(&p.radius)
+                .map(|(&x, &r)| Sphere { x, r }),
+        );
+        self.motion.clear();
+        self.motion.extend((0..p.len()).map(|i| Motion {
+            v: p.velocity[i],
+            w: p.angular_velocity[i],
+            m: p.mass[i],
+            inv_r: 1.0 / p.radius[i],
+        }));
     }
 
     fn health(&self, world: &World, index: usize, cause: HealthCause) -> HealthError {
@@ -554,6 +615,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .neighbors
             .cell_order(&p.position, &p.radius, &world.domain)?;
         p.permute(&order);
+        if self.spheres.len() == order.len() && self.motion.len() == order.len() {
+            apply_permutation(&order, &mut self.spheres);
+            apply_permutation(&order, &mut self.motion);
+        }
         let slots = self.wall_slots;
         let old = std::mem::take(&mut self.wall_history);
         self.wall_history = order
@@ -612,8 +677,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
 
     /// Returns the number of force-carrying contacts and (worst overlap ratio, pair index).
     fn pair_forces(&mut self, world: &World) -> (usize, (f64, usize)) {
-        let p = &world.particles;
-        let (vel, ang) = (&self.velocity_estimate, &self.angular_estimate);
+        let (spheres, motion) = (&self.spheres, &self.motion);
         let domain = world.domain;
         let coef = self.particle_particle;
         let dt = self.dt;
@@ -626,51 +690,55 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .zip(self.pair_forces.par_iter_mut())
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
-            .map(|(k, ((&[i, j], h), out))| {
-                let (i, j) = (i as usize, j as usize);
-                let (ri, rj) = (p.radius[i], p.radius[j]);
-                let d = B::separation(&domain, p.position[i] - p.position[j]);
-                let dist_sq = d.norm_squared();
-                let touch = ri + rj;
-                let r_star = harmonic(ri, rj);
-                let limit = touch + reach;
-                if dist_sq >= limit * limit {
-                    *h = ContactHistory::default();
-                    *out = PairForce::default();
-                    return (0, (0.0, k));
-                }
-                let dist = dist_sq.sqrt();
-                let n = d / dist;
-                let overlap = touch - dist;
-                let arm_i = ri - 0.5 * overlap;
-                let arm_j = rj - 0.5 * overlap;
-                let (wi, wj) = (ang[i], ang[j]);
-                let motion = RelativeMotion {
-                    velocity: vel[i] - vel[j] - (wi * arm_i + wj * arm_j).cross(&n),
-                    angular_velocity: wi - wj,
-                };
-                let geometry = ContactGeometry {
-                    normal: n,
-                    overlap_m: overlap,
-                    r_star_m: r_star,
-                    m_star_kg: harmonic(p.mass[i], p.mass[j]),
-                };
-                match evaluate::<N, R>(&coef, &geometry, &motion, dt, h) {
-                    Some(c) => {
-                        let lever = n.cross(&c.tangential_force);
-                        *out = PairForce {
-                            force_on_first: c.force,
-                            torque_first: c.rolling_torque - lever * arm_i,
-                            torque_second: -c.rolling_torque - lever * arm_j,
-                        };
-                        (1, (overlap.max(0.0) / ri.min(rj), k))
-                    }
-                    None => {
+            .fold(
+                || (0, (0.0, usize::MAX)),
+                |acc, (k, ((&[i, j], h), out))| {
+                    let (si, sj) = (&spheres[i as usize], &spheres[j as usize]);
+                    let d = B::separation(&domain, si.x - sj.x);
+                    let dist_sq = d.norm_squared();
+                    let touch = si.r + sj.r;
+                    let limit = touch + reach;
+                    if dist_sq >= limit * limit {
+                        *h = ContactHistory::default();
                         *out = PairForce::default();
-                        (0, (0.0, k))
+                        return acc;
                     }
-                }
-            })
+                    let (mi, mj) = (&motion[i as usize], &motion[j as usize]);
+                    let dist = dist_sq.sqrt();
+                    let n = d * (1.0 / dist);
+                    let overlap = touch - dist;
+                    let arm_i = si.r - 0.5 * overlap;
+                    let arm_j = sj.r - 0.5 * overlap;
+                    let relative = RelativeMotion {
+                        velocity: mi.v - mj.v - (mi.w * arm_i + mj.w * arm_j).cross(&n),
+                        angular_velocity: mi.w - mj.w,
+                    };
+                    let geometry = ContactGeometry {
+                        normal: n,
+                        overlap_m: overlap,
+                        r_star_m: harmonic(si.r, sj.r),
+                        m_star_kg: harmonic(mi.m, mj.m),
+                    };
+                    match evaluate::<N, R>(&coef, &geometry, &relative, dt, h) {
+                        Some(c) => {
+                            let lever = n.cross(&c.tangential_force);
+                            *out = PairForce {
+                                force_on_first: c.force,
+                                torque: [
+                                    c.rolling_torque - lever * arm_i,
+                                    -c.rolling_torque - lever * arm_j,
+                                ],
+                            };
+                            let ratio = overlap.max(0.0) * mi.inv_r.max(mj.inv_r);
+                            (acc.0 + 1, worse(acc.1, (ratio, k)))
+                        }
+                        None => {
+                            *out = PairForce::default();
+                            acc
+                        }
+                    }
+                },
+            )
             .reduce(
                 || (0, (0.0, usize::MAX)),
                 |a, b| (a.0 + b.0, worse(a.1, b.1)),
@@ -699,72 +767,59 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .zip(p.velocity.par_iter_mut())
             .zip(p.angular_velocity.par_iter_mut())
             .zip(self.wall_history.par_chunks_mut(slots))
-            .zip(
-                p.position
-                    .par_iter()
-                    .zip(p.radius.par_iter().zip(p.mass.par_iter())),
-            )
-            .zip(
-                self.velocity_estimate
-                    .par_iter()
-                    .zip(self.angular_estimate.par_iter()),
-            )
+            .zip(self.spheres.par_iter().zip(self.motion.par_iter()))
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
-            .map(
-                |(i, ((((((f, t), v), w), hist), (x, (&r, &m))), (ve, we)))| {
-                    let mut force = g * m;
-                    let mut torque = Vec3::zeros();
-                    for e in neighbors.incident(i) {
-                        let pf = &buffer[e.pair()];
-                        if e.is_first() {
-                            force += pf.force_on_first;
-                            torque += pf.torque_first;
-                        } else {
-                            force -= pf.force_on_first;
-                            torque += pf.torque_second;
-                        }
+            .map(|(i, (((((f, t), v), w), hist), (sphere, motion)))| {
+                let (x, r, m) = (&sphere.x, sphere.r, motion.m);
+                let (ve, we) = (&motion.v, &motion.w);
+                let mut force = g * m;
+                let mut torque = Vec3::zeros();
+                // Branch-free: x + (−1)·f is bit-identical to x − f.
+                for e in neighbors.incident(i) {
+                    let pf = &buffer[e.pair()];
+                    force += pf.force_on_first * e.sign();
+                    torque += pf.torque[usize::from(!e.is_first())];
+                }
+                let mut contacts = 0;
+                let mut worst = (0.0, usize::MAX);
+                for (k, wall) in placed.iter().enumerate() {
+                    let Some(wc) = wall.contact(*x, r, wall_reach[k]) else {
+                        hist[k] = ContactHistory::default();
+                        continue;
+                    };
+                    let n = wc.normal;
+                    let arm = r - 0.5 * wc.overlap_m;
+                    let motion = RelativeMotion {
+                        velocity: ve - (we * arm).cross(&n) - wc.velocity,
+                        angular_velocity: *we,
+                    };
+                    let geometry = ContactGeometry {
+                        normal: n,
+                        overlap_m: wc.overlap_m,
+                        r_star_m: r,
+                        m_star_kg: m,
+                    };
+                    if let Some(c) =
+                        evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k])
+                    {
+                        force += c.force;
+                        torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
+                        contacts += 1;
+                        worst = worse(worst, (wc.overlap_m.max(0.0) / r, i * slots + k));
                     }
-                    let mut contacts = 0;
-                    let mut worst = (0.0, usize::MAX);
-                    for (k, wall) in placed.iter().enumerate() {
-                        let Some(wc) = wall.contact(*x, r, wall_reach[k]) else {
-                            hist[k] = ContactHistory::default();
-                            continue;
-                        };
-                        let n = wc.normal;
-                        let arm = r - 0.5 * wc.overlap_m;
-                        let motion = RelativeMotion {
-                            velocity: ve - (we * arm).cross(&n) - wc.velocity,
-                            angular_velocity: *we,
-                        };
-                        let geometry = ContactGeometry {
-                            normal: n,
-                            overlap_m: wc.overlap_m,
-                            r_star_m: r,
-                            m_star_kg: m,
-                        };
-                        if let Some(c) =
-                            evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k])
-                        {
-                            force += c.force;
-                            torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
-                            contacts += 1;
-                            worst = worse(worst, (wc.overlap_m.max(0.0) / r, i * slots + k));
-                        }
-                    }
-                    *f = force;
-                    *t = torque;
-                    *v += force * (0.5 * dt / m);
-                    *w += torque * (0.5 * dt / (0.4 * m * r * r));
-                    let finite = x
-                        .iter()
-                        .chain(v.iter())
-                        .chain(w.iter())
-                        .all(|c| c.is_finite());
-                    (contacts, worst, (!finite).then_some(i))
-                },
-            )
+                }
+                *f = force;
+                *t = torque;
+                *v += force * (0.5 * dt / m);
+                *w += torque * (0.5 * dt / (0.4 * m * r * r));
+                let finite = x
+                    .iter()
+                    .chain(v.iter())
+                    .chain(w.iter())
+                    .all(|c| c.is_finite());
+                (contacts, worst, (!finite).then_some(i))
+            })
             .reduce(
                 || (0, (0.0, usize::MAX), None),
                 |a, b| (a.0 + b.0, worse(a.1, b.1), min_option(a.2, b.2)),
@@ -907,6 +962,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Step
         self.energy_reference = None;
         self.sort_and_rebuild(world)
             .map_err(|e| self.neighbor_failure(world, e))?;
+        self.pack(world);
         self.forces(world)
     }
 }

@@ -25,6 +25,9 @@ pub fn damping_ratio(e: f64) -> f64 {
 
 /// Normal damping force along the normal, N (positive repulsive): for an
 /// approaching contact (`v_n < 0`, m/s) it pushes the bodies apart.
+/// `2√(5/6) ψ √(S_n m*) v_n` with `S_n = 2E*a`, evaluated as
+/// `[2√(5/6) ψ √(2E*)] · √(a m*) · v_n` (the bracket is mixed once per pair
+/// type: [`PairCoefficients::normal_damping`]).
 #[inline(always)]
 pub fn normal_damping_force(
     c: &PairCoefficients,
@@ -32,19 +35,20 @@ pub fn normal_damping_force(
     m_star_kg: f64,
     v_n: f64,
 ) -> f64 {
-    let s_n = 2.0 * c.e_star * contact_radius_m;
-    DAMPING_PREFACTOR * c.psi * (s_n * m_star_kg).sqrt() * v_n
+    c.normal_damping * (contact_radius_m * m_star_kg).sqrt() * v_n
 }
 
-/// Tangential damping coefficient η_t = −2√(5/6) ψ √(S_t m*), N·s/m (≥ 0); the
-/// damping force is −η_t v_t.
+/// Tangential damping coefficient η_t = −2√(5/6) ψ √(S_t m*), N·s/m (≥ 0),
+/// with `S_t = 8G*a`; the damping force is −η_t v_t. Evaluated as
+/// `[−2√(5/6) ψ √(8G*)] · √(a m*)` ([`PairCoefficients::tangential_damping`]),
+/// so a contact shares one square root between normal and tangential damping.
 #[inline(always)]
 pub fn tangential_damping_coefficient(
     c: &PairCoefficients,
-    tangential_stiffness: f64,
+    contact_radius_m: f64,
     m_star_kg: f64,
 ) -> f64 {
-    -DAMPING_PREFACTOR * c.psi * (tangential_stiffness * m_star_kg).sqrt()
+    c.tangential_damping * (contact_radius_m * m_star_kg).sqrt()
 }
 
 #[cfg(test)]

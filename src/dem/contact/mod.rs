@@ -82,6 +82,12 @@ pub struct PairCoefficients {
     pub rolling_friction: f64,
     /// JKR surface energy per surface Γ, J/m².
     pub surface_energy_j_m2: f64,
+    /// `2√(5/6) ψ √(2E*)`: the normal damping force is this × √(a m*) × v_n
+    /// (see [`damping::normal_damping_force`]).
+    pub normal_damping: f64,
+    /// `−2√(5/6) ψ √(8G*)` (≥ 0): the tangential damping coefficient is this ×
+    /// √(a m*) (see [`damping::tangential_damping_coefficient`]).
+    pub tangential_damping: f64,
     /// Clip the damped normal force so damping never pulls the bodies together
     /// beyond the elastic (adhesive) force. Off by default: then the measured
     /// restitution equals the input for every e in (0, 1]. On, the damped Hertz
@@ -144,10 +150,15 @@ impl PairCoefficients {
                 allowed: "at most one body of a contact may be rigid",
             });
         }
+        let e_star = effective_youngs_modulus(a, b);
+        let g_star = effective_shear_modulus(a, b);
+        let psi = damping::damping_ratio(p.restitution);
         Ok(Self {
-            e_star: effective_youngs_modulus(a, b),
-            g_star: effective_shear_modulus(a, b),
-            psi: damping::damping_ratio(p.restitution),
+            e_star,
+            g_star,
+            psi,
+            normal_damping: damping::DAMPING_PREFACTOR * psi * (2.0 * e_star).sqrt(),
+            tangential_damping: -damping::DAMPING_PREFACTOR * psi * (8.0 * g_star).sqrt(),
             static_friction: p.static_friction,
             rolling_friction: p.rolling_friction,
             surface_energy_j_m2: p.surface_energy_j_m2,

@@ -29,7 +29,8 @@ impl NormalModel for Hertz {
         }
         let a = (r_star_m * overlap_m).sqrt();
         Some(NormalResponse {
-            elastic_force_n: (4.0 / 3.0) * c.e_star * a * a * a / r_star_m,
+            // (4/3) E* a³/R* = (4/3) E* a δ: no division.
+            elastic_force_n: (4.0 / 3.0) * c.e_star * a * overlap_m,
             contact_radius_m: a,
             pull_off_force_n: 0.0,
         })

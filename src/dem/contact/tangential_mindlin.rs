@@ -47,7 +47,7 @@ pub fn force(
         *xi *= scale;
         return spring * scale;
     }
-    let total = spring - v_t * tangential_damping_coefficient(c, k_t, m_star);
+    let total = spring - v_t * tangential_damping_coefficient(c, a, m_star);
     let total_sq = total.norm_squared();
     if total_sq > cap * cap {
         total * (cap / total_sq.sqrt())

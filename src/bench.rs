@@ -1,0 +1,590 @@
+//! The engine throughput benchmark (`repose bench`): builds the dense-bed test
+//! bed of `../shared/bench` (the LIGGGHTS and LAMMPS decks) and times it.
+//!
+//! # The bed
+//!
+//! Spheres R = 1 mm, ρ = 2500 kg/m³, E = 5 MPa, ν = 0.3, e = 0.5, μ = 0.5, CDT
+//! rolling friction 0.1, gravity 9.81 m/s², dt = 2.4477e-5 s (0.2 × the Rayleigh
+//! time), skin 0.2 mm, periodic in x and y (period n × 2.4 mm) on a flat wall at
+//! z = 0 of the particles' own material. N = n·n·20 spheres start on a
+//! simple-cubic lattice of spacing 2.4 mm (the deck's `lattice sc 0.0024 origin
+//! 0.5 0.5 0.5`, layers 2 to 21) jittered by up to ±0.2 mm per axis (seeded
+//! ChaCha8), and settle under gravity for as many steps as the deck (20,000;
+//! 16,000 for n ≥ 50) with the deck's physics (Hertz + CDT). The settled bed is
+//! kept in memory; every requested variant (normal model × rolling model ×
+//! thread count) starts a fresh simulation from it (contact history starts
+//! empty, as after a LIGGGHTS restart), runs a warm-up (500 steps) and then
+//! timed segments (6,000 / 2,000 / 1,000 steps for n = 16 / 32 / 50, the
+//! deck's `nb`). Throughput is N × steps / wall seconds of a segment.
+//!
+//! # Measured
+//!
+//! Side by side with LIGGGHTS 3.8.0 (Debian package `liggghts`, serial, the
+//! decks of `../shared/bench/liggghts`, settled restart, one LIGGGHTS run
+//! before and one after each repose run, same window), on the shared 2-vCPU
+//! AMD EPYC builder, 2026-11-21 12:24–12:42. Load average 2.9–3.7 throughout:
+//! other builds kept about one core busy, so LIGGGHTS ran at 3.2–4.2 Mps/s here
+//! against 4.6–6.1 in `../shared/bench/README.md`, and **a second repose thread
+//! got no second core** (the process used ≈ 1.0 CPU-second per second on 2
+//! threads: its CPU-time throughput equals its wall throughput), so the
+//! 2-thread column measures oversubscription, not scaling. Mps/s = million
+//! particle-steps per second, median of 3 timed segments; "cpu" = per
+//! CPU-second of the process (repose: `/proc/self/stat`; LIGGGHTS: the
+//! decks' `cpu_ticks.sh`).
+//!
+//! | N      | repose 1 thr (cpu) | repose 2 thr (cpu) | LIGGGHTS (cpu)          | ratio 1 thr, wall (cpu) |
+//! |--------|--------------------|--------------------|-------------------------|-------------------------|
+//! | 5,120  | 4.69 (5.12)        | 5.33 (5.43)        | 3.88 / 4.24 (4.19/4.57) | 1.16 (1.17)             |
+//! | 20,480 | 3.84 (4.07)        | 4.58 (4.61)        | 3.51 / 3.77 (3.85/3.78) | 1.05 (1.07)             |
+//! | 50,000 | 3.84 (3.86)        | 3.80 (3.82)        | 3.21 / 3.21 (3.23/3.23) | 1.20 (1.20)             |
+//!
+//! Settled bed (end of the timed part): 2.27–2.28 force-carrying pairs per
+//! particle (4.53–4.57 contacts per particle; LIGGGHTS `c_zmean` 4.52), 0.051
+//! wall contacts per particle, 3.4 listed pairs per particle. Rebuilds: every
+//! 160–300 steps (LIGGGHTS: every ~400). Settling (2 threads, untimed): 18 s,
+//! 92 s, 160 s.
+//!
+//! Cost of each effect, N = 5,120, 1 thread, same settled bed (rebuild
+//! counts differ because the bed moves differently under each law):
+//!
+//! | kernel                         | Mps/s (cpu)  | relative | LIGGGHTS      |
+//! |--------------------------------|--------------|----------|---------------|
+//! | hertz + no rolling             | 5.91 (5.95)  | 1.00     | `off`: 4.48   |
+//! | hertz + CDT (the deck)         | 5.10 (5.23)  | 0.86     | `cdt`: 4.33   |
+//! | hertz + EPSD                   | 4.91 (5.32)  | 0.83     | (1)           |
+//! | JKR, Γ = 0 + no rolling        | 3.14 (3.18)  | 0.53     |               |
+//! | JKR, Γ = 0 + CDT               | 3.05 (3.05)  | 0.52     |               |
+//! | JKR, Γ = 0 + EPSD              | 3.22 (3.29)  | 0.54     |               |
+//!
+//! (1) LIGGGHTS `epsd2` cannot start from the CDT restart (its wall history
+//! has another size). Rolling resistance costs 14–17 %; JKR at Γ = 0 costs
+//! about 45 %: its contact radius comes from a Newton solve and a
+//! `powf(2/3)` per contact even when Γ = 0.
+//!
+//! Per-stage cost (N = 5,120, 1 thread, instrumented build): drift 15,
+//! rebuild 1.5, pair forces 131, gather + walls + kick 41, energy check 1 ns
+//! per particle-step; the pair kernel is latency-bound (≈ 55 ns per touching
+//! pair: one dependent chain of 5 square roots and 4 divisions per contact).
+
+use std::io::Write;
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::ThreadPoolBuilder;
+use serde::Serialize;
+
+use crate::dem::contact::PairParameters;
+use crate::dem::domain::Domain;
+use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::material::ElasticMaterial;
+use crate::dem::particles::{ParticleInit, Particles};
+use crate::dem::simulation::{
+    ContactSetup, NormalChoice, RollingChoice, SetupError, Simulation, SimulationSetup, World,
+};
+use crate::dem::vec3::Vec3;
+use crate::dem::walls::Wall;
+
+/// Sphere radius, m.
+const RADIUS_M: f64 = 1e-3;
+/// Lattice spacing, m.
+const SPACING_M: f64 = 2.4e-3;
+/// Largest jitter per axis, m.
+const JITTER_M: f64 = 2e-4;
+/// Layers of the lattice.
+const LAYERS: usize = 20;
+/// Time step, s (the decks' `timestep`).
+pub const DT_S: f64 = 2.4477e-5;
+/// Verlet skin, m (the decks' `neighbor 0.0002 bin`).
+const SKIN_M: f64 = 2e-4;
+
+/// What to benchmark.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchOptions {
+    /// Lattice side: N = n·n·20 spheres (16, 32, 50 give 5,120, 20,480, 50,000).
+    pub n: usize,
+    /// Thread counts to time, each in its own rayon pool.
+    pub threads: Vec<usize>,
+    /// Steps per timed segment; `None`: the deck's (6,000 / 2,000 / 1,000).
+    pub steps: Option<u64>,
+    /// Timed segments per variant.
+    pub segments: usize,
+    /// Warm-up steps before the timed segments.
+    pub warmup: u64,
+    /// Settling steps; `None`: the deck's (20,000; 16,000 for n ≥ 50).
+    pub settle: Option<u64>,
+    /// Normal models to time (JKR runs with Γ = 0).
+    pub normals: Vec<NormalChoice>,
+    /// Rolling models to time.
+    pub rollings: Vec<RollingChoice>,
+    /// Seed of the lattice jitter.
+    pub seed: u64,
+}
+
+impl BenchOptions {
+    /// The deck's settings for lattice side `n`: Hertz + CDT on one thread.
+    pub fn deck(n: usize) -> Self {
+        Self {
+            n,
+            threads: vec![1],
+            steps: None,
+            segments: 3,
+            warmup: 500,
+            settle: None,
+            normals: vec![NormalChoice::Hertz],
+            rollings: vec![RollingChoice::Cdt],
+            seed: 15_485_863,
+        }
+    }
+
+    /// Number of spheres, n·n·20.
+    pub fn particles(&self) -> usize {
+        self.n * self.n * LAYERS
+    }
+
+    /// Steps per timed segment (given or the deck's).
+    pub fn segment_steps(&self) -> u64 {
+        self.steps.unwrap_or(match self.n {
+            0..=31 => 6000,
+            32..=49 => 2000,
+            _ => 1000,
+        })
+    }
+
+    /// Settling steps (given or the deck's).
+    pub fn settle_steps(&self) -> u64 {
+        self.settle
+            .unwrap_or(if self.n >= 50 { 16_000 } else { 20_000 })
+    }
+}
+
+/// Why a benchmark could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    /// An option is out of range.
+    #[error("invalid option {name}: {message}")]
+    Option {
+        /// The option.
+        name: &'static str,
+        /// What is allowed.
+        message: &'static str,
+    },
+    /// The rayon pool could not be built.
+    #[error("thread pool: {0}")]
+    ThreadPool(#[from] rayon::ThreadPoolBuildError),
+    /// The simulation rejected the bed.
+    #[error("setup: {0}")]
+    Setup(#[from] SetupError),
+    /// The bed became unhealthy.
+    #[error(transparent)]
+    Health(#[from] HealthError),
+    /// Writing progress failed.
+    #[error("cannot write progress: {0}")]
+    Progress(#[from] std::io::Error),
+}
+
+impl BenchError {
+    /// True when the user's options are at fault.
+    pub fn is_invalid_input(&self) -> bool {
+        matches!(self, BenchError::Option { .. })
+    }
+}
+
+/// The settling phase.
+#[derive(Clone, Debug, Serialize)]
+pub struct SettleReport {
+    /// Steps run.
+    pub steps: u64,
+    /// Threads used.
+    pub threads: usize,
+    /// Wall time, s.
+    pub wall_s: f64,
+    /// Highest sphere centre at the end, m.
+    pub top_z_m: f64,
+    /// Kinetic energy at the end, J.
+    pub kinetic_energy_j: f64,
+}
+
+/// One timed variant.
+#[derive(Clone, Debug, Serialize)]
+pub struct VariantReport {
+    /// The kernel's name (its effects).
+    pub kernel: String,
+    /// Threads of the pool.
+    pub threads: usize,
+    /// Steps per timed segment.
+    pub segment_steps: u64,
+    /// Throughput of each segment, million particle-steps per second.
+    pub segment_mps: Vec<f64>,
+    /// Median of `segment_mps`.
+    pub median_mps: f64,
+    /// Throughput of each segment per CPU second of the process (all its
+    /// threads), million particle-steps per CPU second; empty where the CPU
+    /// clock (`/proc/self/stat`) is unavailable. On a shared machine this is
+    /// less sensitive than wall time to other processes' load.
+    pub segment_cpu_mps: Vec<f64>,
+    /// Median of `segment_cpu_mps` (0 when empty).
+    pub median_cpu_mps: f64,
+    /// Force-carrying particle pairs per particle at the end.
+    pub pairs_per_particle: f64,
+    /// Particle contacts per particle (2 × pairs per particle).
+    pub contacts_per_particle: f64,
+    /// Wall contacts per particle at the end.
+    pub wall_contacts_per_particle: f64,
+    /// Neighbour-list rebuilds during the timed segments.
+    pub rebuilds: u64,
+    /// Setup (first neighbour build and forces) wall time, s.
+    pub setup_s: f64,
+    /// Warm-up wall time, s.
+    pub warmup_s: f64,
+    /// Wall time of all timed segments, s.
+    pub timed_s: f64,
+}
+
+/// Everything one `repose bench` measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    /// Lattice side n.
+    pub n: usize,
+    /// Spheres, n·n·20.
+    pub particles: usize,
+    /// Time step, s.
+    pub dt_s: f64,
+    /// The settling phase.
+    pub settle: SettleReport,
+    /// Timed variants, in the order run.
+    pub variants: Vec<VariantReport>,
+}
+
+/// The jittered lattice, the periodic box and the floor.
+pub fn bed_world(n: usize, seed: u64) -> World {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut particles = Particles::default();
+    let density = bed_setup(NormalChoice::Hertz, RollingChoice::Cdt).density_kg_m3;
+    let mut jitter = || JITTER_M * (2.0 * rng.random::<f64>() - 1.0);
+    for k in 0..LAYERS {
+        for j in 0..n {
+            for i in 0..n {
+                let lattice = Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 1.5) * SPACING_M;
+                let offset = Vec3::new(jitter(), jitter(), jitter());
+                particles.push(
+                    &ParticleInit {
+                        position: lattice + offset,
+                        velocity: Vec3::zeros(),
+                        angular_velocity: Vec3::zeros(),
+                        radius_m: RADIUS_M,
+                    },
+                    density,
+                );
+            }
+        }
+    }
+    let side = n as f64 * SPACING_M;
+    let top = (LAYERS + 2) as f64 * SPACING_M;
+    World {
+        particles,
+        walls: vec![Wall::plane(Vec3::zeros(), Vec3::z(), 0).expect("the floor is a valid plane")],
+        domain: Domain::new(
+            Vec3::zeros(),
+            Vec3::new(side, side, top),
+            [true, true, false],
+        )
+        .expect("the bed's box is valid"),
+        time_s: 0.0,
+        step: 0,
+    }
+}
+
+/// The deck's physics with the given normal and rolling models (JKR with Γ = 0).
+pub fn bed_setup(normal: NormalChoice, rolling: RollingChoice) -> SimulationSetup {
+    let material = ElasticMaterial {
+        youngs_modulus_pa: 5e6,
+        poisson_ratio: 0.3,
+    };
+    let pair = PairParameters {
+        restitution: 0.5,
+        static_friction: 0.5,
+        rolling_friction: 0.1,
+        surface_energy_j_m2: 0.0,
+    };
+    SimulationSetup {
+        contact: ContactSetup {
+            normal,
+            rolling,
+            clip_tensile: false,
+            particle_material: material,
+            particle_particle: pair,
+            wall_materials: vec![(material, pair)],
+        },
+        density_kg_m3: 2500.0,
+        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -9.81)),
+        dt_s: DT_S,
+        skin_m: SKIN_M,
+        health: HealthLimits::default(),
+    }
+}
+
+/// Settles the bed (progress to `progress`), then times every variant.
+pub fn run(
+    options: &BenchOptions,
+    progress: &mut (dyn Write + Send),
+) -> Result<BenchReport, BenchError> {
+    check(options)?;
+    let n_part = options.particles();
+    let settle_threads = options.threads.iter().copied().max().unwrap_or(1);
+    let settle_steps = options.settle_steps();
+    writeln!(
+        progress,
+        "settling N = {n_part} for {settle_steps} steps on {settle_threads} thread(s)"
+    )?;
+    let pool = ThreadPoolBuilder::new()
+        .num_threads(settle_threads)
+        .build()?;
+    let start = Instant::now();
+    let settled = pool.install(|| -> Result<World, BenchError> {
+        let world = bed_world(options.n, options.seed);
+        let mut sim = Simulation::new(world, &bed_setup(NormalChoice::Hertz, RollingChoice::Cdt))?;
+        let chunk = settle_steps.div_ceil(10).max(1);
+        let mut done = 0;
+        while done < settle_steps {
+            let k = chunk.min(settle_steps - done);
+            sim.advance(k)?;
+            done += k;
+            let s = sim.stats();
+            writeln!(
+                progress,
+                "  step {done}: {:.2} contacts/particle, KE {:.3e} J, {:.1} s",
+                2.0 * s.contacts as f64 / n_part as f64,
+                sim.world().particles.kinetic_energy_j(),
+                start.elapsed().as_secs_f64()
+            )?;
+        }
+        Ok(sim.world().clone())
+    })?;
+    let p = &settled.particles;
+    let settle = SettleReport {
+        steps: settle_steps,
+        threads: settle_threads,
+        wall_s: start.elapsed().as_secs_f64(),
+        top_z_m: p.position.iter().map(|x| x.z).fold(f64::MIN, f64::max),
+        kinetic_energy_j: p.kinetic_energy_j(),
+    };
+    let mut variants = Vec::new();
+    for &normal in &options.normals {
+        for &rolling in &options.rollings {
+            for &threads in &options.threads {
+                let v = time_variant(options, &settled, normal, rolling, threads, progress)?;
+                variants.push(v);
+            }
+        }
+    }
+    Ok(BenchReport {
+        n: options.n,
+        particles: n_part,
+        dt_s: DT_S,
+        settle,
+        variants,
+    })
+}
+
+fn check(options: &BenchOptions) -> Result<(), BenchError> {
+    let fail = |name, message| Err(BenchError::Option { name, message });
+    if !(2..=400).contains(&options.n) {
+        return fail("--n", "the lattice side must be in 2..=400");
+    }
+    if options.threads.is_empty() || options.threads.contains(&0) {
+        return fail("--threads", "thread counts must be >= 1");
+    }
+    if options.segments == 0 || options.segment_steps() == 0 {
+        return fail("--segments/--steps", "at least one segment of >= 1 step");
+    }
+    if options.normals.is_empty() || options.rollings.is_empty() {
+        return fail("--normal/--rolling", "at least one model each");
+    }
+    Ok(())
+}
+
+fn time_variant(
+    options: &BenchOptions,
+    settled: &World,
+    normal: NormalChoice,
+    rolling: RollingChoice,
+    threads: usize,
+    progress: &mut (dyn Write + Send),
+) -> Result<VariantReport, BenchError> {
+    let pool = ThreadPoolBuilder::new().num_threads(threads).build()?;
+    let n_part = settled.particles.len() as f64;
+    let steps = options.segment_steps();
+    pool.install(|| {
+        let t0 = Instant::now();
+        let mut sim = Simulation::new(settled.clone(), &bed_setup(normal, rolling))?;
+        let setup_s = t0.elapsed().as_secs_f64();
+        let kernel = sim.kernel_name();
+        let t1 = Instant::now();
+        sim.advance(options.warmup)?;
+        let warmup_s = t1.elapsed().as_secs_f64();
+        let rebuilds_before = sim.stats().rebuilds;
+        let mut segment_mps = Vec::with_capacity(options.segments);
+        let mut segment_cpu_mps = Vec::with_capacity(options.segments);
+        let work = n_part * steps as f64 / 1e6;
+        for k in 0..options.segments {
+            let (t, cpu) = (Instant::now(), process_cpu_s());
+            sim.advance(steps)?;
+            let mps = work / t.elapsed().as_secs_f64();
+            let cpu_mps = cpu
+                .zip(process_cpu_s())
+                .map(|(a, b)| work / (b - a).max(1e-2));
+            writeln!(
+                progress,
+                "  {kernel}, {threads} thread(s), segment {}: {mps:.2} M particle-steps/s, {:.2} per CPU s",
+                k + 1,
+                cpu_mps.unwrap_or(0.0)
+            )?;
+            segment_mps.push(mps);
+            segment_cpu_mps.extend(cpu_mps);
+        }
+        let timed_s =
+            n_part * steps as f64 / 1e6 * segment_mps.iter().map(|m| 1.0 / m).sum::<f64>();
+        let s = sim.stats();
+        Ok(VariantReport {
+            kernel,
+            threads,
+            segment_steps: steps,
+            median_mps: median(&segment_mps),
+            segment_mps,
+            median_cpu_mps: if segment_cpu_mps.is_empty() {
+                0.0
+            } else {
+                median(&segment_cpu_mps)
+            },
+            segment_cpu_mps,
+            pairs_per_particle: s.contacts as f64 / n_part,
+            contacts_per_particle: 2.0 * s.contacts as f64 / n_part,
+            wall_contacts_per_particle: s.wall_contacts as f64 / n_part,
+            rebuilds: s.rebuilds - rebuilds_before,
+            setup_s,
+            warmup_s,
+            timed_s,
+        })
+    })
+}
+
+/// User + system CPU time of this process (all threads), s, from
+/// `/proc/self/stat` (clock ticks of 1/100 s); `None` where unavailable.
+fn process_cpu_s() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let mut fields = rest.split_whitespace().skip(11);
+    let utime: f64 = fields.next()?.parse().ok()?;
+    let stime: f64 = fields.next()?.parse().ok()?;
+    Some((utime + stime) / 100.0)
+}
+
+/// Median of a non-empty list (mean of the middle two for even lengths).
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let m = s.len() / 2;
+    if s.len() % 2 == 1 {
+        s[m]
+    } else {
+        0.5 * (s[m - 1] + s[m])
+    }
+}
+
+impl BenchReport {
+    /// Writes the report as a text table.
+    pub fn write_table(&self, out: &mut dyn Write) -> std::io::Result<()> {
+        writeln!(
+            out,
+            "bed: N = {} ({} x {} x {LAYERS}), dt = {:e} s; settled in {} steps, {:.1} s on {} thread(s), top z = {:.2} mm",
+            self.particles,
+            self.n,
+            self.n,
+            self.dt_s,
+            self.settle.steps,
+            self.settle.wall_s,
+            self.settle.threads,
+            self.settle.top_z_m * 1e3
+        )?;
+        writeln!(
+            out,
+            "{:<34} {:>3} {:>6}  {:<23} {:>7} {:>7} {:>7} {:>7} {:>6} {:>5} {:>8} {:>8}",
+            "kernel",
+            "thr",
+            "steps",
+            "segments Mps/s",
+            "median",
+            "cpu Mps",
+            "pairs/p",
+            "cont/p",
+            "wall/p",
+            "rebld",
+            "warmup s",
+            "timed s"
+        )?;
+        for v in &self.variants {
+            let segs: Vec<String> = v.segment_mps.iter().map(|m| format!("{m:.2}")).collect();
+            writeln!(
+                out,
+                "{:<34} {:>3} {:>6}  {:<23} {:>7.2} {:>7.2} {:>7.3} {:>7.3} {:>6.3} {:>5} {:>8.2} {:>8.2}",
+                v.kernel,
+                v.threads,
+                v.segment_steps,
+                segs.join(" "),
+                v.median_mps,
+                v.median_cpu_mps,
+                v.pairs_per_particle,
+                v.contacts_per_particle,
+                v.wall_contacts_per_particle,
+                v.rebuilds,
+                v.warmup_s,
+                v.timed_s
+            )?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lattice_matches_the_deck() {
+        let w = bed_world(4, 1);
+        assert_eq!(w.particles.len(), 4 * 4 * 20);
+        let z: Vec<f64> = w.particles.position.iter().map(|p| p.z).collect();
+        let (lo, hi) = z
+            .iter()
+            .fold((f64::MAX, f64::MIN), |a, &z| (a.0.min(z), a.1.max(z)));
+        // Layers k = 1..=20 of `lattice sc 0.0024 origin 0.5 0.5 0.5`, ±0.2 mm.
+        assert!(lo >= 1.5 * SPACING_M - JITTER_M && hi <= 20.5 * SPACING_M + JITTER_M);
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+    }
+
+    #[test]
+    fn a_tiny_bed_settles_and_times() {
+        let mut o = BenchOptions::deck(3);
+        o.settle = Some(50);
+        o.steps = Some(20);
+        o.warmup = 10;
+        o.segments = 2;
+        o.threads = vec![1, 2];
+        o.rollings = vec![RollingChoice::None, RollingChoice::Epsd];
+        o.normals = vec![NormalChoice::Jkr];
+        let r = run(&o, &mut std::io::sink()).unwrap();
+        assert_eq!(r.variants.len(), 4);
+        assert!(r.variants.iter().all(|v| v.median_mps > 0.0));
+        assert!(r.variants[0]
+            .kernel
+            .starts_with("jkr+mindlin+none+gravity+periodic"));
+        let mut bad = o.clone();
+        bad.threads = vec![0];
+        assert!(run(&bad, &mut std::io::sink())
+            .unwrap_err()
+            .is_invalid_input());
+    }
+}
