@@ -109,14 +109,22 @@ fn hash_prints_the_pinned_id() {
 
 #[test]
 fn run_stores_the_manifest_and_a_failure_then_lists_and_shows_it() {
+    // A pair impact given far too little time to finish: a runtime failure
+    // (exit 1) recorded in error.json, never a result.
     let tmp = tempfile::tempdir().unwrap();
     let store = tmp.path().join("store");
-    let file = "experiments/drum/smoke.json";
+    let base: serde_json::Value = serde_json::from_str(&common::text(
+        "experiments/validation/pair_hertz_particle_particle.json",
+    ))
+    .unwrap();
+    let short = edit(base, "/scene/max_time_s", Some(serde_json::json!(1e-6)));
+    let file = tmp.path().join("short.json");
+    std::fs::write(&file, serde_json::to_string_pretty(&short).unwrap()).unwrap();
+    let file = file.to_str().unwrap();
     let out = repose(&store, &["run", file]);
-    // No scene is simulated yet: a runtime failure recorded in error.json.
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(
-        stderr(&out).contains("scene kind `drum` is not simulated yet"),
+        stderr(&out).contains("did not end within max_time_s"),
         "{}",
         stderr(&out)
     );
@@ -124,6 +132,7 @@ fn run_stores_the_manifest_and_a_failure_then_lists_and_shows_it() {
     assert!(store.join(&id).join("manifest.json").is_file());
     assert!(store.join(&id).join("error.json").is_file());
     assert!(!store.join(&id).join("result.json").exists());
+    assert!(!store.join(&id).join("run.mcap").exists());
 
     let list = stdout(&repose(&store, &["runs", "list"]));
     let row = list
@@ -131,7 +140,7 @@ fn run_stores_the_manifest_and_a_failure_then_lists_and_shows_it() {
         .find(|l| l.starts_with(&id[..12]))
         .unwrap_or_else(|| panic!("{list}"));
     assert!(
-        row.contains("drum") && row.contains("smoke") && row.contains("failed"),
+        row.contains("pair") && row.contains("smoke") && row.contains("failed"),
         "{row}"
     );
 
@@ -140,7 +149,7 @@ fn run_stores_the_manifest_and_a_failure_then_lists_and_shows_it() {
         &["--store", store.to_str().unwrap(), "runs", "show", &id[..8]],
     );
     assert_eq!(show.status.code(), Some(0), "{}", stderr(&show));
-    assert!(stdout(&show).contains(&id) && stdout(&show).contains("not simulated yet"));
+    assert!(stdout(&show).contains(&id) && stdout(&show).contains("max_time_s"));
 }
 
 #[test]
