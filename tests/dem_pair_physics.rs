@@ -320,3 +320,30 @@ fn adhered_pair_rests_at_the_jkr_equilibrium_overlap() {
         );
     }
 }
+
+#[test]
+fn jkr_without_surface_energy_runs_the_hertz_kernel() {
+    // Absent cohesion costs nothing: JKR with Γ = 0 is Hertz (normal_jkr's
+    // unit tests), so the engine runs the Hertz kernel and gives the same bits.
+    for partner in PARTNERS {
+        let p = params(0.5, 0.5, 0.0, 0.0);
+        let (jkr, kernel) = run_pair(&test(
+            partner,
+            p,
+            NormalChoice::Jkr,
+            RollingChoice::None,
+            0.5,
+        ))
+        .unwrap();
+        let (hertz, _) = run_pair(&test(
+            partner,
+            p,
+            NormalChoice::Hertz,
+            RollingChoice::None,
+            0.5,
+        ))
+        .unwrap();
+        assert!(kernel.starts_with("hertz+"), "{kernel}");
+        assert_eq!(jkr, hertz);
+    }
+}
