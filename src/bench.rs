@@ -284,18 +284,16 @@ pub fn bed_world(n: usize, seed: u64) -> World {
     }
     let side = n as f64 * SPACING_M;
     let top = (LAYERS + 2) as f64 * SPACING_M;
-    World {
+    World::new(
         particles,
-        walls: vec![Wall::plane(Vec3::zeros(), Vec3::z(), 0).expect("the floor is a valid plane")],
-        domain: Domain::new(
+        vec![Wall::plane(Vec3::zeros(), Vec3::z(), 0).expect("the floor is a valid plane")],
+        Domain::new(
             Vec3::zeros(),
             Vec3::new(side, side, top),
             [true, true, false],
         )
         .expect("the bed's box is valid"),
-        time_s: 0.0,
-        step: 0,
-    }
+    )
 }
 
 /// Surface energy the JKR variant uses, J/m²: physically negligible (the

@@ -35,18 +35,16 @@ fn dense_bed() -> World {
         }
     }
     let side = n as f64 * spacing;
-    World {
+    World::new(
         particles,
-        walls: vec![Wall::plane(Vec3::zeros(), Vec3::z(), 0).unwrap()],
-        domain: Domain::new(
+        vec![Wall::plane(Vec3::zeros(), Vec3::z(), 0).unwrap()],
+        Domain::new(
             Vec3::zeros(),
             Vec3::new(side, side, 0.1),
             [true, true, false],
         )
         .unwrap(),
-        time_s: 0.0,
-        step: 0,
-    }
+    )
 }
 
 /// Every per-particle quantity as raw bits, in index order, ids included.

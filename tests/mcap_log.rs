@@ -186,18 +186,16 @@ fn drum_world() -> (World, SimulationSetup) {
         rolling_friction: 0.0,
         surface_energy_j_m2: 0.0,
     };
-    let world = World {
+    let world = World::new(
         particles,
-        walls: vec![drum],
-        domain: Domain::new(
+        vec![drum],
+        Domain::new(
             Vec3::new(-0.02, -0.02, -0.02),
             Vec3::new(0.02, 0.02, 0.02),
             [false; 3],
         )
         .unwrap(),
-        time_s: 0.0,
-        step: 0,
-    };
+    );
     let setup = SimulationSetup {
         contact: ContactSetup {
             normal: NormalChoice::Hertz,

@@ -47,6 +47,19 @@ pub struct World {
     pub step: u64,
 }
 
+impl World {
+    /// A world at time 0, step 0.
+    pub fn new(particles: Particles, walls: Vec<Wall>, domain: Domain) -> Self {
+        Self {
+            particles,
+            walls,
+            domain,
+            time_s: 0.0,
+            step: 0,
+        }
+    }
+}
+
 /// Normal-force slot choice.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NormalChoice {
@@ -384,8 +397,9 @@ struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> {
     motion: Vec<Motion>,
     stats: StepStats,
     limits: HealthLimits,
-    /// Energy check enabled (non-cohesive; skipped while any wall moves) and
-    /// its reference, J.
+    /// Energy check enabled (non-adhesive kernel — the JKR kernel runs only
+    /// with non-zero surface energy; skipped while any wall moves) and its
+    /// reference, J.
     energy_reference: Option<f64>,
     energy_check: bool,
     rebuilds_since_sort: u32,
@@ -444,9 +458,6 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .iter()
             .map(|w| N::reach_m(w, r_bound))
             .collect();
-        let cohesive = std::iter::once(&particle_particle)
-            .chain(&wall_coefficients)
-            .any(|c| c.surface_energy_j_m2 > 0.0);
         let neighbors =
             NeighborList::new(setup.skin_m, pair_reach).map_err(SetupError::Neighbor)?;
         let wall_slots = world.walls.len().max(1);
@@ -467,7 +478,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             stats: StepStats::default(),
             limits: setup.health,
             energy_reference: None,
-            energy_check: !(cohesive && N::ADHESIVE),
+            energy_check: !N::ADHESIVE,
             rebuilds_since_sort: 0,
             _boundary: std::marker::PhantomData,
         };

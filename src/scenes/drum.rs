@@ -331,11 +331,5 @@ fn build_world(
     for p in &placed.particles {
         particles.push(p, exp.material.particle.density_kg_m3);
     }
-    Ok(World {
-        particles,
-        walls,
-        domain,
-        time_s: 0.0,
-        step: 0,
-    })
+    Ok(World::new(particles, walls, domain))
 }

@@ -13,7 +13,7 @@
 
 use super::{physics, SceneError};
 use crate::dem::contact::normal_jkr::{pull_off_force_n, separation_overlap_m};
-use crate::dem::contact::PairCoefficients;
+use crate::dem::contact::{PairCoefficients, ParameterError};
 use crate::dem::domain::{Domain, DomainError};
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::material::{harmonic, hertz_contact_time_s, hertz_max_overlap_m};
@@ -175,7 +175,7 @@ pub fn run_pair_logged(
         Partner::Particle { radius_m } => (radius_m, vec![]),
         Partner::Wall => (0.0, vec![Wall::plane(Vec3::zeros(), Vec3::z(), 0)?]),
     };
-    let reach = jkr_reach(test, partner_r);
+    let reach = jkr_reach(test);
     let start_gap = 0.01 * r;
     let z0 = match test.partner {
         Partner::Particle { .. } => r + partner_r + start_gap,
@@ -223,13 +223,7 @@ pub fn run_pair_logged(
             test.density_kg_m3,
         );
     }
-    let world = World {
-        particles,
-        walls,
-        domain,
-        time_s: 0.0,
-        step: 0,
-    };
+    let world = World::new(particles, walls, domain);
     let setup = SimulationSetup {
         contact: test.contact.clone(),
         density_kg_m3: test.density_kg_m3,
@@ -268,8 +262,9 @@ fn expected_duration_s(test: &PairTest, reach: f64) -> f64 {
     let t = match test.mode {
         PairMode::Impact => {
             let v = test.normal_velocity_m_s;
-            let (m_star, r_star, coef) = effective_pair(test);
-            0.01 * r / v + hertz_contact_time_s(m_star, r_star, coef.e_star, v)
+            effective_pair(test).map_or(f64::NAN, |(m_star, r_star, coef)| {
+                0.01 * r / v + hertz_contact_time_s(m_star, r_star, coef.e_star, v)
+            })
         }
         PairMode::Separation { pull_speed_m_s } => (1e-3 * r + reach) / pull_speed_m_s,
     };
@@ -288,28 +283,12 @@ fn record(rec: &mut Option<Recorder<'_>>, sim: &Simulation) -> Result<(), LogErr
     }
 }
 
-/// Extra separation (m) over which a JKR contact of this test stays alive.
-fn jkr_reach(test: &PairTest, partner_r: f64) -> f64 {
-    let c = &test.contact;
-    let (partner_material, params, r_star) = match test.partner {
-        Partner::Particle { .. } => (
-            c.particle_material,
-            c.particle_particle,
-            test.radius_m * partner_r / (test.radius_m + partner_r),
-        ),
-        Partner::Wall => match c.wall_materials.first() {
-            Some((m, p)) => (*m, *p, test.radius_m),
-            None => return 0.0,
-        },
-    };
-    PairCoefficients::new(
-        &c.particle_material,
-        &partner_material,
-        &params,
-        c.clip_tensile,
-    )
-    .map(|coef| -separation_overlap_m(&coef, r_star))
-    .unwrap_or(0.0)
+/// Extra separation (m) over which a JKR contact of this test stays alive
+/// (0 when the parameters are invalid: the engine then reports them).
+fn jkr_reach(test: &PairTest) -> f64 {
+    effective_pair(test)
+        .map(|(_, r_star, coef)| -separation_overlap_m(&coef, r_star))
+        .unwrap_or(0.0)
 }
 
 /// Overlap (m), unit normal (partner → moving particle) and the relative velocity.
@@ -520,7 +499,8 @@ pub fn run(
     put("contact_duration_s", m.contact_duration_s);
     put("max_overlap_m", m.max_overlap_m);
     put("max_normal_force_n", m.max_normal_force_n);
-    let (m_star, r_star, coef) = effective_pair(&test);
+    // run_pair has just simulated with these very parameters, so they mix.
+    let (m_star, r_star, coef) = effective_pair(&test).expect("parameters the engine accepted");
     if let Some(f) = m.pull_off_force_n {
         put("pull_off_force_n", f);
         put("theory_pull_off_force_n", pull_off_force_n(&coef, r_star));
@@ -551,7 +531,7 @@ pub fn run(
 }
 
 /// m*, R* and the mixed coefficients of the test's contact.
-fn effective_pair(test: &PairTest) -> (f64, f64, PairCoefficients) {
+fn effective_pair(test: &PairTest) -> Result<(f64, f64, PairCoefficients), ParameterError> {
     let c = &test.contact;
     let mass = |r: f64| test.density_kg_m3 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
     let (partner_material, params, m_star, r_star) = match test.partner {
@@ -561,19 +541,22 @@ fn effective_pair(test: &PairTest) -> (f64, f64, PairCoefficients) {
             harmonic(mass(test.radius_m), mass(radius_m)),
             harmonic(test.radius_m, radius_m),
         ),
-        Partner::Wall => (
-            c.wall_materials[0].0,
-            c.wall_materials[0].1,
-            mass(test.radius_m),
-            test.radius_m,
-        ),
+        Partner::Wall => {
+            let Some(&(material, params)) = c.wall_materials.first() else {
+                return Err(ParameterError {
+                    name: "wall_materials",
+                    value: 0.0,
+                    allowed: "a wall partner needs wall material 0",
+                });
+            };
+            (material, params, mass(test.radius_m), test.radius_m)
+        }
     };
     let coef = PairCoefficients::new(
         &c.particle_material,
         &partner_material,
         &params,
         c.clip_tensile,
-    )
-    .expect("validated manifest parameters");
-    (m_star, r_star, coef)
+    )?;
+    Ok((m_star, r_star, coef))
 }

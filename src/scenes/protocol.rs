@@ -241,18 +241,16 @@ mod tests {
             },
             2500.0,
         );
-        let world = World {
+        let world = World::new(
             particles,
-            walls: vec![Wall::plane(Vec3::zeros(), Vec3::z(), 0).unwrap()],
-            domain: Domain::new(
+            vec![Wall::plane(Vec3::zeros(), Vec3::z(), 0).unwrap()],
+            Domain::new(
                 Vec3::new(-0.1, -0.1, -0.01),
                 Vec3::new(0.1, 0.1, 0.1),
                 [false; 3],
             )
             .unwrap(),
-            time_s: 0.0,
-            step: 0,
-        };
+        );
         let setup = SimulationSetup {
             contact: ContactSetup {
                 normal: NormalChoice::Hertz,

@@ -134,13 +134,7 @@ pub fn world(particles: &[ParticleInit], rho: f64, walls: Vec<Wall>, lo: Vec3, h
     for q in particles {
         p.push(q, rho);
     }
-    World {
-        particles: p,
-        walls,
-        domain: Domain::new(lo, hi, [false; 3]).unwrap(),
-        time_s: 0.0,
-        step: 0,
-    }
+    World::new(p, walls, Domain::new(lo, hi, [false; 3]).unwrap())
 }
 
 pub fn all_finite(w: &World) -> bool {
