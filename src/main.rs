@@ -19,6 +19,9 @@ struct Cli {
     /// Root of the run store.
     #[arg(long, global = true, env = STORE_ENV, default_value = DEFAULT_STORE)]
     store: PathBuf,
+    /// No progress reports on stderr (they are also off when stderr is not a terminal).
+    #[arg(long, global = true)]
+    quiet: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -95,9 +98,6 @@ struct BenchArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
-    /// No progress on stderr.
-    #[arg(long)]
-    quiet: bool,
 }
 
 /// Rolling-resistance model on the command line.
@@ -158,6 +158,7 @@ enum RunsCommand {
 }
 
 fn dispatch(cli: Cli) -> Result<(), CommandError> {
+    repose::scenes::protocol::set_quiet(cli.quiet);
     let mut out = io::stdout().lock();
     match cli.command {
         Command::Hash { file, kind } => commands::hash(&file, kind, &mut out),
@@ -167,7 +168,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         Command::Run { manifest } => commands::run(&cli.store, &manifest, &mut out),
         Command::Inspect { file } => commands::inspect(&cli.store, &file, &mut out),
         Command::Bench(args) => {
-            let mut progress: Box<dyn io::Write + Send> = if args.quiet {
+            let mut progress: Box<dyn io::Write + Send> = if cli.quiet {
                 Box::new(io::sink())
             } else {
                 Box::new(io::stderr())

@@ -171,7 +171,7 @@ pub fn run(
         dynamic_window: None,
         dynamic: Vec::new(),
     };
-    let mut progress = Progress::new(!std::io::IsTerminal::is_terminal(&std::io::stderr()));
+    let mut progress = Progress::on_stderr();
     let mass = rho * PI / 6.0 * d_mean.powi(3);
     let settle = Phase {
         name: "settle",

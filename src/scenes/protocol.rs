@@ -11,6 +11,8 @@ use crate::dem::health::HealthError;
 use crate::dem::simulation::Simulation;
 use crate::store::Trace;
 use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// When a phase may end early: the mean kinetic energy per particle (J) stays
@@ -163,7 +165,22 @@ pub struct Progress {
     last: Option<Instant>,
 }
 
+/// Set once by the command line (`--quiet`): silences every [`Progress::on_stderr`].
+static QUIET: AtomicBool = AtomicBool::new(false);
+
+/// Silences (or re-enables) progress reports of every scene in this process;
+/// `repose --quiet` calls it before running anything.
+pub fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, Ordering::Relaxed);
+}
+
 impl Progress {
+    /// The reporter scenes use: silent under `--quiet` and when stderr is not a
+    /// terminal (batch logs and CI stay clean).
+    pub fn on_stderr() -> Self {
+        Self::new(QUIET.load(Ordering::Relaxed) || !std::io::stderr().is_terminal())
+    }
+
     /// A progress reporter; `quiet` silences it.
     pub fn new(quiet: bool) -> Self {
         Self {
