@@ -12,9 +12,10 @@ use repose::manifest::scene::{
     BaffleLiftScene, DrumScene, FunnelPileScene, HopperScene, StaticPileScene,
 };
 use repose::manifest::{
-    canonical_json, parse_document, parse_experiment, Contact, ContactModel, ContentId, Experiment,
-    Material, NormalModel, PairMode, PairParams, PairScene, ParticleMaterial, Partner, Profile,
-    RollingModel, Scene, Seeds, SizeDistribution, TimeStep, WallMaterial, WallStiffness,
+    canonical_json, parse_document, parse_experiment, CoarseGraining, CoarseGrainingRule, Contact,
+    ContactModel, ContentId, Experiment, Material, NormalModel, PairMode, PairParams, PairScene,
+    ParticleMaterial, Partner, Profile, RollingModel, Scene, Seeds, SizeDistribution, TimeStep,
+    WallMaterial, WallStiffness,
 };
 use serde_json::{json, Value};
 
@@ -344,6 +345,8 @@ prop_compose! {
         particle_wall in prop::collection::btree_map(name(), pair_params(), 0..3),
         seeds in (any::<u64>(), any::<u64>(), any::<u64>()),
         time_step in (float(), float()),
+        coarse in prop::option::of((float(), float(), prop_oneof![
+            Just(CoarseGrainingRule::SurfaceEnergyProportional), Just(CoarseGrainingRule::CohesionNumber)])),
     ) -> Experiment {
         Experiment {
             schema_version: versions.0,
@@ -361,6 +364,7 @@ prop_compose! {
             },
             seeds: Seeds { design_seed: seeds.0, sample_index: seeds.1, packing_seed: seeds.2 },
             time_step: TimeStep { rayleigh_fraction: time_step.0, design_impact_speed_m_s: time_step.1 },
+            coarse_graining: coarse.map(|(size_factor, youngs_modulus_factor, rule)| CoarseGraining { size_factor, youngs_modulus_factor, rule }),
         }
     }
 }

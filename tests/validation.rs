@@ -741,3 +741,36 @@ fn a_document_of_unknown_kind_is_refused() {
         Err(ManifestError::UnknownKind)
     ));
 }
+
+// --- coarse graining
+fn coarse(size_factor: f64, youngs_modulus_factor: f64) -> Option<Value> {
+    Some(
+        json!({"size_factor": size_factor, "youngs_modulus_factor": youngs_modulus_factor,
+                "rule": "cohesion_number"}),
+    )
+}
+
+reject!(
+    coarse_graining_size_factor_at_least_one,
+    study(),
+    "/coarse_graining",
+    coarse(0.5, 1.0),
+    "coarse_graining.size_factor",
+    "must be in [1, 1000]"
+);
+reject!(
+    coarse_graining_modulus_factor_at_most_one,
+    study(),
+    "/coarse_graining",
+    coarse(4.0, 2.0),
+    "coarse_graining.youngs_modulus_factor",
+    "must be in (0, 1]"
+);
+reject!(
+    coarse_graining_not_for_pair_scenes,
+    pair_wall(),
+    "/coarse_graining",
+    coarse(2.0, 1.0),
+    "coarse_graining",
+    "must be absent for a pair scene"
+);

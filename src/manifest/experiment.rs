@@ -34,6 +34,10 @@ pub struct Experiment {
     pub seeds: Seeds,
     /// How the integration time step is chosen.
     pub time_step: TimeStep,
+    /// Fidelity scaling of the real particles (bigger, softer) with the rule that
+    /// keeps cohesion similar; absent: the particles are simulated as given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coarse_graining: Option<CoarseGraining>,
 }
 
 /// Fidelity profile: `smoke` (seconds, CI), `quick` (minutes, the default) or
@@ -262,6 +266,38 @@ impl PairParams {
         *slot = value;
         true
     }
+}
+
+/// Coarse graining and modulus reduction: the manifest states the real particle
+/// (size, Young's modulus, surface energies) and this block says how the simulated
+/// one differs. Radii are multiplied by `size_factor`, the particle Young's modulus by
+/// `youngs_modulus_factor`, and every surface energy by the factor `rule` gives, so
+/// cohesion stays comparable (see [`crate::packing::coarse`]). Density, friction,
+/// restitution, wall materials and scene geometry are kept.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoarseGraining {
+    /// Simulated radius / real radius, in [1, 1000].
+    pub size_factor: f64,
+    /// Simulated / real particle Young's modulus, in (0, 1]; default 1.
+    #[serde(default = "unit_factor")]
+    pub youngs_modulus_factor: f64,
+    /// How the surface energy follows the scaling.
+    pub rule: CoarseGrainingRule,
+}
+
+/// How surface energies are rescaled under coarse graining.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CoarseGrainingRule {
+    /// cai2024: Γ ∝ particle size (Γ/R* constant keeps the JKR law similar).
+    SurfaceEnergyProportional,
+    /// he2019 Eq. 1–3: the cohesion number is kept, Γ' = Γ (k m)^(2/5).
+    CohesionNumber,
+}
+
+fn unit_factor() -> f64 {
+    1.0
 }
 
 /// Seeds: the only sources of randomness in a run.

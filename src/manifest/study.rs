@@ -11,8 +11,8 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use super::experiment::{
-    Contact, ContactModel, Experiment, Material, PairParams, Profile, Seeds, TimeStep,
-    PAIR_PARAM_FIELDS,
+    CoarseGraining, Contact, ContactModel, Experiment, Material, PairParams, Profile, Seeds,
+    TimeStep, PAIR_PARAM_FIELDS,
 };
 use super::scene::Scene;
 use super::validate::{validate_experiment, FieldError, ValidationErrors};
@@ -56,6 +56,9 @@ pub struct Study {
     pub packing_seed: u64,
     /// Time-step rule of the generated experiments.
     pub time_step: TimeStep,
+    /// Coarse graining of the generated experiments (absent: real particles).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coarse_graining: Option<CoarseGraining>,
 }
 
 /// A closed range `[min, max]` of a calibrated parameter (min < max).
@@ -229,6 +232,7 @@ impl Study {
                 packing_seed: self.packing_seed,
             },
             time_step: self.time_step,
+            coarse_graining: self.coarse_graining,
         };
         validate_experiment(&experiment)?;
         Ok(experiment)

@@ -80,6 +80,15 @@ pub struct CoarseGraining {
     pub coh_after: f64,
 }
 
+/// Γ'/Γ under `rule` for size factor k and modulus factor m: k (cai2024) or
+/// (k m)^(2/5) (he2019's Coh kept).
+pub fn surface_energy_factor(rule: ScalingRule, size_factor: f64, modulus_factor: f64) -> f64 {
+    match rule {
+        ScalingRule::SurfaceEnergyProportional => size_factor,
+        ScalingRule::CohesionNumber => (size_factor * modulus_factor).powf(0.4),
+    }
+}
+
 /// Scales `before` by size factor k and modulus factor m under `rule`; density is
 /// kept (both papers keep it).
 pub fn coarse_grain(
@@ -92,14 +101,10 @@ pub fn coarse_grain(
     check_positive("size_factor", size_factor)?;
     check_positive("modulus_factor", modulus_factor)?;
     check_positive("g_m_s2", g_m_s2)?;
-    check_positive("surface_energy_j_m2", before.surface_energy_j_m2)?;
     check_positive("effective_modulus_pa", before.effective_modulus_pa)?;
     check_positive("effective_radius_m", before.effective_radius_m)?;
     check_positive("density_kg_m3", before.density_kg_m3)?;
-    let gamma_factor = match rule {
-        ScalingRule::SurfaceEnergyProportional => size_factor,
-        ScalingRule::CohesionNumber => (size_factor * modulus_factor).powf(0.4),
-    };
+    let gamma_factor = surface_energy_factor(rule, size_factor, modulus_factor);
     let after = CohesionState {
         surface_energy_j_m2: before.surface_energy_j_m2 * gamma_factor,
         effective_modulus_pa: before.effective_modulus_pa * modulus_factor,

@@ -146,7 +146,7 @@ pub fn run(
     let setup = SimulationSetup {
         contact,
         density_kg_m3: rho,
-        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -9.81)),
+        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -physics::STANDARD_GRAVITY_M_S2)),
         dt_s: plan.dt_s,
         skin_m: 0.1 * d_mean,
         health: HealthLimits::default(),
@@ -177,7 +177,10 @@ pub fn run(
         name: "settle",
         max_duration_s: scene.settle_max_s,
         settle: Some(SettleCriterion {
-            mean_kinetic_energy_j: REST_ENERGY_FRACTION * mass * 9.81 * d_mean,
+            mean_kinetic_energy_j: REST_ENERGY_FRACTION
+                * mass
+                * physics::STANDARD_GRAVITY_M_S2
+                * d_mean,
             hold_s: REST_HOLD_S,
         }),
     };

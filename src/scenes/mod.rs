@@ -46,9 +46,11 @@ pub fn run_experiment(
     experiment: &Experiment,
     log: Option<&Path>,
 ) -> Result<RunResult, SceneError> {
-    match &experiment.scene {
+    let mut result = match &experiment.scene {
         Scene::Pair(scene) => pair::run(experiment, scene, log),
         Scene::Drum(scene) => drum::run(experiment, scene, log),
         other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
-    }
+    }?;
+    result.coarse_graining = physics::coarse_graining_report(experiment);
+    Ok(result)
 }

@@ -11,6 +11,7 @@
 //! asked. Contact start and end are found by linear interpolation of the
 //! overlap between steps, so the duration is resolved below one step.
 
+use super::physics::STANDARD_GRAVITY_M_S2;
 use super::{physics, SceneError};
 use crate::dem::contact::normal_jkr::{pull_off_force_n, separation_overlap_m};
 use crate::dem::contact::{PairCoefficients, ParameterError};
@@ -26,9 +27,6 @@ use crate::manifest::scene::{PairMode as ManifestPairMode, PairScene, Partner as
 use crate::manifest::Experiment;
 use crate::store::RunResult;
 use std::path::Path;
-
-/// Standard gravity used when a pair test asks for gravity, m/s².
-pub const STANDARD_GRAVITY_M_S2: f64 = 9.81;
 
 /// Frames a pair run logs over its expected duration (approach plus elastic
 /// Hertz contact time, or the pull-off travel): every k-th step with

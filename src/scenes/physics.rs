@@ -1,6 +1,11 @@
 //! Translating an experiment's materials, contact parameters and time-step
 //! settings into the engine's and the packing module's types: the one place
 //! manifests meet `dem`.
+//!
+//! Coarse graining happens here and nowhere else: with a `coarse_graining`
+//! block, [`size_distribution`] returns the simulated (scaled) sizes,
+//! [`particle_material`] the simulated modulus and [`contact_setup`] the
+//! simulated surface energies, so scenes never see the real particle.
 
 use crate::dem::contact::PairParameters;
 use crate::dem::material::{effective_youngs_modulus, ElasticMaterial};
@@ -9,19 +14,97 @@ use crate::dem::timestep::{
     choose_time_step, StiffestContact, TimeStepError, TimeStepPlan, TimeStepRequest,
 };
 use crate::manifest::{
-    Experiment, NormalModel, PairParams, RollingModel, SizeDistribution, WallMaterial,
-    WallStiffness,
+    CoarseGrainingRule, Experiment, NormalModel, PairParams, RollingModel, SizeDistribution,
+    WallMaterial, WallStiffness,
+};
+use crate::packing::coarse::{
+    coarse_grain, effective_modulus, surface_energy_factor, CohesionState, ScalingRule,
 };
 use crate::packing::distribution::SizeDistribution as PackingSizes;
 use crate::packing::PackingError;
+use crate::store::CoarseGrainingReport;
 use std::f64::consts::PI;
 
-/// The particle material as the engine sees it.
+/// Standard gravity, m/s² (lab scenes pull along −z with it; pair tests when asked).
+pub const STANDARD_GRAVITY_M_S2: f64 = 9.81;
+
+/// The factors coarse graining applies: (size, Young's modulus, surface energy);
+/// all 1 without a `coarse_graining` block.
+fn scale_factors(exp: &Experiment) -> (f64, f64, f64) {
+    match &exp.coarse_graining {
+        None => (1.0, 1.0, 1.0),
+        Some(cg) => (
+            cg.size_factor,
+            cg.youngs_modulus_factor,
+            surface_energy_factor(
+                scaling_rule(cg.rule),
+                cg.size_factor,
+                cg.youngs_modulus_factor,
+            ),
+        ),
+    }
+}
+
+fn scaling_rule(rule: CoarseGrainingRule) -> ScalingRule {
+    match rule {
+        CoarseGrainingRule::SurfaceEnergyProportional => ScalingRule::SurfaceEnergyProportional,
+        CoarseGrainingRule::CohesionNumber => ScalingRule::CohesionNumber,
+    }
+}
+
+/// The particle material as the engine sees it (simulated modulus).
 pub fn particle_material(exp: &Experiment) -> ElasticMaterial {
     ElasticMaterial {
-        youngs_modulus_pa: exp.material.particle.youngs_modulus_pa,
+        youngs_modulus_pa: exp.material.particle.youngs_modulus_pa * scale_factors(exp).1,
         poisson_ratio: exp.material.particle.poisson_ratio,
     }
+}
+
+/// What coarse graining did, for result.json; `None` without a
+/// `coarse_graining` block. Cohesion numbers are he2019 Eq. 2 for a pair of
+/// representative particles (R* = r/2).
+pub fn coarse_graining_report(exp: &Experiment) -> Option<CoarseGrainingReport> {
+    let cg = exp.coarse_graining.as_ref()?;
+    let (_, d_real) = diameter_bounds(&real_sizes(exp)).ok()?;
+    let particle = &exp.material.particle;
+    let e_real = particle.youngs_modulus_pa;
+    let real = CohesionState {
+        surface_energy_j_m2: exp.contact.particle_particle.surface_energy_j_m2,
+        effective_modulus_pa: effective_modulus(
+            e_real,
+            particle.poisson_ratio,
+            e_real,
+            particle.poisson_ratio,
+        ),
+        effective_radius_m: 0.25 * d_real,
+        density_kg_m3: particle.density_kg_m3,
+    };
+    let scaled = coarse_grain(
+        &real,
+        scaling_rule(cg.rule),
+        cg.size_factor,
+        cg.youngs_modulus_factor,
+        STANDARD_GRAVITY_M_S2,
+    )
+    .ok()?;
+    let rule = serde_json::to_value(cg.rule)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default();
+    Some(CoarseGrainingReport {
+        rule,
+        size_factor: cg.size_factor,
+        youngs_modulus_factor: cg.youngs_modulus_factor,
+        surface_energy_factor: scale_factors(exp).2,
+        real_radius_m: 0.5 * d_real,
+        simulated_radius_m: 0.5 * d_real * cg.size_factor,
+        real_youngs_modulus_pa: e_real,
+        simulated_youngs_modulus_pa: e_real * cg.youngs_modulus_factor,
+        real_surface_energy_j_m2: real.surface_energy_j_m2,
+        simulated_surface_energy_j_m2: scaled.after.surface_energy_j_m2,
+        real_cohesion_number: scaled.coh_before,
+        simulated_cohesion_number: scaled.coh_after,
+    })
 }
 
 fn wall_material(w: &WallMaterial) -> ElasticMaterial {
@@ -34,12 +117,12 @@ fn wall_material(w: &WallMaterial) -> ElasticMaterial {
     }
 }
 
-fn pair_parameters(p: &PairParams) -> PairParameters {
+fn pair_parameters(p: &PairParams, surface_energy_factor: f64) -> PairParameters {
     PairParameters {
         restitution: p.restitution,
         static_friction: p.static_friction,
         rolling_friction: p.rolling_friction,
-        surface_energy_j_m2: p.surface_energy_j_m2,
+        surface_energy_j_m2: p.surface_energy_j_m2 * surface_energy_factor,
     }
 }
 
@@ -48,6 +131,7 @@ fn pair_parameters(p: &PairParams) -> PairParameters {
 /// particle–wall parameters).
 pub fn contact_setup(exp: &Experiment, walls: &[&str]) -> ContactSetup {
     let c = &exp.contact;
+    let gamma_factor = scale_factors(exp).2;
     ContactSetup {
         normal: match c.model.normal {
             NormalModel::Hertz => NormalChoice::Hertz,
@@ -60,13 +144,13 @@ pub fn contact_setup(exp: &Experiment, walls: &[&str]) -> ContactSetup {
         },
         clip_tensile: c.model.clip_tensile_normal_force,
         particle_material: particle_material(exp),
-        particle_particle: pair_parameters(&c.particle_particle),
+        particle_particle: pair_parameters(&c.particle_particle, gamma_factor),
         wall_materials: walls
             .iter()
             .map(|name| {
                 (
                     wall_material(&exp.material.walls[*name]),
-                    pair_parameters(&c.particle_wall[*name]),
+                    pair_parameters(&c.particle_wall[*name], gamma_factor),
                 )
             })
             .collect(),
@@ -118,9 +202,15 @@ pub fn time_step(
     })
 }
 
-/// The particle size distribution of the manifest as the packing module's
-/// (diameters; d10/d50/d90 become a truncated log-normal).
+/// The simulated particle size distribution as the packing module's
+/// (diameters; d10/d50/d90 become a truncated log-normal), coarse-grained when
+/// the manifest says so.
 pub fn size_distribution(exp: &Experiment) -> PackingSizes {
+    real_sizes(exp).scaled(scale_factors(exp).0)
+}
+
+/// The manifest's (real) size distribution.
+fn real_sizes(exp: &Experiment) -> PackingSizes {
     match &exp.material.particle.size {
         SizeDistribution::Monodisperse { radius_m } => PackingSizes::Mono {
             diameter_m: 2.0 * radius_m,

@@ -28,7 +28,7 @@ use serde::de::DeserializeOwned;
 pub use atomic::{write_atomic, AtomicFile, TEMP_PREFIX};
 pub use lineage::{InputRef, Lineage};
 pub use lookup::RunSummary;
-pub use result::{ErrorRecord, RunResult, TimingRecord, Trace};
+pub use result::{CoarseGrainingReport, ErrorRecord, RunResult, TimingRecord, Trace};
 
 use crate::manifest::{
     canonical_json, validate_experiment, ContentId, Experiment, ValidationErrors,

@@ -27,6 +27,41 @@ pub struct RunResult {
     pub traces: BTreeMap<String, Trace>,
     /// The angle of repose the scene reports, degrees (none for pair scenes).
     pub headline_angle_deg: Option<f64>,
+    /// Real and simulated particle when the experiment coarse-grains.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coarse_graining: Option<CoarseGrainingReport>,
+}
+
+/// What coarse graining did to the particle (he2019 Eq. 1–3, cai2024 §1.2):
+/// the factors applied and the particle–particle cohesion before and after.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoarseGrainingReport {
+    /// The surface-energy rule (`surface_energy_proportional` or `cohesion_number`).
+    pub rule: String,
+    /// Simulated / real radius.
+    pub size_factor: f64,
+    /// Simulated / real particle Young's modulus.
+    pub youngs_modulus_factor: f64,
+    /// Simulated / real surface energy, applied to every pair type.
+    pub surface_energy_factor: f64,
+    /// Representative real particle radius (mean of a list, d50/2), m.
+    pub real_radius_m: f64,
+    /// The same particle as simulated, m.
+    pub simulated_radius_m: f64,
+    /// Real particle Young's modulus, Pa.
+    pub real_youngs_modulus_pa: f64,
+    /// Simulated particle Young's modulus, Pa.
+    pub simulated_youngs_modulus_pa: f64,
+    /// Real particle–particle surface energy, J/m².
+    pub real_surface_energy_j_m2: f64,
+    /// Simulated particle–particle surface energy, J/m².
+    pub simulated_surface_energy_j_m2: f64,
+    /// he2019 Eq. 2 cohesion number of the real pair of representative particles
+    /// (m² as printed; see [`crate::packing::coarse`]); 0 without cohesion.
+    pub real_cohesion_number: f64,
+    /// The same for the simulated pair.
+    pub simulated_cohesion_number: f64,
 }
 
 /// A time series: `values[i]` at simulated time `time_s[i]`.
@@ -52,6 +87,7 @@ impl RunResult {
             measurements: BTreeMap::new(),
             traces: BTreeMap::new(),
             headline_angle_deg: None,
+            coarse_graining: None,
         }
     }
 

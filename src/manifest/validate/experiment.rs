@@ -6,10 +6,10 @@ use std::collections::BTreeMap;
 use super::checker::{join, number, string, Checker, Interval};
 use super::scene::check_scene;
 use crate::manifest::experiment::{
-    ContactModel, Experiment, Material, NormalModel, PairParams, RollingModel, SizeDistribution,
-    TimeStep, WallStiffness,
+    CoarseGraining, ContactModel, Experiment, Material, NormalModel, PairParams, RollingModel,
+    SizeDistribution, TimeStep, WallStiffness,
 };
-use crate::manifest::{PHYSICS_VERSION, SCHEMA_VERSION};
+use crate::manifest::{Scene, PHYSICS_VERSION, SCHEMA_VERSION};
 
 /// Poisson ratios allowed for isotropic elastic materials.
 const POISSON: Interval = Interval {
@@ -54,6 +54,35 @@ pub(crate) fn check_experiment(c: &mut Checker, e: &Experiment) {
     check_scene(c, "scene", &e.scene, &e.material);
     check_scene_walls_have_params(c, "scene", &e.scene, &e.contact.particle_wall);
     check_time_step(c, "time_step", &e.time_step);
+    if let Some(cg) = &e.coarse_graining {
+        check_coarse_graining(c, "coarse_graining", cg);
+        if matches!(e.scene, Scene::Pair(_)) {
+            c.fail(
+                "coarse_graining",
+                "(present)".into(),
+                "must be absent for a pair scene (its radii are the simulated ones)",
+            );
+        }
+    }
+}
+
+/// Checks a coarse-graining block (also used by studies).
+pub(crate) fn check_coarse_graining(c: &mut Checker, path: &str, cg: &CoarseGraining) {
+    c.within(
+        &join(path, "size_factor"),
+        cg.size_factor,
+        Interval {
+            lo: 1.0,
+            lo_closed: true,
+            hi: 1000.0,
+            hi_closed: true,
+        },
+    );
+    c.within(
+        &join(path, "youngs_modulus_factor"),
+        cg.youngs_modulus_factor,
+        Interval::open_closed(0.0, 1.0),
+    );
 }
 
 /// Requires the schema version this build reads.

@@ -4,7 +4,9 @@
 use std::collections::BTreeMap;
 
 use super::checker::{join, number, string, Checker, Interval};
-use super::experiment::{check_material, check_pair_field, check_schema_version, check_time_step};
+use super::experiment::{
+    check_coarse_graining, check_material, check_pair_field, check_schema_version, check_time_step,
+};
 use super::scene::check_scene;
 use crate::manifest::experiment::PAIR_PARAM_FIELDS;
 use crate::manifest::study::{DesignKind, Slot, Study, TargetScene};
@@ -24,6 +26,9 @@ pub(crate) fn check_study(c: &mut Checker, s: &Study) {
     }
     check_design(c, s);
     check_time_step(c, "time_step", &s.time_step);
+    if let Some(cg) = &s.coarse_graining {
+        check_coarse_graining(c, "coarse_graining", cg);
+    }
 }
 
 fn check_parameters(c: &mut Checker, s: &Study) {
