@@ -6,6 +6,7 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
+use crate::audit::{self, AuditError};
 use crate::bench::{self, BenchError, BenchOptions};
 use crate::log::{inspect, InspectError};
 use crate::manifest::{read_document, read_experiment, ContentId, DocumentKind, ManifestError};
@@ -76,6 +77,17 @@ pub enum CommandError {
     /// The benchmark failed or its options are invalid.
     #[error("bench: {0}")]
     Bench(#[from] BenchError),
+    /// The audit could not run.
+    #[error("audit: {0}")]
+    Audit(#[from] AuditError),
+    /// The audit ran and found broken links or irreproducible runs.
+    #[error("audit found {broken} broken link(s) and {differing} re-run(s) that differ")]
+    AuditFailed {
+        /// Broken lineage links.
+        broken: usize,
+        /// Re-runs that did not reproduce their stored outputs.
+        differing: usize,
+    },
 }
 
 impl CommandError {
@@ -87,7 +99,11 @@ impl CommandError {
             CommandError::Store(e) => e.is_invalid_input(),
             CommandError::Inspect(e) => e.is_invalid_input(),
             CommandError::Bench(e) => e.is_invalid_input(),
-            CommandError::RunFailed { .. } | CommandError::Output(_) => false,
+            CommandError::Audit(AuditError::Path { .. } | AuditError::NothingToAudit(_)) => true,
+            CommandError::Audit(AuditError::Store(e)) => e.is_invalid_input(),
+            CommandError::RunFailed { .. }
+            | CommandError::Output(_)
+            | CommandError::AuditFailed { .. } => false,
         };
         if invalid {
             2
@@ -326,4 +342,51 @@ fn pretty<T: serde::Serialize>(value: &T) -> String {
 /// channels, message counts and time range.
 pub fn inspect(store_root: &Path, file: &Path, out: &mut dyn Write) -> Result<(), CommandError> {
     Ok(inspect::report(file, store_root, out)?)
+}
+
+/// `repose audit PATH`: checks every lineage record under `path` (see
+/// [`crate::audit`]) and re-runs `rerun` stored runs chosen with `seed`; fails
+/// (exit 1) on any broken link or irreproducible run.
+pub fn audit(
+    store_root: &Path,
+    path: &Path,
+    rerun: usize,
+    seed: u64,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let store = Store::open(store_root)?;
+    let report = audit::audit(&store, path, rerun, seed)?;
+    writeln!(
+        out,
+        "audited {} lineage record(s): {} file input(s) re-hashed, {} run(s) checked",
+        report.records, report.files_checked, report.runs_checked
+    )?;
+    for link in &report.broken {
+        writeln!(out, "BROKEN {}: {}", link.record.display(), link.problem)?;
+    }
+    for r in &report.reruns {
+        let verdict = match (&r.failure, r.identical()) {
+            (Some(f), _) => format!("re-run FAILED: {f}"),
+            (None, true) => "result.json and run.mcap byte-identical".to_string(),
+            (None, false) => format!(
+                "DIFFERS (result.json {}, run.mcap {})",
+                if r.result_identical {
+                    "same"
+                } else {
+                    "differs"
+                },
+                if r.mcap_identical { "same" } else { "differs" }
+            ),
+        };
+        writeln!(out, "rerun {}: {verdict}", r.id.short(12))?;
+    }
+    if report.is_clean() {
+        writeln!(out, "audit clean")?;
+        Ok(())
+    } else {
+        Err(CommandError::AuditFailed {
+            broken: report.broken.len(),
+            differing: report.reruns.iter().filter(|r| !r.identical()).count(),
+        })
+    }
 }

@@ -16,6 +16,7 @@
 //!   coarse-graining rules.
 //! - [`dem`]: the soft-sphere DEM engine; knows nothing of studies, manifests or files.
 
+pub mod audit;
 pub mod bench;
 pub mod commands;
 pub mod dem;

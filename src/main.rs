@@ -58,6 +58,19 @@ enum Command {
     /// Time the engine on the dense-bed benchmark of ../shared/bench (settle, warm up,
     /// timed segments); progress on stderr.
     Bench(BenchArgs),
+    /// Walk a study's outputs back to their manifests through the lineage records,
+    /// re-hash every input file and check every referenced run; optionally re-run
+    /// some runs and check they reproduce byte for byte.
+    Audit {
+        /// A study output directory (or one output file).
+        path: PathBuf,
+        /// How many completed runs to re-run (chosen with --seed).
+        #[arg(long, default_value_t = 0)]
+        rerun: usize,
+        /// Seed of the choice of runs to re-run.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
     /// Inspect the run store.
     Runs {
         #[command(subcommand)]
@@ -174,6 +187,9 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
                 Box::new(io::stderr())
             };
             commands::bench(&args.options(), args.json, &mut out, &mut progress)
+        }
+        Command::Audit { path, rerun, seed } => {
+            commands::audit(&cli.store, &path, rerun, seed, &mut out)
         }
         Command::Runs {
             command: RunsCommand::List,

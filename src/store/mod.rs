@@ -295,7 +295,7 @@ impl Store {
     }
 
     /// Reads and parses a JSON file of the store.
-    fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, StoreError> {
+    pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, StoreError> {
         let bytes = std::fs::read(path).map_err(StoreError::io(path))?;
         serde_json::from_slice(&bytes).map_err(|e| StoreError::Corrupt {
             path: path.to_path_buf(),

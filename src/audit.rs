@@ -1,0 +1,329 @@
+//! `repose audit`: walks a study's outputs back to their manifests and proves
+//! the chain is intact.
+//!
+//! Every stage output has a lineage record beside it
+//! ([`crate::store::Lineage`], `<output>.lineage.json`). The audit reads every
+//! record under a path and checks, for each:
+//! - the output it describes still exists;
+//! - every file input still exists and its bytes hash to the recorded sha256
+//!   (relative paths are tried against the current directory, then against the
+//!   store root's parent — where the stages were run from);
+//! - every id input names either a run in the store whose manifest.json hashes
+//!   to that id (and whose result.json, if present, carries the same id), or a
+//!   study.json under the audited path whose content id it is.
+//!
+//! With `rerun > 0` it then re-runs that many of the referenced completed runs
+//! (chosen with a seeded ChaCha stream, so an audit is itself reproducible) in
+//! a scratch store and checks result.json and run.mcap are byte-identical to
+//! the stored ones: the determinism promise, checked on the user's own data.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::manifest::{content_id, ContentId, Study};
+use crate::scenes::run_experiment;
+use crate::store::{Lineage, Store, StoreError, MCAP_FILE, RESULT_FILE};
+
+/// Suffix of lineage records.
+const LINEAGE_SUFFIX: &str = ".lineage.json";
+
+/// What the audit found.
+#[derive(Debug, Default)]
+pub struct AuditReport {
+    /// Lineage records read.
+    pub records: usize,
+    /// File inputs re-hashed.
+    pub files_checked: usize,
+    /// Distinct run ids checked against the store.
+    pub runs_checked: usize,
+    /// Every broken link, in the order found.
+    pub broken: Vec<BrokenLink>,
+    /// Re-run comparisons.
+    pub reruns: Vec<RerunCheck>,
+}
+
+impl AuditReport {
+    /// True when no link is broken and every re-run reproduced its outputs.
+    pub fn is_clean(&self) -> bool {
+        self.broken.is_empty() && self.reruns.iter().all(RerunCheck::identical)
+    }
+}
+
+/// One broken link: which record, and what is wrong.
+#[derive(Debug)]
+pub struct BrokenLink {
+    /// The lineage record that names the missing or changed input.
+    pub record: PathBuf,
+    /// What is wrong, naming the input.
+    pub problem: String,
+}
+
+/// One re-run of a stored run.
+#[derive(Debug)]
+pub struct RerunCheck {
+    /// The run.
+    pub id: ContentId,
+    /// Whether the new result.json equals the stored one byte for byte.
+    pub result_identical: bool,
+    /// Whether the new run.mcap equals the stored one byte for byte (true when
+    /// neither exists).
+    pub mcap_identical: bool,
+    /// Why the re-run failed, if it did.
+    pub failure: Option<String>,
+}
+
+impl RerunCheck {
+    /// True when the re-run succeeded and reproduced both files.
+    pub fn identical(&self) -> bool {
+        self.failure.is_none() && self.result_identical && self.mcap_identical
+    }
+}
+
+/// Why the audit itself could not run (broken links are findings, not errors).
+#[derive(Debug, thiserror::Error)]
+pub enum AuditError {
+    /// The path to audit does not exist or cannot be read.
+    #[error("audit path {path}: {source}")]
+    Path {
+        /// The path.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// No lineage record was found under the path.
+    #[error(
+        "no lineage records (*{LINEAGE_SUFFIX}) under {0}; \
+         audit a study output directory written by sample/batch/train/search/verify"
+    )]
+    NothingToAudit(PathBuf),
+    /// The store failed.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+}
+
+/// Audits every lineage record under `path` (a directory, walked recursively in
+/// name order, or one output file) and re-runs `rerun` referenced runs chosen
+/// with `seed`.
+pub fn audit(
+    store: &Store,
+    path: &Path,
+    rerun: usize,
+    seed: u64,
+) -> Result<AuditReport, AuditError> {
+    let records = lineage_records(path)?;
+    if records.is_empty() {
+        return Err(AuditError::NothingToAudit(path.to_path_buf()));
+    }
+    let studies = study_ids(path)?;
+    let mut report = AuditReport::default();
+    let mut runs = BTreeSet::new();
+    for record in &records {
+        report.records += 1;
+        check_record(store, record, &studies, &mut runs, &mut report);
+    }
+    report.runs_checked = runs.len();
+    let completed: Vec<ContentId> = runs
+        .into_iter()
+        .filter(|id| store.run_dir(id).result_path().is_file())
+        .collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut picked: Vec<usize> = (0..completed.len()).collect();
+    picked.shuffle(&mut rng);
+    picked.truncate(rerun);
+    picked.sort_unstable();
+    for i in picked {
+        report.reruns.push(rerun_one(store, &completed[i])?);
+    }
+    Ok(report)
+}
+
+fn check_record(
+    store: &Store,
+    record: &Path,
+    studies: &BTreeSet<String>,
+    runs: &mut BTreeSet<ContentId>,
+    report: &mut AuditReport,
+) {
+    let mut broken = |problem: String| {
+        report.broken.push(BrokenLink {
+            record: record.to_path_buf(),
+            problem,
+        })
+    };
+    let name = record.to_string_lossy();
+    let output = PathBuf::from(&name[..name.len() - LINEAGE_SUFFIX.len()]);
+    if !output.exists() {
+        broken(format!("its output {} is missing", output.display()));
+    }
+    let lineage: Lineage = match Store::read_json(record) {
+        Ok(l) => l,
+        Err(e) => {
+            broken(format!("unreadable lineage record: {e}"));
+            return;
+        }
+    };
+    for input in &lineage.inputs {
+        let label = format!("input `{}` ({})", input.role, input.id_or_path);
+        if input.id_or_path == input.sha256 {
+            let Some(id) = ContentId::parse(&input.sha256) else {
+                broken(format!("{label}: not a content id"));
+                continue;
+            };
+            if studies.contains(id.as_str()) {
+                continue;
+            }
+            match check_run(store, &id) {
+                Ok(()) => {
+                    runs.insert(id);
+                }
+                Err(problem) => broken(format!("{label}: {problem}")),
+            }
+        } else {
+            report.files_checked += 1;
+            match resolve(store, Path::new(&input.id_or_path)) {
+                None => broken(format!("{label}: file not found")),
+                Some(file) => match std::fs::read(&file) {
+                    Err(e) => broken(format!("{label}: {e}")),
+                    Ok(bytes) => {
+                        let now = ContentId::of_bytes(&bytes);
+                        if now.as_str() != input.sha256 {
+                            broken(format!(
+                                "{label}: changed since the stage ran (sha256 {} recorded, {} now)",
+                                input.sha256, now
+                            ));
+                        }
+                    }
+                },
+            }
+        }
+    }
+}
+
+/// Checks run `id` exists and its stored manifest and result are consistent.
+fn check_run(store: &Store, id: &ContentId) -> Result<(), String> {
+    let dir = store.run_dir(id);
+    let bytes = std::fs::read(dir.manifest_path())
+        .map_err(|e| format!("no run {} in the store ({e})", id.short(12)))?;
+    let hashed = ContentId::of_bytes(&bytes);
+    if &hashed != id {
+        return Err(format!(
+            "run {}: manifest.json hashes to {hashed}, not to its id",
+            id.short(12)
+        ));
+    }
+    match store.load_result(id) {
+        Ok(Some(r)) if &r.id != id => Err(format!(
+            "run {}: result.json names run {}",
+            id.short(12),
+            r.id
+        )),
+        Ok(_) => Ok(()),
+        Err(e) => Err(format!("run {}: {e}", id.short(12))),
+    }
+}
+
+/// Re-runs `id` in a scratch store beside the real one and compares outputs.
+fn rerun_one(store: &Store, id: &ContentId) -> Result<RerunCheck, AuditError> {
+    let experiment = store.load_manifest(id)?;
+    let scratch_root = store
+        .root()
+        .join(format!(".audit-{}-{}", std::process::id(), id.short(12)));
+    let scratch = Store::open(&scratch_root)?;
+    let outcome = scratch.run_cached(&experiment, |e, dir| {
+        run_experiment(e, Some(&dir.mcap_path()))
+    });
+    let same = |file: &str| -> bool {
+        let old = std::fs::read(store.run_dir(id).path().join(file)).ok();
+        let new = std::fs::read(scratch.run_dir(id).path().join(file)).ok();
+        old == new
+    };
+    let check = RerunCheck {
+        id: id.clone(),
+        result_identical: same(RESULT_FILE),
+        mcap_identical: same(MCAP_FILE),
+        failure: outcome.err().map(|e| e.to_string()),
+    };
+    std::fs::remove_dir_all(&scratch_root).map_err(|source| AuditError::Path {
+        path: scratch_root.clone(),
+        source,
+    })?;
+    Ok(check)
+}
+
+/// Every lineage record under `path` (or beside it, if it is a file), sorted.
+fn lineage_records(path: &Path) -> Result<Vec<PathBuf>, AuditError> {
+    let meta = std::fs::metadata(path).map_err(|source| AuditError::Path {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if meta.is_file() {
+        let beside = Lineage::path_beside(path);
+        return Ok(if path.to_string_lossy().ends_with(LINEAGE_SUFFIX) {
+            vec![path.to_path_buf()]
+        } else if beside.is_file() {
+            vec![beside]
+        } else {
+            Vec::new()
+        });
+    }
+    let mut found = Vec::new();
+    walk(path, &mut |p| {
+        if p.to_string_lossy().ends_with(LINEAGE_SUFFIX) {
+            found.push(p.to_path_buf());
+        }
+    })?;
+    Ok(found)
+}
+
+/// Content ids of every `study.json` under `path` (a stage may name its study
+/// by id).
+fn study_ids(path: &Path) -> Result<BTreeSet<String>, AuditError> {
+    let mut ids = BTreeSet::new();
+    if path.is_dir() {
+        walk(path, &mut |p| {
+            if p.file_name().is_some_and(|n| n == "study.json") {
+                if let Ok(study) = Store::read_json::<Study>(p) {
+                    ids.insert(content_id(&study).to_string());
+                }
+            }
+        })?;
+    }
+    Ok(ids)
+}
+
+/// Visits every file under `dir`, in name order, depth first.
+fn walk(dir: &Path, visit: &mut dyn FnMut(&Path)) -> Result<(), AuditError> {
+    let io = |source| AuditError::Path {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(io)?
+        .map(|e| e.map(|e| e.path()))
+        .collect::<Result<_, _>>()
+        .map_err(io)?;
+    entries.sort();
+    for entry in entries {
+        if entry.is_dir() {
+            walk(&entry, visit)?;
+        } else {
+            visit(&entry);
+        }
+    }
+    Ok(())
+}
+
+/// An input path as recorded, resolved: absolute as is; relative against the
+/// current directory, then against the store root's parent.
+fn resolve(store: &Store, recorded: &Path) -> Option<PathBuf> {
+    if recorded.is_absolute() || recorded.exists() {
+        return recorded.exists().then(|| recorded.to_path_buf());
+    }
+    let parent = store.root().parent()?;
+    let candidate = parent.join(recorded);
+    candidate.exists().then_some(candidate)
+}
