@@ -307,6 +307,9 @@ fn scene() -> impl Strategy<Value = Scene> {
             max_time_s: f[7],
             hopper_material: a,
             plate_material: b,
+            fill_height_m: None,
+            settle_max_s: None,
+            sample_interval_s: None,
         })
     });
     let pile = (

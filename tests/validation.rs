@@ -774,3 +774,37 @@ reject!(
     "coarse_graining",
     "must be absent for a pair scene"
 );
+
+// --- hopper scene: the optional fields added with its simulation
+reject!(
+    hopper_fill_height_fits_the_hopper,
+    with_scene(DRUM, hopper()),
+    "/verification/1/scene/fill_height_m",
+    Some(json!(0.08)),
+    "verification[1].scene.fill_height_m",
+    "must be <= height_m = 0.07"
+);
+reject!(
+    hopper_fill_height_positive,
+    with_scene(DRUM, hopper()),
+    "/verification/1/scene/fill_height_m",
+    Some(json!(0)),
+    "verification[1].scene.fill_height_m",
+    "> 0"
+);
+reject!(
+    hopper_settle_max_positive,
+    with_scene(DRUM, hopper()),
+    "/verification/1/scene/settle_max_s",
+    Some(json!(-1)),
+    "verification[1].scene.settle_max_s",
+    "> 0"
+);
+reject!(
+    hopper_sample_interval_range,
+    with_scene(DRUM, hopper()),
+    "/verification/1/scene/sample_interval_s",
+    Some(json!(0.1)),
+    "verification[1].scene.sample_interval_s",
+    "(0, 0.05]"
+);

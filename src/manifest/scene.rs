@@ -239,12 +239,29 @@ pub struct HopperScene {
     pub packing_fraction: f64,
     /// Stop once no particle has left the hopper for this long, s.
     pub no_discharge_stop_s: f64,
-    /// Hard limit on simulated time, s.
+    /// Longest discharge, s: simulated time from the opening of the lid to the
+    /// end of the run when particles keep leaving.
     pub max_time_s: f64,
     /// Hopper wall material name.
     pub hopper_material: String,
     /// Plate wall material name.
     pub plate_material: String,
+    /// Height of the poured bed, m, in (0, height_m]; absent: the bed fills the
+    /// hopper to `height_m`. The particle count is `packing_fraction` × the bed
+    /// volume / the mean particle volume (yan2015: ~14 700 spheres R = 1 mm at
+    /// 56.7 % in D = 50 mm make a 55 mm bed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fill_height_m: Option<f64>,
+    /// Longest time the poured bed may take to come to rest before the lid
+    /// opens, s, > 0 (it opens earlier once the mean kinetic energy per
+    /// particle stays below 1e-4 of m g d for 0.05 s); absent: 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settle_max_s: Option<f64>,
+    /// Interval between discharge counts (the flow-rate trace), removals of
+    /// particles that fell off the plate and angle samples, s, in (0, 0.05];
+    /// absent: 0.01.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample_interval_s: Option<f64>,
 }
 
 /// cai2024 fixed-base funnel (GB/T 16913-2008): particles generated at the funnel top

@@ -4,6 +4,7 @@
 //! [`crate::store::Store::run_cached`].
 
 pub mod drum;
+pub mod hopper;
 pub mod pair;
 pub mod physics;
 pub mod protocol;
@@ -32,6 +33,9 @@ pub enum SceneError {
     /// The drum scene failed.
     #[error(transparent)]
     Drum(#[from] drum::DrumError),
+    /// The hopper scene failed.
+    #[error(transparent)]
+    Hopper(#[from] hopper::HopperError),
     /// The run log could not be written.
     #[error(transparent)]
     Log(#[from] LogError),
@@ -49,6 +53,7 @@ pub fn run_experiment(
     let mut result = match &experiment.scene {
         Scene::Pair(scene) => pair::run(experiment, scene, log),
         Scene::Drum(scene) => drum::run(experiment, scene, log),
+        Scene::Hopper(scene) => hopper::run(experiment, scene, log),
         other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
     }?;
     result.coarse_graining = physics::coarse_graining_report(experiment);

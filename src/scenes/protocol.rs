@@ -45,7 +45,8 @@ pub struct PhaseOutcome {
     pub start_s: f64,
     /// Simulated time at its end, s.
     pub end_s: f64,
-    /// True if the settle criterion ended it, false if the maximum time did.
+    /// True if it ended early (its settle criterion was met, or the sampler
+    /// asked to stop), false if the maximum time ended it.
     pub settled: bool,
 }
 
@@ -55,6 +56,13 @@ pub trait Sampler {
     type Error: From<HealthError>;
     /// Called at t = phase start and then every sampling interval.
     fn sample(&mut self, phase: &'static str, sim: &mut Simulation) -> Result<(), Self::Error>;
+
+    /// Asked after every sample but the first: true ends the phase there, like a
+    /// met settle criterion (e.g. no particle has left a hopper for a while).
+    /// By default a phase runs to its own criterion or maximum time.
+    fn stop_early(&self) -> bool {
+        false
+    }
 }
 
 /// Mean kinetic energy per particle, J (0 for an empty world).
@@ -89,6 +97,9 @@ pub fn run_phase<S: Sampler>(
         done += n;
         sampler.sample(phase.name, sim)?;
         progress.report(phase, sim, done, total_steps);
+        if sampler.stop_early() {
+            return Ok(outcome(phase, start, sim, true));
+        }
         if let Some(c) = phase.settle {
             let t = sim.world().time_s;
             if mean_kinetic_energy_j(sim) < c.mean_kinetic_energy_j {

@@ -208,7 +208,34 @@ fn check_hopper(c: &mut Checker, path: &str, s: &HopperScene) {
     );
     c.positive(&join(path, "no_discharge_stop_s"), s.no_discharge_stop_s);
     c.positive(&join(path, "max_time_s"), s.max_time_s);
+    if let Some(h) = s.fill_height_m {
+        c.positive(&join(path, "fill_height_m"), h);
+        if h.is_finite() && s.height_m.is_finite() && h > s.height_m {
+            c.fail(
+                &join(path, "fill_height_m"),
+                number(h),
+                format!(
+                    "must be <= height_m = {} (the bed must fit the hopper)",
+                    number(s.height_m)
+                ),
+            );
+        }
+    }
+    if let Some(t) = s.settle_max_s {
+        c.positive(&join(path, "settle_max_s"), t);
+    }
+    if let Some(dt) = s.sample_interval_s {
+        c.within(
+            &join(path, "sample_interval_s"),
+            dt,
+            Interval::open_closed(0.0, HOPPER_MAX_SAMPLE_INTERVAL_S),
+        );
+    }
 }
+
+/// Longest hopper sample interval, s: particles that fall off the plate are
+/// removed at samples and must stay inside the simulation box until then.
+pub const HOPPER_MAX_SAMPLE_INTERVAL_S: f64 = 0.05;
 
 fn check_static_pile(c: &mut Checker, path: &str, s: &StaticPileScene) {
     c.within(
