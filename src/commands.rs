@@ -11,7 +11,11 @@ use crate::bench::{self, BenchError, BenchOptions};
 use crate::log::{inspect, InspectError};
 use crate::manifest::{read_document, read_experiment, ContentId, DocumentKind, ManifestError};
 use crate::scenes::run_experiment;
-use crate::store::{CacheOutcome, RunError, RunSummary, Store, StoreError};
+use crate::store::{
+    write_atomic, CacheOutcome, InputRef, Lineage, RunError, RunSummary, Store, StoreError,
+};
+use crate::tradeoff::plan::{plan, Knob, PlanError};
+use crate::tradeoff::{self as tradeoff_sweep, report};
 
 /// Which kind of manifest a file holds, as chosen on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -77,6 +81,13 @@ pub enum CommandError {
     /// The benchmark failed or its options are invalid.
     #[error("bench: {0}")]
     Bench(#[from] BenchError),
+    /// The tradeoff sweep could not be planned (a knob does not apply or makes an
+    /// invalid experiment: refused before anything runs).
+    #[error("tradeoff: {0}")]
+    TradeoffPlan(#[from] PlanError),
+    /// A command-line option is malformed (the message names it).
+    #[error("{0}")]
+    Usage(String),
     /// The audit could not run.
     #[error("audit: {0}")]
     Audit(#[from] AuditError),
@@ -99,6 +110,7 @@ impl CommandError {
             CommandError::Store(e) => e.is_invalid_input(),
             CommandError::Inspect(e) => e.is_invalid_input(),
             CommandError::Bench(e) => e.is_invalid_input(),
+            CommandError::TradeoffPlan(_) | CommandError::Usage(_) => true,
             CommandError::Audit(AuditError::Path { .. } | AuditError::NothingToAudit(_)) => true,
             CommandError::Audit(AuditError::Store(e)) => e.is_invalid_input(),
             CommandError::RunFailed { .. }
@@ -389,4 +401,83 @@ pub fn audit(
             differing: report.reruns.iter().filter(|r| !r.identical()).count(),
         })
     }
+}
+
+/// Options of `repose tradeoff`.
+#[derive(Debug, Clone)]
+pub struct TradeoffOptions {
+    /// Knobs to sweep, each with its values (finest first).
+    pub knobs: Vec<Knob>,
+    /// Replicates per point (packing seeds), ≥ 2.
+    pub replicates: usize,
+    /// Runs in parallel.
+    pub threads: usize,
+    /// Output directory (default `<store>/tradeoff/<first 12 hex of the base id>`).
+    pub out_dir: Option<PathBuf>,
+}
+
+/// `repose tradeoff MANIFEST`: sweeps fidelity knobs around the manifest's
+/// scene (see [`crate::tradeoff`]), writes tradeoff.csv / .md / .svg with a
+/// lineage record, and prints the Markdown table.
+pub fn tradeoff(
+    store_root: &Path,
+    manifest: &Path,
+    options: &TradeoffOptions,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
+    let points = plan(&base, &options.knobs, options.replicates)?;
+    let store = Store::open(store_root)?;
+    let total: usize = points.iter().map(|p| p.replicates.len()).sum();
+    let done = points
+        .iter()
+        .flat_map(|p| &p.replicates)
+        .filter(|e| store.run_dir(&e.id()).result_path().is_file())
+        .count();
+    eprintln!(
+        "tradeoff: {} points x {} replicates = {total} runs ({done} already complete) on {} thread(s)",
+        points.len(),
+        options.replicates,
+        options.threads
+    );
+    let outcomes = tradeoff_sweep::run(&store, &points, options.threads);
+    let rows = tradeoff_sweep::summarise(&points, &outcomes);
+    let dir = options.out_dir.clone().unwrap_or_else(|| {
+        store
+            .root()
+            .join("tradeoff")
+            .join(base.id().short(12).to_string())
+    });
+    std::fs::create_dir_all(&dir).map_err(StoreError::io(&dir))?;
+    let title = format!(
+        "What accuracy costs: {} ({})",
+        base.scene.kind(),
+        manifest.display()
+    );
+    let csv_path = dir.join("tradeoff.csv");
+    let outputs = [
+        (csv_path.clone(), report::csv(&rows)),
+        (dir.join("tradeoff.md"), report::markdown(&rows, &title)),
+        (dir.join("tradeoff.svg"), report::svg(&rows, &title)),
+    ];
+    let mut lineage = Lineage::new(
+        "tradeoff",
+        serde_json::json!({
+            "knobs": options.knobs.iter().map(|k| (k.name, k.values.clone())).collect::<Vec<_>>(),
+            "replicates": options.replicates,
+        }),
+    )
+    .with_input(InputRef::file("base_manifest", manifest)?);
+    for row in &rows {
+        for id in &row.ids {
+            lineage = lineage.with_input(InputRef::id(row.label.clone(), id));
+        }
+    }
+    for (path, text) in &outputs {
+        write_atomic(path, text.as_bytes()).map_err(StoreError::io(path))?;
+        lineage.write_beside(path)?;
+    }
+    write!(out, "{}", report::markdown(&rows, &title))?;
+    writeln!(out, "\nwritten: {}", dir.display())?;
+    Ok(())
 }

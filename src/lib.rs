@@ -26,3 +26,4 @@ pub mod measure;
 pub mod packing;
 pub mod scenes;
 pub mod store;
+pub mod tradeoff;

@@ -8,9 +8,10 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use repose::bench::BenchOptions;
-use repose::commands::{self, CommandError, KindArg};
+use repose::commands::{self, CommandError, KindArg, TradeoffOptions};
 use repose::dem::simulation::{NormalChoice, RollingChoice};
 use repose::store::{DEFAULT_STORE, STORE_ENV};
+use repose::tradeoff::plan::{Knob, KNOB_NAMES};
 
 /// Reproducible calibration of DEM particle parameters against angle-of-repose tests.
 #[derive(Parser)]
@@ -58,6 +59,10 @@ enum Command {
     /// Time the engine on the dense-bed benchmark of ../shared/bench (settle, warm up,
     /// timed segments); progress on stderr.
     Bench(BenchArgs),
+    /// Measure what accuracy costs in time: sweep fidelity knobs around a scene
+    /// manifest (one at a time, R replicates each) and tabulate angle error vs the
+    /// finest setting against wall time, with the Pareto front.
+    Tradeoff(TradeoffArgs),
     /// Walk a study's outputs back to their manifests through the lineage records,
     /// re-hash every input file and check every referenced run; optionally re-run
     /// some runs and check they reproduce byte for byte.
@@ -76,6 +81,73 @@ enum Command {
         #[command(subcommand)]
         command: RunsCommand,
     },
+}
+
+/// Options of `repose tradeoff`.
+#[derive(clap::Args)]
+struct TradeoffArgs {
+    /// Experiment manifest of the scene (a lab scene).
+    manifest: PathBuf,
+    /// Knobs to sweep (rayleigh_fraction, youngs_modulus_factor, size_factor,
+    /// periodic_slices), comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "rayleigh_fraction,youngs_modulus_factor,size_factor"
+    )]
+    knobs: Vec<String>,
+    /// Values of one knob, finest first, as KNOB=V1,V2,... (repeatable); others
+    /// use their presets.
+    #[arg(long = "values")]
+    values: Vec<String>,
+    /// Replicates (packing seeds) per point, >= 2.
+    #[arg(long, default_value_t = 3)]
+    replicates: usize,
+    /// Runs in parallel.
+    #[arg(long, default_value_t = 2)]
+    threads: usize,
+    /// Output directory (default <store>/tradeoff/<base id prefix>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+impl TradeoffArgs {
+    fn options(&self) -> Result<TradeoffOptions, String> {
+        let mut knobs = Vec::new();
+        for name in &self.knobs {
+            let knob = Knob::preset(name).ok_or_else(|| {
+                format!(
+                    "--knobs: `{name}` is not a knob; known: {}",
+                    KNOB_NAMES.join(", ")
+                )
+            })?;
+            knobs.push(knob);
+        }
+        for spec in &self.values {
+            let (name, list) = spec
+                .split_once('=')
+                .ok_or_else(|| format!("--values `{spec}`: expected KNOB=V1,V2,..."))?;
+            let values = list
+                .split(',')
+                .map(|v| v.trim().parse::<f64>())
+                .collect::<Result<Vec<f64>, _>>()
+                .map_err(|e| format!("--values `{spec}`: {e}"))?;
+            if values.len() < 2 {
+                return Err(format!("--values `{spec}`: needs at least two values"));
+            }
+            let slot = knobs
+                .iter_mut()
+                .find(|k| k.name == name)
+                .ok_or_else(|| format!("--values `{spec}`: `{name}` is not among --knobs"))?;
+            *slot = slot.clone().with_values(values);
+        }
+        Ok(TradeoffOptions {
+            knobs,
+            replicates: self.replicates,
+            threads: self.threads,
+            out_dir: self.out.clone(),
+        })
+    }
 }
 
 /// Options of `repose bench`.
@@ -187,6 +259,10 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
                 Box::new(io::stderr())
             };
             commands::bench(&args.options(), args.json, &mut out, &mut progress)
+        }
+        Command::Tradeoff(args) => {
+            let options = args.options().map_err(CommandError::Usage)?;
+            commands::tradeoff(&cli.store, &args.manifest, &options, &mut out)
         }
         Command::Audit { path, rerun, seed } => {
             commands::audit(&cli.store, &path, rerun, seed, &mut out)

@@ -115,7 +115,8 @@ impl StoreError {
         )
     }
 
-    fn io(path: &Path) -> impl FnOnce(io::Error) -> StoreError + '_ {
+    /// Wraps an I/O error on `path` (for `map_err`).
+    pub fn io(path: &Path) -> impl FnOnce(io::Error) -> StoreError + '_ {
         move |source| StoreError::Io {
             path: path.to_path_buf(),
             source,
