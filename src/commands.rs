@@ -442,12 +442,10 @@ pub fn tradeoff(
     );
     let outcomes = tradeoff_sweep::run(&store, &points, options.threads);
     let rows = tradeoff_sweep::summarise(&points, &outcomes);
-    let dir = options.out_dir.clone().unwrap_or_else(|| {
-        store
-            .root()
-            .join("tradeoff")
-            .join(base.id().short(12).to_string())
-    });
+    let dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| store.root().join("tradeoff").join(base.id().short(12)));
     std::fs::create_dir_all(&dir).map_err(StoreError::io(&dir))?;
     let title = format!(
         "What accuracy costs: {} ({})",
