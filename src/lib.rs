@@ -17,6 +17,7 @@
 //! - [`dem`]: the soft-sphere DEM engine; knows nothing of studies, manifests or files.
 
 pub mod bench;
+pub mod calibrate;
 pub mod commands;
 pub mod dem;
 pub mod log;

@@ -219,7 +219,7 @@ impl RunDir {
 
 /// Test-only fault injection: called between temp write and rename of every file.
 #[cfg(test)]
-type FaultHook = Box<dyn Fn(&Path) -> io::Result<()>>;
+type FaultHook = Box<dyn Fn(&Path) -> io::Result<()> + Send + Sync>;
 
 /// A run store rooted at a directory.
 pub struct Store {
