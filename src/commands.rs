@@ -546,6 +546,12 @@ fn write_sweep(outcome: &TrainOutcome, out: &mut dyn Write) -> Result<(), Comman
         "kept: {} hidden neurons, validation R2 {:.4} (Eq. 7)",
         best.hidden, best.validation_r2
     )?;
+    if best.validation_r2 < 0.9 {
+        writeln!(
+            out,
+            "note: below the R2 >= 0.9 that he2019 (§3.4) requires before using the network"
+        )?;
+    }
     if let Some(r) = outcome.reference_r2 {
         writeln!(
             out,

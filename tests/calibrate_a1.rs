@@ -26,7 +26,9 @@ const R2_TOLERANCE: f64 = 1e-6;
 
 /// The four independent inputs: the printed gamma column repeats mu_pw.
 fn inputs() -> Vec<String> {
-    ["e_pp", "mu_pp", "e_pw", "mu_pw"].map(String::from).to_vec()
+    ["e_pp", "mu_pp", "e_pw", "mu_pw"]
+        .map(String::from)
+        .to_vec()
 }
 
 fn table() -> PathBuf {
@@ -88,7 +90,11 @@ fn the_sweep_reaches_r2_0_9_and_matches_the_golden_file() {
     let col = |t: &Table, name: &str| t.index(name).unwrap();
     for (p, c) in pinned.rows.iter().zip(&now.rows) {
         assert_eq!(p[col(&pinned, "hidden")], c[col(&now, "hidden")]);
-        assert_eq!(p[col(&pinned, "kept")], c[col(&now, "kept")], "kept size moved");
+        assert_eq!(
+            p[col(&pinned, "kept")],
+            c[col(&now, "kept")],
+            "kept size moved"
+        );
         for name in ["train_r2", "validation_r2"] {
             let a: f64 = p[col(&pinned, name)].parse().unwrap();
             let b: f64 = c[col(&now, name)].parse().unwrap();
@@ -148,7 +154,13 @@ fn the_diagnostics_flag_table_a1_as_degenerate() {
     assert_eq!(d.max_abs_spearman.as_ref().unwrap().r, 1.0);
     for a in 0..5 {
         for b in 0..5 {
-            assert_eq!(d.spearman[a][b], Some(1.0), "{} vs {}", columns[a], columns[b]);
+            assert_eq!(
+                d.spearman[a][b],
+                Some(1.0),
+                "{} vs {}",
+                columns[a],
+                columns[b]
+            );
         }
     }
     // 10 pairs strongly correlated, plus the degeneracy warning.
@@ -165,8 +177,14 @@ fn training_is_bit_identical_on_any_thread_count_and_on_rerun() {
             .build()
             .unwrap();
         pool.install(|| train(tmp.path()));
-        ["sweep.csv", "model.json", "parity.svg", "summary.json", "sweep.csv.lineage.json"]
-            .map(|f| std::fs::read(tmp.path().join(f)).unwrap())
+        [
+            "sweep.csv",
+            "model.json",
+            "parity.svg",
+            "summary.json",
+            "sweep.csv.lineage.json",
+        ]
+        .map(|f| std::fs::read(tmp.path().join(f)).unwrap())
     };
     let one = run(1);
     assert_eq!(one, run(3));

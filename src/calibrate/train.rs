@@ -85,14 +85,22 @@ struct Summary {
     reference_validation_r2: Option<f64>,
 }
 
-/// The row index where validation starts for `n` rows.
-fn split_at(n: usize, fraction: f64) -> Result<usize, CalibrateError> {
-    if !(fraction > 0.0 && fraction < 1.0) {
-        return Err(CalibrateError::Settings(format!(
-            "--train-fraction = {fraction}: must be in (0, 1)"
-        )));
+impl TrainOptions {
+    /// What is wrong with these options, if anything.
+    fn check(&self) -> Result<(), CalibrateError> {
+        let f = self.train_fraction;
+        if !(f > 0.0 && f < 1.0) {
+            return Err(CalibrateError::Settings(format!(
+                "--train-fraction = {f}: must be in (0, 1)"
+            )));
+        }
+        self.settings.check().map_err(CalibrateError::Settings)
     }
-    Ok((n as f64 * fraction).round() as usize)
+
+    /// The row index where validation starts for `n` rows.
+    fn split_at(&self, n: usize) -> usize {
+        (n as f64 * self.train_fraction).round() as usize
+    }
 }
 
 /// Trains on the study's batch/angles.csv and writes into `train/`.
@@ -101,8 +109,9 @@ pub fn train_study(
     study: &Study,
     options: &TrainOptions,
 ) -> Result<TrainOutcome, CalibrateError> {
+    options.check()?;
     let (angles_file, rows) = read_angles(dir, study)?;
-    let cut = split_at(rows.len(), options.train_fraction)?;
+    let cut = options.split_at(rows.len());
     let inputs = study
         .parameters
         .iter()
@@ -149,9 +158,10 @@ pub fn train_table(
     out_dir: &Path,
     options: &TrainOptions,
 ) -> Result<TrainOutcome, CalibrateError> {
+    options.check()?;
     let table = Table::read(spec.path)?;
     let n = table.rows.len();
-    let cut = split_at(n, options.train_fraction)?;
+    let cut = options.split_at(n);
     let columns = spec
         .inputs
         .iter()
