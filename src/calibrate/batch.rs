@@ -18,7 +18,8 @@
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::mpsc;
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::time::Duration;
 
 use serde_json::json;
 
@@ -239,10 +240,16 @@ where
             }));
         }
         drop(sender);
-        for (i, outcome) in receiver {
-            progress.finished_one(outcome.is_err());
-            if let Err(message) = outcome {
-                failures.push((i, message));
+        loop {
+            match receiver.recv_timeout(Duration::from_millis(500)) {
+                Ok((i, outcome)) => {
+                    progress.finished_one(outcome.is_err());
+                    if let Err(message) = outcome {
+                        failures.push((i, message));
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) => progress.tick(),
+                Err(RecvTimeoutError::Disconnected) => break,
             }
         }
         Ok(())

@@ -4,7 +4,9 @@
 //! `mu_inc` and retry; stop after `epochs` accepted steps, when the largest
 //! gradient component falls below `min_gradient`, or when μ exceeds `mu_max`.
 //! trainlm's defaults are μ₀ = 0.001, μ_dec = 0.1, μ_inc = 10, μ_max = 1e10,
-//! min_grad = 1e-7 ([`LmSettings::default`]); the epoch budget is ours.
+//! min_grad = 1e-7 ([`LmSettings::default`]); the 200-step budget is ours and
+//! doubles as early stopping (see [`super::surrogate`] for what it does on
+//! he2019's Table A1).
 //!
 //! The weight decay of [`Objective`] enters as augmented residuals √λ θ, so
 //! the normal matrix becomes JᵀJ + (λ + μ) I and the gradient Jᵀr + λθ.

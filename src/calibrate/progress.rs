@@ -3,7 +3,8 @@
 //! finished so far (cache hits excluded, they cost nothing). Redrawn in place
 //! at most twice a second; shown only when
 //! [`crate::scenes::protocol::progress_enabled`] (not `--quiet`, stderr a
-//! terminal). Wall-clock time never reaches any output file.
+//! terminal). Wall-clock time never reaches any output file. With several
+//! workers the ETA divides by the observed throughput, so it accounts for them.
 
 use std::io::Write;
 use std::time::{Duration, Instant};
@@ -47,6 +48,11 @@ impl BatchProgress {
         self.finished += 1;
         self.failed += usize::from(failed);
         self.draw(self.finished == self.to_run);
+    }
+
+    /// Redraws (elapsed time and ETA move on between finished runs).
+    pub fn tick(&mut self) {
+        self.draw(false);
     }
 
     /// Ends the bar's line.
