@@ -18,6 +18,7 @@
 
 pub mod audit;
 pub mod bench;
+pub mod calibrate;
 pub mod commands;
 pub mod dem;
 pub mod log;

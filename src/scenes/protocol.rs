@@ -174,11 +174,17 @@ pub fn set_quiet(quiet: bool) {
     QUIET.store(quiet, Ordering::Relaxed);
 }
 
+/// True when progress may be shown on stderr: not `--quiet`, and stderr is a
+/// terminal (batch logs and CI stay clean). [`Progress::on_stderr`] and the
+/// calibration batch's progress bar both decide by it.
+pub fn progress_enabled() -> bool {
+    !QUIET.load(Ordering::Relaxed) && std::io::stderr().is_terminal()
+}
+
 impl Progress {
-    /// The reporter scenes use: silent under `--quiet` and when stderr is not a
-    /// terminal (batch logs and CI stay clean).
+    /// The reporter scenes use: silent unless [`progress_enabled`].
     pub fn on_stderr() -> Self {
-        Self::new(QUIET.load(Ordering::Relaxed) || !std::io::stderr().is_terminal())
+        Self::new(!progress_enabled())
     }
 
     /// A progress reporter; `quiet` silences it.
