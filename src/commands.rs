@@ -12,7 +12,10 @@ use crate::calibrate::batch::{batch as run_batch, BatchSettings};
 use crate::calibrate::diagnostics::Diagnostics;
 use crate::calibrate::sample::{diagnose_table, sample as run_sample, SampleSettings};
 use crate::calibrate::search::{search as run_search, SearchSettings};
+use crate::calibrate::surrogate::TrainSettings;
+use crate::calibrate::train::DEFAULT_TRAIN_FRACTION;
 use crate::calibrate::train::{train_study, train_table, TableSpec, TrainOptions, TrainOutcome};
+use crate::calibrate::verify::verify as run_verify;
 use crate::calibrate::{CalibrateError, StudyDir};
 use crate::log::{inspect, InspectError};
 use crate::manifest::{
@@ -763,4 +766,89 @@ pub fn search(
         outcome.out_dir.display()
     )?;
     Ok(())
+}
+
+/// `repose verify STUDY`: re-simulates the `candidates` largest clusters'
+/// centres in the calibration scene and every verification scene (he2019
+/// Table 3); prints the table. A candidate outside tolerance is a finding,
+/// not an error; a failed run makes the command fail after the table.
+pub fn verify(
+    store_root: &Path,
+    study_path: &Path,
+    jobs: usize,
+    candidates: usize,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_study(store_root, study_path)?;
+    let store = Store::open(store_root)?;
+    let settings = BatchSettings {
+        jobs,
+        progress: progress_enabled(),
+    };
+    set_quiet(true);
+    let outcome = run_verify(&dir, &study, &store, &settings, candidates, |e, run_dir| {
+        run_experiment(e, Some(&run_dir.mcap_path()))
+    })?;
+    write!(out, "{}", outcome.markdown)?;
+    writeln!(out, "  table: {}", outcome.table.display())?;
+    let failed = outcome.rows.iter().filter(|r| r.failure.is_some()).count();
+    if failed > 0 {
+        return Err(CommandError::BatchIncomplete {
+            failed,
+            total: outcome.rows.len(),
+        });
+    }
+    Ok(())
+}
+
+/// The study `repose calibrate` runs without an argument (he2019's PU powder,
+/// its ranges and targets, at the quick profile; see its description).
+pub const DEFAULT_STUDY: &str = include_str!("../experiments/he2019/default.json");
+
+/// `repose calibrate [STUDY]`: sample → batch → train → search → verify with
+/// each stage's defaults; without a study, the embedded default is written to
+/// `<store>/he2019-default.json` and calibrated.
+pub fn calibrate(
+    store_root: &Path,
+    study_path: Option<&Path>,
+    jobs: usize,
+    candidates: usize,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let path = match study_path {
+        Some(p) => p.to_path_buf(),
+        None => {
+            std::fs::create_dir_all(store_root).map_err(StoreError::io(store_root))?;
+            let p = store_root.join("he2019-default.json");
+            write_atomic(&p, DEFAULT_STUDY.as_bytes()).map_err(StoreError::io(&p))?;
+            writeln!(
+                out,
+                "calibrating the embedded default study ({})",
+                p.display()
+            )?;
+            p
+        }
+    };
+    let study = read_study(&path)?;
+    let mut err = io::stderr();
+    writeln!(out, "\n== 1/5 sample")?;
+    sample(store_root, &path, &SampleSettings::default(), out, &mut err)?;
+    writeln!(out, "\n== 2/5 batch ({jobs} at a time)")?;
+    batch(store_root, &path, jobs, out)?;
+    writeln!(out, "\n== 3/5 train")?;
+    let options = TrainOptions {
+        settings: TrainSettings::with_seed(study.design.seed),
+        train_fraction: DEFAULT_TRAIN_FRACTION,
+    };
+    train(store_root, &path, &options, None, out)?;
+    writeln!(out, "\n== 4/5 search")?;
+    search(
+        store_root,
+        &path,
+        &SearchSettings::with_seed(study.design.seed),
+        None,
+        out,
+    )?;
+    writeln!(out, "\n== 5/5 verify ({candidates} candidate(s))")?;
+    verify(store_root, &path, jobs, candidates, out)
 }

@@ -67,6 +67,30 @@ enum Command {
     /// Time the engine on the dense-bed benchmark of ../shared/bench (settle, warm up,
     /// timed segments); progress on stderr.
     Bench(BenchArgs),
+    /// Re-simulate the search's cluster centres in the calibration and
+    /// verification scenes and compare with the measured angles (he2019 Table 3).
+    Verify {
+        /// Study manifest.
+        study: PathBuf,
+        /// Runs at once, each single-threaded [default: the number of CPUs].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// How many clusters (largest first) to verify.
+        #[arg(long, default_value_t = 3)]
+        candidates: usize,
+    },
+    /// The whole he2019 method: sample, batch, train, search, verify. Without a
+    /// study, runs the embedded default (PU powder, quick profile).
+    Calibrate {
+        /// Study manifest [default: the embedded he2019 default].
+        study: Option<PathBuf>,
+        /// Runs at once, each single-threaded [default: the number of CPUs].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// How many clusters (largest first) to verify.
+        #[arg(long, default_value_t = 3)]
+        candidates: usize,
+    },
     /// Measure what accuracy costs in time: sweep fidelity knobs around a scene
     /// manifest (one at a time, R replicates each) and tabulate angle error vs the
     /// finest setting against wall time, with the Pareto front.
@@ -400,6 +424,22 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             };
             commands::bench(&args.options(), args.json, &mut out, &mut progress)
         }
+        Command::Verify {
+            study,
+            jobs,
+            candidates,
+        } => commands::verify(&cli.store, &study, default_jobs(jobs), candidates, &mut out),
+        Command::Calibrate {
+            study,
+            jobs,
+            candidates,
+        } => commands::calibrate(
+            &cli.store,
+            study.as_deref(),
+            default_jobs(jobs),
+            candidates,
+            &mut out,
+        ),
         Command::Tradeoff(args) => {
             let options = args.options().map_err(CommandError::Usage)?;
             commands::tradeoff(&cli.store, &args.manifest, &options, &mut out)
@@ -415,9 +455,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         } => commands::runs_show(&cli.store, &prefix, &mut out),
         Command::Sample(args) => sample(&cli.store, args, &mut out),
         Command::Batch { study, jobs } => {
-            let jobs =
-                jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-            commands::batch(&cli.store, &study, jobs, &mut out)
+            commands::batch(&cli.store, &study, default_jobs(jobs), &mut out)
         }
         Command::Train(args) => train(&cli.store, args, &mut out),
         Command::Search(args) => {
@@ -481,6 +519,11 @@ fn train(
         (None, Some(study)) => commands::train(store, study, &options, args.seed, out),
         (None, None) => unreachable!("clap requires STUDY or --table"),
     }
+}
+
+/// `--jobs`, or the number of CPUs.
+fn default_jobs(jobs: Option<usize>) -> usize {
+    jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
 fn main() -> ExitCode {

@@ -15,6 +15,7 @@ use repose::calibrate::sample::{design_path, experiment_path, sample, SampleSett
 use repose::calibrate::search::{search, SearchSettings};
 use repose::calibrate::surrogate::TrainSettings;
 use repose::calibrate::train::{train_study, TrainOptions, DEFAULT_TRAIN_FRACTION};
+use repose::calibrate::verify::verify;
 use repose::calibrate::{CalibrateError, Stage, StudyDir};
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::scenes::run_experiment;
@@ -346,9 +347,25 @@ fn train_and_search_recover_the_fake_response_and_rerun_byte_identically() {
         assert!((c.predicted_angle_deg - 30.0).abs() < 3.0, "{c:?}");
     }
 
+    // Verify: each candidate re-simulated in the calibration scene (the study
+    // has no verification scenes). The fake DEM's angle at a centre is known,
+    // so the table's simulated angle, relative error and verdict are checked
+    // against it.
+    let checked = verify(&dir, &s, &store, &settings(2), 2, |e, d| fake.run(e, d)).unwrap();
+    assert_eq!(checked.rows.len(), found.clusters.len().min(2));
+    for (row, cluster) in checked.rows.iter().zip(&found.clusters) {
+        assert_eq!((row.group, row.scene.as_str()), (cluster.group, "drum"));
+        let (mu_r, mu) = (cluster.centre[0], cluster.centre[1]);
+        let truth = 20.0 + 30.0 * mu + 40.0 * mu_r;
+        assert_eq!(row.simulated_deg, Some(truth));
+        assert_eq!(row.relative_error, Some((truth - 30.0).abs() / 30.0));
+        assert_eq!(row.passes(), (truth - 30.0).abs() / 30.0 <= 0.05);
+    }
+
     let first = snapshot(dir.path());
     train_study(&dir, &s, &options).unwrap();
     search(&dir, &s, &SearchSettings::with_seed(7)).unwrap();
+    verify(&dir, &s, &store, &settings(1), 2, |e, d| fake.run(e, d)).unwrap();
     assert_eq!(first, snapshot(dir.path()));
 }
 

@@ -201,7 +201,7 @@ where
 
 /// Runs the pending experiments on `jobs` workers; returns the failures as
 /// (position in the design, message), sorted.
-fn run_pending<E, F>(
+pub(crate) fn run_pending<E, F>(
     pending: &[usize],
     experiments: &[Experiment],
     store: &Store,

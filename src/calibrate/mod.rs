@@ -1,10 +1,11 @@
-//! The he2019 §3 calibration stages: `sample`, `batch`, `train`, `search`.
+//! The he2019 §3 calibration stages: `sample`, `batch`, `train`, `search`, `verify`.
 //!
 //! ```text
 //! study.json ── sample ──▶ design.csv + one experiment manifest per sample
 //!            ── batch  ──▶ angles.csv (the Table A1 equivalent; runs cached in the store)
 //!            ── train  ──▶ sweep.csv (Fig. 12) + model.json + parity.svg (Fig. 13)
 //!            ── search ──▶ points.csv + clusters.csv/.md (Table 2) + scatter.svg (Fig. 14)
+//!            ── verify ──▶ verification.csv/.md (Table 3)
 //! ```
 //!
 //! # Layout
@@ -27,6 +28,8 @@
 //!   search/points.csv               resampled points, predicted angle, kept, cluster
 //!   search/clusters.csv, .md        centres (physical units), sizes, predicted angle
 //!   search/scatter.svg              scatter matrix of the kept points by cluster
+//!   verify/verification.csv, .md    each candidate in every scene: simulated and
+//!                                   measured angle, relative error, pass/fail
 //! ```
 //!
 //! The runs themselves stay where `repose run` puts them (`<store>/<id>/`), so a
@@ -71,6 +74,7 @@ pub mod surrogate;
 pub mod svg;
 pub mod table;
 pub mod train;
+pub mod verify;
 
 use std::path::{Path, PathBuf};
 
@@ -114,6 +118,8 @@ pub enum Stage {
     Train,
     /// `repose search`.
     Search,
+    /// `repose verify`.
+    Verify,
 }
 
 impl Stage {
@@ -124,6 +130,7 @@ impl Stage {
             Stage::Batch => "batch",
             Stage::Train => "train",
             Stage::Search => "search",
+            Stage::Verify => "verify",
         }
     }
 }
