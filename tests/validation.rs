@@ -741,3 +741,21 @@ fn a_document_of_unknown_kind_is_refused() {
         Err(ManifestError::UnknownKind)
     ));
 }
+
+// --- static pile: insertion and sampling intervals
+reject!(
+    static_pile_insertion_interval_positive,
+    with_scene(BAFFLE, static_pile()),
+    "/verification/0/scene/insertion_interval_s",
+    Some(json!(0)),
+    "verification[0].scene.insertion_interval_s",
+    "> 0"
+);
+reject!(
+    static_pile_samples_at_insertion_windows,
+    with_scene(BAFFLE, static_pile()),
+    "/verification/0/scene/sample_interval_s",
+    Some(json!(0.001)),
+    "verification[0].scene.sample_interval_s",
+    ">= insertion_interval_s = 0.01"
+);

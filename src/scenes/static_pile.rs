@@ -440,8 +440,6 @@ pub struct PileMeasurement {
     /// Median height of the pile's top at the rim, m: 2H/D reads this step
     /// as part of the cone (see the module docs).
     pub rim_height_m: f64,
-    /// Particles resting on the disk (centre above it and below the outlet).
-    pub on_disk: usize,
 }
 
 /// Measures the pile formed by the particles (`positions`, `radii`, m) on the
@@ -492,7 +490,6 @@ pub fn measure_pile(
         height,
         rim_coverage_fraction,
         rim_height_m,
-        on_disk: pos.len(),
     })
 }
 
@@ -529,6 +526,8 @@ pub struct Census {
     pub in_funnel: usize,
     /// Centre above the disk and below the outlet: on the disk (or falling).
     pub on_disk: usize,
+    /// Centre below the disk: falling off it, removed at the next window.
+    pub below_disk: usize,
 }
 
 impl Census {
@@ -542,7 +541,12 @@ impl Census {
             .iter()
             .filter(|p| p.z >= 0.0 && p.z < geometry.outlet_z_m)
             .count();
-        Self { in_funnel, on_disk }
+        let below_disk = positions.len() - in_funnel - on_disk;
+        Self {
+            in_funnel,
+            on_disk,
+            below_disk,
+        }
     }
 }
 
@@ -730,7 +734,8 @@ pub fn run(
     );
     put("removed_off_disk", removed as f64);
     put("funnel_retained", census.in_funnel as f64);
-    put("particles_on_disk", pile.on_disk as f64);
+    put("particles_on_disk", census.on_disk as f64);
+    put("particles_below_disk", census.below_disk as f64);
     put("dt_s", dt_s);
     put("steps", steps as f64);
     put("pour_end_s", pour_end_s);
