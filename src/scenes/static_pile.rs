@@ -135,7 +135,8 @@ use std::path::Path;
 pub const INSERTION_DEPTH_FRACTION: f64 = 0.5;
 /// Gap between a new particle and the funnel wall, in d50 (as the drum's fill).
 pub const INSERTION_CLEARANCE_DIAMETERS: f64 = 0.05;
-/// Random positions tried per new particle before it is skipped.
+/// Random positions tried per new particle in one window; one that finds no
+/// free place waits for the next window.
 pub const INSERTION_ATTEMPTS: usize = 100;
 /// A flank fit with a smaller R² is flagged (`profile_r2_below_floor`): below
 /// it the surface is too lumpy for a line (synthetic rough cones give > 0.98).
@@ -149,7 +150,7 @@ pub const VIEW_AZIMUTHS_DEG: [f64; VIEWS] = [0.0, 45.0, 90.0, 135.0];
 /// Equal azimuthal sectors of the rim checked for pile coverage.
 pub const RIM_SECTORS: usize = 16;
 /// Factor on the free-fall speed from the top of the rig that bounds any
-/// particle's speed when sizing the box (collisions can pass momentum on).
+/// particle's speed when sizing the box ([`Removal::travel_m`]).
 const SPEED_SAFETY: f64 = 2.0;
 /// A pile lower than this many d50 is not measurable.
 const MIN_HEIGHT_DIAMETERS: f64 = 3.0;
@@ -293,7 +294,8 @@ impl Removal {
 
     /// The farthest a particle can move between two removal checks `window_s`
     /// apart, m: free fall from the funnel top to the removal floor gives the
-    /// speed scale, times [`SPEED_SAFETY`], plus the fall within the window.
+    /// speed scale, times a safety factor of 2 (collisions can pass momentum
+    /// on), plus the fall within the window.
     pub fn travel_m(&self, geometry: &Geometry, window_s: f64) -> f64 {
         let g = STANDARD_GRAVITY_M_S2;
         let v_max = SPEED_SAFETY * (2.0 * g * (geometry.top_z_m - self.floor_z_m)).sqrt();
@@ -580,7 +582,8 @@ struct PileSampler<'a> {
     removal: Removal,
     removed: u64,
     geometry: Geometry,
-    bin_width_m: f64,
+    /// d50, m: the surface bin width and the speed scale √(g d50).
+    d50_m: f64,
     traces: Traces,
     log: Option<&'a mut RunLog>,
     window_s: f64,
@@ -627,12 +630,12 @@ impl PileSampler<'_> {
         // The falling stream is not part of the pile: only particles slower
         // than a fall through half a d50, √(g d50), count here.
         let p = &w.particles;
-        let calm_sq = STANDARD_GRAVITY_M_S2 * self.bin_width_m;
+        let calm_sq = STANDARD_GRAVITY_M_S2 * self.d50_m;
         let (pos, rad): (Vec<Vec3>, Vec<f64>) = (0..p.len())
             .filter(|&i| p.velocity[i].norm_squared() <= calm_sq)
             .map(|i| (p.position[i], p.radius[i]))
             .unzip();
-        let pile = measure_pile(&self.geometry, &pos, &rad, self.bin_width_m).ok();
+        let pile = measure_pile(&self.geometry, &pos, &rad, self.d50_m).ok();
         if let Some(m) = pile {
             self.traces
                 .push("profile_angle", "deg", t, m.profile_angle_deg);
@@ -698,7 +701,7 @@ pub fn run(
         removal,
         removed: 0,
         geometry,
-        bin_width_m: d50,
+        d50_m: d50,
         traces: Traces::default(),
         log: log_file.as_mut(),
         window_s: scene.insertion_interval_s,
