@@ -310,7 +310,7 @@ fn scene() -> impl Strategy<Value = Scene> {
         })
     });
     let pile = (
-        prop::collection::vec(float(), 7),
+        prop::collection::vec(float(), 9),
         any::<u64>(),
         name(),
         name(),
@@ -325,6 +325,8 @@ fn scene() -> impl Strategy<Value = Scene> {
                 particle_count,
                 insertion_rate_per_s: f[5],
                 settle_time_s: f[6],
+                insertion_interval_s: f[7],
+                sample_interval_s: f[8],
                 funnel_material: a,
                 disk_material: b,
             })

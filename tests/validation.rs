@@ -773,4 +773,21 @@ reject!(
     coarse(2.0, 1.0),
     "coarse_graining",
     "must be absent for a pair scene"
+
+// --- static pile: insertion and sampling intervals
+reject!(
+    static_pile_insertion_interval_positive,
+    with_scene(BAFFLE, static_pile()),
+    "/verification/0/scene/insertion_interval_s",
+    Some(json!(0)),
+    "verification[0].scene.insertion_interval_s",
+    "> 0"
+);
+reject!(
+    static_pile_samples_at_insertion_windows,
+    with_scene(BAFFLE, static_pile()),
+    "/verification/0/scene/sample_interval_s",
+    Some(json!(0.001)),
+    "verification[0].scene.sample_interval_s",
+    ">= insertion_interval_s = 0.01"
 );

@@ -266,12 +266,45 @@ pub struct StaticPileScene {
     pub particle_count: u64,
     /// Generation rate, particles per second, > 0 (cai2024: 5000).
     pub insertion_rate_per_s: f64,
-    /// Settling time after the last particle is generated, s.
+    /// Longest settling time after the last particle is generated, s, ≥ 0 (it
+    /// ends earlier once the pile is at rest: the mean kinetic energy per
+    /// particle below 1e-6 of m g d for 0.05 s).
     pub settle_time_s: f64,
+    /// Window of the rate factory, s, > 0: the particles due in each window
+    /// appear together at its end (paper silent; default 0.01, he2019's
+    /// generation interval).
+    #[serde(
+        default = "default_static_pile_insertion_interval_s",
+        skip_serializing_if = "is_default_static_pile_insertion_interval_s"
+    )]
+    pub insertion_interval_s: f64,
+    /// Interval between trace samples and log frames, s, ≥ `insertion_interval_s`
+    /// (rounded to a whole number of insertion windows); default 0.02.
+    #[serde(
+        default = "default_static_pile_sample_interval_s",
+        skip_serializing_if = "is_default_static_pile_sample_interval_s"
+    )]
+    pub sample_interval_s: f64,
     /// Funnel wall material name.
     pub funnel_material: String,
     /// Disk wall material name.
     pub disk_material: String,
+}
+
+fn default_static_pile_insertion_interval_s() -> f64 {
+    0.01
+}
+
+fn is_default_static_pile_insertion_interval_s(v: &f64) -> bool {
+    *v == default_static_pile_insertion_interval_s()
+}
+
+fn default_static_pile_sample_interval_s() -> f64 {
+    0.02
+}
+
+fn is_default_static_pile_sample_interval_s(v: &f64) -> bool {
+    *v == default_static_pile_sample_interval_s()
 }
 
 fn default_drum_settle_max_s() -> f64 {

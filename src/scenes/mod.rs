@@ -7,6 +7,7 @@ pub mod drum;
 pub mod pair;
 pub mod physics;
 pub mod protocol;
+pub mod static_pile;
 
 use std::path::Path;
 
@@ -32,6 +33,9 @@ pub enum SceneError {
     /// The drum scene failed.
     #[error(transparent)]
     Drum(#[from] drum::DrumError),
+    /// The static pile scene failed.
+    #[error(transparent)]
+    StaticPile(#[from] static_pile::StaticPileError),
     /// The run log could not be written.
     #[error(transparent)]
     Log(#[from] LogError),
@@ -49,6 +53,7 @@ pub fn run_experiment(
     let mut result = match &experiment.scene {
         Scene::Pair(scene) => pair::run(experiment, scene, log),
         Scene::Drum(scene) => drum::run(experiment, scene, log),
+        Scene::StaticPile(scene) => static_pile::run(experiment, scene, log),
         other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
     }?;
     result.coarse_graining = physics::coarse_graining_report(experiment);

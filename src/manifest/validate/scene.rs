@@ -236,4 +236,20 @@ fn check_static_pile(c: &mut Checker, path: &str, s: &StaticPileScene) {
     }
     c.positive(&join(path, "insertion_rate_per_s"), s.insertion_rate_per_s);
     c.non_negative(&join(path, "settle_time_s"), s.settle_time_s);
+    c.positive(&join(path, "insertion_interval_s"), s.insertion_interval_s);
+    if s.sample_interval_s.is_finite()
+        && s.insertion_interval_s.is_finite()
+        && s.sample_interval_s < s.insertion_interval_s
+    {
+        c.fail(
+            &join(path, "sample_interval_s"),
+            number(s.sample_interval_s),
+            format!(
+                "must be >= insertion_interval_s = {} (samples are taken at insertion windows)",
+                number(s.insertion_interval_s)
+            ),
+        );
+    } else {
+        c.positive(&join(path, "sample_interval_s"), s.sample_interval_s);
+    }
 }
