@@ -164,7 +164,9 @@ fn sample_refuses_design_kinds_it_does_not_make() {
     let out = repose(tmp.path(), &["sample", path.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(
-        stderr(&out).contains("makes Latin hypercubes (lhs, lhs_optimised) only"),
+        stderr(&out).contains(
+            "design.kind = \"full_factorial\": `repose sample` makes Latin hypercubes (lhs, lhs_optimised) only"
+        ),
         "{}",
         stderr(&out)
     );

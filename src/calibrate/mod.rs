@@ -329,6 +329,15 @@ fn write_output(path: &Path, bytes: &[u8], lineage: &Lineage) -> Result<(), Cali
     Ok(())
 }
 
+/// The name serde gives a unit enum variant (e.g. `full_factorial`), as
+/// manifests and the command line spell it.
+fn serde_name<T: serde::Serialize>(value: T) -> String {
+    match serde_json::to_value(value) {
+        Ok(serde_json::Value::String(s)) => s,
+        other => format!("{other:?}"),
+    }
+}
+
 /// Pretty JSON with a final newline.
 fn json_bytes<T: serde::Serialize>(value: &T) -> Vec<u8> {
     let mut bytes = serde_json::to_vec_pretty(value).expect("stage records serialise");

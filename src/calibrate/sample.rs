@@ -20,8 +20,8 @@ use super::diagnostics::{diagnose, unit_scaled, Diagnostics};
 use super::lhs::{latin_hypercube, optimise, Optimisation, Placement};
 use super::table::{Cell, CsvWriter, Table};
 use super::{
-    create_dir, json_bytes, parameter_names, rng, to_physical, write_file, write_output,
-    CalibrateError, Stage, Stream, StudyDir,
+    create_dir, json_bytes, parameter_names, rng, serde_name, to_physical, write_file,
+    write_output, CalibrateError, Stage, Stream, StudyDir,
 };
 use crate::manifest::{canonical_json, DesignKind, Study};
 
@@ -110,9 +110,9 @@ pub fn sample(
         DesignKind::LhsOptimised => "lhs_optimised",
         DesignKind::FullFactorial | DesignKind::BoxBehnken => {
             return Err(CalibrateError::Unsupported(format!(
-                "design.kind = {:?}: `repose sample` makes Latin hypercubes (lhs, lhs_optimised) only",
-                kind
-            )))
+                "design.kind = \"{}\": `repose sample` makes Latin hypercubes (lhs, lhs_optimised) only",
+                serde_name(kind)
+            )));
         }
     };
     let names = parameter_names(study);

@@ -24,7 +24,8 @@ use super::surrogate::Model;
 use super::svg::scatter_matrix;
 use super::table::{Cell, CsvWriter};
 use super::{
-    parameter_names, rng, to_physical, write_output, CalibrateError, Stage, Stream, StudyDir,
+    parameter_names, rng, serde_name, to_physical, write_output, CalibrateError, Stage, Stream,
+    StudyDir,
 };
 use crate::manifest::Study;
 
@@ -304,12 +305,12 @@ fn markdown(
     let _ = writeln!(
         s,
         "{kept} of {} resampled points predict `{}` within {}% of {} deg; \
-         {:?} kernel, bandwidth {bandwidth:.4} (unit-scaled, {how}).\n",
+         {} kernel, bandwidth {bandwidth:.4} (unit-scaled, {how}).\n",
         settings.samples,
         t.name,
         t.tolerance_fraction * 100.0,
         t.target_angle_deg,
-        settings.kernel
+        serde_name(settings.kernel)
     );
     let _ = writeln!(
         s,

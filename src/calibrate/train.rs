@@ -24,8 +24,8 @@ use super::surrogate::{sweep, Dataset, Scale, Sweep, TrainSettings};
 use super::svg::{parity_plot, ParityPoint};
 use super::table::{parse_number, Cell, CsvWriter, Table};
 use super::{
-    create_dir, file_input, json_bytes, parameter_names, write_output, CalibrateError, Stage,
-    StudyDir,
+    create_dir, file_input, json_bytes, parameter_names, serde_name, write_output, CalibrateError,
+    Stage, StudyDir,
 };
 use crate::manifest::Study;
 use crate::store::Lineage;
@@ -332,10 +332,6 @@ pub const SWEEP_HEADER: [&str; 10] = [
 pub fn sweep_csv(sweep: &Sweep) -> String {
     let mut csv = CsvWriter::new(&SWEEP_HEADER);
     for (i, r) in sweep.rows.iter().enumerate() {
-        let stop = serde_json::to_value(r.lm_stop)
-            .ok()
-            .and_then(|v| v.as_str().map(String::from))
-            .unwrap_or_default();
         csv.row(&[
             Cell::Integer(r.hidden as u64),
             Cell::Number(r.train_r2),
@@ -345,7 +341,7 @@ pub fn sweep_csv(sweep: &Sweep) -> String {
             Cell::Number(r.ga_objective),
             Cell::Number(r.lm_objective),
             Cell::Integer(r.lm_epochs as u64),
-            Cell::Text(stop),
+            Cell::Text(serde_name(r.lm_stop)),
             Cell::Text(if i == sweep.best { "yes" } else { "no" }.to_string()),
         ]);
     }
