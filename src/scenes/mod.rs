@@ -3,6 +3,7 @@
 //! [`run_experiment`] is the runner `repose run` hands to
 //! [`crate::store::Store::run_cached`].
 
+pub mod baffle;
 pub mod drum;
 pub mod pair;
 pub mod physics;
@@ -32,6 +33,9 @@ pub enum SceneError {
     /// The drum scene failed.
     #[error(transparent)]
     Drum(#[from] drum::DrumError),
+    /// The baffle-lift scene failed.
+    #[error(transparent)]
+    Baffle(#[from] baffle::BaffleError),
     /// The run log could not be written.
     #[error(transparent)]
     Log(#[from] LogError),
@@ -49,6 +53,7 @@ pub fn run_experiment(
     match &experiment.scene {
         Scene::Pair(scene) => pair::run(experiment, scene, log),
         Scene::Drum(scene) => drum::run(experiment, scene, log),
+        Scene::BaffleLift(scene) => baffle::run(experiment, scene, log),
         other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
     }
 }

@@ -15,6 +15,12 @@ use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+/// A bed is at rest when its mean kinetic energy per particle is below this
+/// fraction of m g d (the energy of lifting a mean particle by one diameter).
+pub const REST_ENERGY_FRACTION: f64 = 1e-6;
+/// How long a bed must stay below the rest threshold to count as at rest, s.
+pub const REST_HOLD_S: f64 = 0.05;
+
 /// When a phase may end early: the mean kinetic energy per particle (J) stays
 /// below `mean_kinetic_energy_j` for `hold_s` seconds of simulated time.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,6 +29,20 @@ pub struct SettleCriterion {
     pub mean_kinetic_energy_j: f64,
     /// How long the energy must stay below the threshold, s.
     pub hold_s: f64,
+}
+
+impl SettleCriterion {
+    /// The lab scenes' rest criterion for spheres of diameter `diameter_m` (m)
+    /// and density `density_kg_m3` (kg/m³) under gravity `g_m_s2` (m/s²): mean
+    /// kinetic energy per particle below [`REST_ENERGY_FRACTION`] · m g d for
+    /// [`REST_HOLD_S`].
+    pub fn at_rest(density_kg_m3: f64, diameter_m: f64, g_m_s2: f64) -> Self {
+        let mass = density_kg_m3 * std::f64::consts::PI / 6.0 * diameter_m.powi(3);
+        Self {
+            mean_kinetic_energy_j: REST_ENERGY_FRACTION * mass * g_m_s2 * diameter_m,
+            hold_s: REST_HOLD_S,
+        }
+    }
 }
 
 /// One phase of a protocol.
