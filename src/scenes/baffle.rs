@@ -22,7 +22,7 @@
 //! and every sample removes the particles whose centre is off the floor's
 //! extent or more than [`LEAVE_DEPTH_DIAMETERS`] below it
 //! ([`Simulation::retain`]); the simulated domain is padded so that nothing
-//! leaves it between two samples (see [`domain_pad`]). Removed powder is
+//! leaves it between two samples (see `domain_pad`). Removed powder is
 //! counted, never lost from the books: placed = in box + outside on the floor
 //! + removed.
 //!
@@ -90,6 +90,7 @@
 //! is still, so the rest phase often runs its full `settle_time_s`;
 //! `settled_after_lift` says which.
 
+use super::pair::STANDARD_GRAVITY_M_S2;
 use super::physics;
 use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
 use super::SceneError;
@@ -110,8 +111,6 @@ use crate::packing::PackingError;
 use crate::store::RunResult;
 use std::path::Path;
 
-/// Gravitational acceleration, m/s² (−z).
-pub const GRAVITY_M_S2: f64 = 9.81;
 /// Solid fraction of the placement column (random sequential addition
 /// saturates near 0.38 for equal spheres and slows down well before).
 pub const FILL_SOLID_FRACTION: f64 = 0.25;
@@ -127,9 +126,9 @@ pub const FLOOR_BEHIND_DIAMETERS: f64 = 2.0;
 /// fallen off it and is removed.
 pub const LEAVE_DEPTH_DIAMETERS: f64 = 1.0;
 /// A slope fit with R² below this is flagged (`static_angle_low_r2`): a straight
-/// slope of a few dozen surface points fits with R² > 0.95 even with one-diameter
-/// steps (see `measure::baffle`'s tests); below 0.9 the surface is clumpy or
-/// curved and its angle depends on the band.
+/// lattice slope fits with R² > 0.99 despite its one-diameter steps (see
+/// `measure::baffle`'s tests); below 0.9 the surface is clumpy or curved (a
+/// cohesive bed that broke off in blocks) and its angle depends on the band.
 pub const ANGLE_R2_FLOOR: f64 = 0.9;
 
 /// Why a baffle-lift run failed beyond the engine's own errors.
@@ -267,7 +266,7 @@ impl BoxGeometry {
 /// leave the domain and stop the run.
 fn domain_pad(design_speed_m_s: f64, sample_interval_s: f64, d_mean_m: f64) -> f64 {
     let dt = sample_interval_s;
-    2.0 * (design_speed_m_s * dt + 0.5 * GRAVITY_M_S2 * dt * dt) + 2.0 * d_mean_m
+    2.0 * (design_speed_m_s * dt + 0.5 * STANDARD_GRAVITY_M_S2 * dt * dt) + 2.0 * d_mean_m
 }
 
 /// Mass and count of a set of particles.
@@ -385,7 +384,7 @@ pub fn run(
     let setup = SimulationSetup {
         contact,
         density_kg_m3: rho,
-        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -GRAVITY_M_S2)),
+        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -STANDARD_GRAVITY_M_S2)),
         dt_s: plan.dt_s,
         skin_m: 0.1 * d_mean,
         health: HealthLimits::default(),
@@ -398,7 +397,7 @@ pub fn run(
             exp,
             LogOptions {
                 // Free-fall speed over the box height: the fastest outflow.
-                speed_scale_m_s: (2.0 * GRAVITY_M_S2 * scene.box_height_m).sqrt(),
+                speed_scale_m_s: (2.0 * STANDARD_GRAVITY_M_S2 * scene.box_height_m).sqrt(),
                 ..LogOptions::default()
             },
         )?),
@@ -412,7 +411,7 @@ pub fn run(
         removed: Tally::default(),
     };
     let mut progress = Progress::on_stderr();
-    let at_rest = SettleCriterion::at_rest(rho, d_mean, GRAVITY_M_S2);
+    let at_rest = SettleCriterion::at_rest(rho, d_mean, STANDARD_GRAVITY_M_S2);
     let dt = plan.dt_s;
 
     let settle = Phase {
