@@ -269,18 +269,24 @@ fn scene() -> impl Strategy<Value = Scene> {
                 platform_material: b,
             })
         });
-    let baffle = (prop::collection::vec(float(), 6), name(), name()).prop_map(|(f, a, b)| {
-        Scene::BaffleLift(BaffleLiftScene {
-            box_length_m: f[0],
-            box_width_m: f[1],
-            box_height_m: f[2],
-            powder_mass_kg: f[3],
-            lift_speed_m_s: f[4],
-            settle_time_s: f[5],
-            box_material: a,
-            floor_material: b,
-        })
-    });
+    let optional = prop::collection::vec(prop::option::of(float()), 4);
+    let baffle =
+        (prop::collection::vec(float(), 6), optional, name(), name()).prop_map(|(f, o, a, b)| {
+            Scene::BaffleLift(BaffleLiftScene {
+                box_length_m: f[0],
+                box_width_m: f[1],
+                box_height_m: f[2],
+                powder_mass_kg: f[3],
+                lift_speed_m_s: f[4],
+                settle_time_s: f[5],
+                box_material: a,
+                floor_material: b,
+                periodic_slice_m: o[0],
+                floor_overhang_m: o[1],
+                settle_max_s: o[2],
+                sample_interval_s: o[3],
+            })
+        });
     let drum = (prop::collection::vec(float(), 6), name()).prop_map(|(f, w)| {
         Scene::Drum(DrumScene {
             inner_diameter_m: f[0],

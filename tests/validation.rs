@@ -773,6 +773,7 @@ reject!(
     coarse(2.0, 1.0),
     "coarse_graining",
     "must be absent for a pair scene"
+);
 
 // --- static pile: insertion and sampling intervals
 reject!(
@@ -790,4 +791,46 @@ reject!(
     Some(json!(0.001)),
     "verification[0].scene.sample_interval_s",
     ">= insertion_interval_s = 0.01"
+);
+
+// --- baffle_lift optional fields
+reject!(
+    baffle_slice_within_the_box_width,
+    study(),
+    "/verification/0/scene/periodic_slice_m",
+    Some(json!(0.07)),
+    "verification[0].scene.periodic_slice_m",
+    "<= box_width_m = 0.06"
+);
+reject!(
+    baffle_slice_positive,
+    study(),
+    "/verification/0/scene/periodic_slice_m",
+    Some(json!(0)),
+    "verification[0].scene.periodic_slice_m",
+    "> 0"
+);
+reject!(
+    baffle_floor_overhang_positive,
+    study(),
+    "/verification/0/scene/floor_overhang_m",
+    Some(json!(-0.01)),
+    "verification[0].scene.floor_overhang_m",
+    "> 0"
+);
+reject!(
+    baffle_settle_max_positive,
+    study(),
+    "/verification/0/scene/settle_max_s",
+    Some(json!(0)),
+    "verification[0].scene.settle_max_s",
+    "> 0"
+);
+reject!(
+    baffle_sample_interval_at_most_50_ms,
+    study(),
+    "/verification/0/scene/sample_interval_s",
+    Some(json!(0.1)),
+    "verification[0].scene.sample_interval_s",
+    "(0, 0.05]"
 );

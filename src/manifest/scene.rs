@@ -174,12 +174,63 @@ pub struct BaffleLiftScene {
     pub powder_mass_kg: f64,
     /// Baffle lift speed, m/s (he2019: 0.1).
     pub lift_speed_m_s: f64,
-    /// Settling time after the baffle is clear, s.
+    /// Settling time after the baffle is clear, s (it ends earlier once the
+    /// powder is at rest).
     pub settle_time_s: f64,
     /// Box and baffle wall material name (he2019: Plexiglas).
     pub box_material: String,
     /// Floor wall material name.
     pub floor_material: String,
+    /// Thickness of a slice across the box width simulated instead of the whole
+    /// box, periodic along the width (y), m, in (0, box_width_m]; absent: the
+    /// whole box with its two side walls. A slice has no side walls, so it
+    /// leaves out their friction (which steepens a real slope near them) and
+    /// its run-out heap is a ridge rather than a fan; it costs box_width_m /
+    /// slice times fewer particles. The powder mass placed is
+    /// `powder_mass_kg` · slice / box_width_m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub periodic_slice_m: Option<f64>,
+    /// How far the floor reaches past the opening and past each side wall, m, must
+    /// be > 0 (he2019 is silent: the box stands on a bench); powder that runs off
+    /// its edge is removed. Absent: `box_height_m`, which holds the run-out heap
+    /// of a full box at angles down to ~25° (see `scenes::baffle`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor_overhang_m: Option<f64>,
+    /// Longest time the placed powder may take to come to rest before the baffle
+    /// is lifted, s, > 0 (it lifts earlier once the mean kinetic energy per
+    /// particle stays below the rest threshold). Absent: 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settle_max_s: Option<f64>,
+    /// Interval between samples (angle, traces, log frames, removal of powder
+    /// that left the floor), s, in (0, 0.05]. Absent: 0.02.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample_interval_s: Option<f64>,
+}
+
+impl BaffleLiftScene {
+    /// Default of [`Self::settle_max_s`], s.
+    pub const DEFAULT_SETTLE_MAX_S: f64 = 1.0;
+    /// Default of [`Self::sample_interval_s`], s.
+    pub const DEFAULT_SAMPLE_INTERVAL_S: f64 = 0.02;
+    /// Largest [`Self::sample_interval_s`], s: powder leaving the floor must be
+    /// removed before it falls out of the simulated domain (see `scenes::baffle`).
+    pub const MAX_SAMPLE_INTERVAL_S: f64 = 0.05;
+
+    /// The floor's reach past the opening and the side walls, m.
+    pub fn floor_overhang(&self) -> f64 {
+        self.floor_overhang_m.unwrap_or(self.box_height_m)
+    }
+
+    /// Longest pre-lift settling time, s.
+    pub fn settle_max(&self) -> f64 {
+        self.settle_max_s.unwrap_or(Self::DEFAULT_SETTLE_MAX_S)
+    }
+
+    /// Sampling interval, s.
+    pub fn sample_interval(&self) -> f64 {
+        self.sample_interval_s
+            .unwrap_or(Self::DEFAULT_SAMPLE_INTERVAL_S)
+    }
 }
 
 /// Rotating drum: fill, rotate at constant speed, stop and stand (he2019 §3.6.2:

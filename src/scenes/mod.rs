@@ -3,6 +3,7 @@
 //! [`run_experiment`] is the runner `repose run` hands to
 //! [`crate::store::Store::run_cached`].
 
+pub mod baffle;
 pub mod drum;
 pub mod pair;
 pub mod physics;
@@ -36,6 +37,9 @@ pub enum SceneError {
     /// The static pile scene failed.
     #[error(transparent)]
     StaticPile(#[from] static_pile::StaticPileError),
+    /// The baffle-lift scene failed.
+    #[error(transparent)]
+    Baffle(#[from] baffle::BaffleError),
     /// The run log could not be written.
     #[error(transparent)]
     Log(#[from] LogError),
@@ -54,6 +58,7 @@ pub fn run_experiment(
         Scene::Pair(scene) => pair::run(experiment, scene, log),
         Scene::Drum(scene) => drum::run(experiment, scene, log),
         Scene::StaticPile(scene) => static_pile::run(experiment, scene, log),
+        Scene::BaffleLift(scene) => baffle::run(experiment, scene, log),
         other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
     }?;
     result.coarse_graining = physics::coarse_graining_report(experiment);

@@ -139,6 +139,29 @@ fn check_baffle(c: &mut Checker, path: &str, s: &BaffleLiftScene, density_kg_m3:
     c.positive(&join(path, "powder_mass_kg"), s.powder_mass_kg);
     c.positive(&join(path, "lift_speed_m_s"), s.lift_speed_m_s);
     c.non_negative(&join(path, "settle_time_s"), s.settle_time_s);
+    if let Some(slice) = s.periodic_slice_m {
+        c.positive(&join(path, "periodic_slice_m"), slice);
+        if slice.is_finite() && s.box_width_m.is_finite() && slice > s.box_width_m {
+            c.fail(
+                &join(path, "periodic_slice_m"),
+                number(slice),
+                format!("must be <= box_width_m = {}", number(s.box_width_m)),
+            );
+        }
+    }
+    if let Some(v) = s.floor_overhang_m {
+        c.positive(&join(path, "floor_overhang_m"), v);
+    }
+    if let Some(v) = s.settle_max_s {
+        c.positive(&join(path, "settle_max_s"), v);
+    }
+    if let Some(v) = s.sample_interval_s {
+        c.within(
+            &join(path, "sample_interval_s"),
+            v,
+            Interval::open_closed(0.0, BaffleLiftScene::MAX_SAMPLE_INTERVAL_S),
+        );
+    }
     let box_volume = s.box_length_m * s.box_width_m * s.box_height_m;
     let max_mass = box_volume * PACKING_LIMIT * density_kg_m3;
     if max_mass.is_finite() && max_mass > 0.0 && s.powder_mass_kg > max_mass {
