@@ -4,6 +4,7 @@
 //! [`crate::store::Store::run_cached`].
 
 pub mod drum;
+pub mod funnel;
 pub mod pair;
 pub mod physics;
 pub mod protocol;
@@ -32,6 +33,9 @@ pub enum SceneError {
     /// The drum scene failed.
     #[error(transparent)]
     Drum(#[from] drum::DrumError),
+    /// The funnel_pile scene failed.
+    #[error(transparent)]
+    Funnel(#[from] funnel::FunnelError),
     /// The run log could not be written.
     #[error(transparent)]
     Log(#[from] LogError),
@@ -49,6 +53,7 @@ pub fn run_experiment(
     match &experiment.scene {
         Scene::Pair(scene) => pair::run(experiment, scene, log),
         Scene::Drum(scene) => drum::run(experiment, scene, log),
+        Scene::FunnelPile(scene) => funnel::run(experiment, scene, log),
         other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
     }
 }

@@ -25,6 +25,25 @@ pub struct SettleCriterion {
     pub hold_s: f64,
 }
 
+/// A bed is at rest when its mean kinetic energy per particle is below this
+/// fraction of m g d (the energy of lifting a mean particle by one diameter).
+pub const REST_ENERGY_FRACTION: f64 = 1e-6;
+/// How long the bed must stay below that energy to count as at rest, s.
+pub const REST_HOLD_S: f64 = 0.05;
+
+impl SettleCriterion {
+    /// At rest: the mean kinetic energy per particle stays below
+    /// [`REST_ENERGY_FRACTION`] · m g d for [`REST_HOLD_S`], m being the mass
+    /// of a sphere of diameter `diameter_m` (m) and density `density_kg_m3`.
+    pub fn at_rest(density_kg_m3: f64, diameter_m: f64) -> Self {
+        let mass = density_kg_m3 * std::f64::consts::PI / 6.0 * diameter_m.powi(3);
+        Self {
+            mean_kinetic_energy_j: REST_ENERGY_FRACTION * mass * 9.81 * diameter_m,
+            hold_s: REST_HOLD_S,
+        }
+    }
+}
+
 /// One phase of a protocol.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Phase {
