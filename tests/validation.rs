@@ -834,3 +834,76 @@ reject!(
     "verification[0].scene.sample_interval_s",
     "(0, 0.05]"
 );
+
+// --- funnel_pile fields added with the simulated scene (issue 4)
+reject!(
+    funnel_tube_length_positive,
+    study(),
+    "/calibration/scene/outlet_tube_length_m",
+    Some(json!(0)),
+    "calibration.scene.outlet_tube_length_m",
+    "> 0"
+);
+reject!(
+    funnel_tube_clears_the_platform,
+    study(),
+    "/calibration/scene/outlet_tube_length_m",
+    Some(json!(0.07)),
+    "calibration.scene.outlet_height_m",
+    "the tube would reach the platform"
+);
+reject!(
+    funnel_brush_blade_count,
+    study(),
+    "/calibration/scene/brush_blades",
+    Some(json!(9)),
+    "calibration.scene.brush_blades",
+    "1 to 8"
+);
+reject!(
+    funnel_brush_gap_non_negative,
+    study(),
+    "/calibration/scene/brush_gap_m",
+    Some(json!(-0.001)),
+    "calibration.scene.brush_gap_m",
+    ">= 0"
+);
+reject!(
+    funnel_brush_width_positive,
+    study(),
+    "/calibration/scene/brush_width_m",
+    Some(json!(0)),
+    "calibration.scene.brush_width_m",
+    "> 0"
+);
+reject!(
+    funnel_brush_inside_the_funnel,
+    study(),
+    "/calibration/scene/brush_width_m",
+    Some(json!(0.06)),
+    "calibration.scene.brush_width_m",
+    "brush_gap_m + brush_width_m < funnel_top_diameter_m / 2"
+);
+reject!(
+    funnel_fill_height_within_the_cone,
+    study(),
+    "/calibration/scene/fill_height_m",
+    Some(json!(0.2)),
+    "calibration.scene.fill_height_m",
+    "(0, 0.095]"
+);
+reject!(
+    funnel_sample_interval_positive,
+    study(),
+    "/calibration/scene/sample_interval_s",
+    Some(json!(0)),
+    "calibration.scene.sample_interval_s",
+    "> 0"
+);
+
+#[test]
+fn funnel_brush_settings_need_a_brush() {
+    let doc = edit(study(), "/calibration/scene/brush_rpm", None);
+    let doc = edit(doc, "/calibration/scene/brush_gap_m", Some(json!(0.002)));
+    assert_rejects(doc, "calibration.scene.brush_gap_m", "requires brush_rpm");
+}

@@ -5,6 +5,7 @@
 
 pub mod baffle;
 pub mod drum;
+pub mod funnel;
 pub mod pair;
 pub mod physics;
 pub mod protocol;
@@ -40,6 +41,9 @@ pub enum SceneError {
     /// The baffle-lift scene failed.
     #[error(transparent)]
     Baffle(#[from] baffle::BaffleError),
+    /// The funnel_pile scene failed.
+    #[error(transparent)]
+    Funnel(#[from] funnel::FunnelError),
     /// The run log could not be written.
     #[error(transparent)]
     Log(#[from] LogError),
@@ -59,6 +63,7 @@ pub fn run_experiment(
         Scene::Drum(scene) => drum::run(experiment, scene, log),
         Scene::StaticPile(scene) => static_pile::run(experiment, scene, log),
         Scene::BaffleLift(scene) => baffle::run(experiment, scene, log),
+        Scene::FunnelPile(scene) => funnel::run(experiment, scene, log),
         other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
     }?;
     result.coarse_graining = physics::coarse_graining_report(experiment);
