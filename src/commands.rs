@@ -801,13 +801,14 @@ pub fn verify(
     Ok(())
 }
 
-/// The study `repose calibrate` runs without an argument (he2019's PU powder,
-/// its ranges and targets, at the quick profile; see its description).
-pub const DEFAULT_STUDY: &str = include_str!("../experiments/he2019/default.json");
+/// The study `repose calibrate` runs without an argument. For now the smoke
+/// study (a seconds-per-run drum, see its description): the he2019 PU study at
+/// the quick funnel profile is not yet set up to finish in 30 minutes (issue 6).
+pub const DEFAULT_STUDY: &str = include_str!("../experiments/calibrate-smoke/study.json");
 
 /// `repose calibrate [STUDY]`: sample → batch → train → search → verify with
 /// each stage's defaults; without a study, the embedded default is written to
-/// `<store>/he2019-default.json` and calibrated.
+/// `<store>/default-study.json` and calibrated.
 pub fn calibrate(
     store_root: &Path,
     study_path: Option<&Path>,
@@ -819,7 +820,7 @@ pub fn calibrate(
         Some(p) => p.to_path_buf(),
         None => {
             std::fs::create_dir_all(store_root).map_err(StoreError::io(store_root))?;
-            let p = store_root.join("he2019-default.json");
+            let p = store_root.join("default-study.json");
             write_atomic(&p, DEFAULT_STUDY.as_bytes()).map_err(StoreError::io(&p))?;
             writeln!(
                 out,

@@ -80,9 +80,9 @@ enum Command {
         candidates: usize,
     },
     /// The whole he2019 method: sample, batch, train, search, verify. Without a
-    /// study, runs the embedded default (PU powder, quick profile).
+    /// study, runs the embedded default (the calibrate-smoke drum study).
     Calibrate {
-        /// Study manifest [default: the embedded he2019 default].
+        /// Study manifest [default: the embedded smoke study].
         study: Option<PathBuf>,
         /// Runs at once, each single-threaded [default: the number of CPUs].
         #[arg(long)]
