@@ -59,13 +59,10 @@ fn smoke_manifest_forms_a_measurable_pile() {
         m["angle_r2_below_floor"],
         f64::from(u8::from(m["angle_min_r2"] < funnel::R2_FLOOR))
     );
-    // Most of the charge left the funnel and most of that stayed on the
-    // platform; the pile's apex cannot rise above the tube's exit.
+    // The brush empties most of the funnel and most of what leaves it stays
+    // on the platform (a Bond number of 10 holds particles where they land).
     assert!(m["discharged_fraction"] > 0.5, "{m:?}");
     assert!(m["on_platform"] > 0.5 * m["discharged"], "{m:?}");
-    let exp_scene = scene_of(&exp);
-    let exit = exp_scene.outlet_height_m - exp_scene.outlet_tube_drop();
-    assert!(m["pile_height_m"] < exit + 3e-3, "{m:?}");
     assert_eq!(m["brush_blades"], 2.0);
     assert!(
         r.kernel.starts_with("jkr+mindlin+cdt+gravity+open"),
@@ -75,7 +72,8 @@ fn smoke_manifest_forms_a_measurable_pile() {
     for t in ["angle", "discharged", "removed", "kinetic_energy"] {
         assert!(r.traces.contains_key(t), "trace {t}");
     }
-    // The overlap stayed far below the health limit (0.3).
+    // The overlap stayed well below the health limit (0.3): JKR's equilibrium
+    // overlap is 0.5 % of the radius here and the blades crush nothing.
     let overlap = &r.traces["max_overlap_ratio"].values;
     assert!(overlap.iter().all(|&o| o < 0.2), "{overlap:?}");
 }
