@@ -6,8 +6,9 @@
 //! record under a path and checks, for each:
 //! - the output it describes still exists;
 //! - every file input still exists and its bytes hash to the recorded sha256
-//!   (relative paths are tried against the current directory, then against the
-//!   store root's parent — where the stages were run from);
+//!   (relative paths are tried against the store root, the current directory
+//!   and the store root's parent); an input that is a run's
+//!   `<id>/result.json` also has its run checked as below;
 //! - every id input names either a run in the store whose manifest.json hashes
 //!   to that id (and whose result.json, if present, carries the same id), or a
 //!   study.json under the audited path whose content id it is.
@@ -184,6 +185,14 @@ fn check_record(
             }
         } else {
             report.files_checked += 1;
+            if let Some(id) = run_of_result_file(Path::new(&input.id_or_path)) {
+                match check_run(store, &id) {
+                    Ok(()) => {
+                        runs.insert(id);
+                    }
+                    Err(problem) => broken(format!("{label}: {problem}")),
+                }
+            }
             match resolve(store, Path::new(&input.id_or_path)) {
                 None => broken(format!("{label}: file not found")),
                 Some(file) => match std::fs::read(&file) {
@@ -317,13 +326,29 @@ fn walk(dir: &Path, visit: &mut dyn FnMut(&Path)) -> Result<(), AuditError> {
     Ok(())
 }
 
+/// The run whose result.json `path` is (`[...]/<id>/result.json`), if it is one.
+fn run_of_result_file(path: &Path) -> Option<ContentId> {
+    if path.file_name()? != RESULT_FILE {
+        return None;
+    }
+    ContentId::parse(path.parent()?.file_name()?.to_str()?)
+}
+
 /// An input path as recorded, resolved: absolute as is; relative against the
-/// current directory, then against the store root's parent.
+/// store root (where the calibration stages record paths from), the current
+/// directory, then the store root's parent.
 fn resolve(store: &Store, recorded: &Path) -> Option<PathBuf> {
-    if recorded.is_absolute() || recorded.exists() {
+    if recorded.is_absolute() {
         return recorded.exists().then(|| recorded.to_path_buf());
     }
-    let parent = store.root().parent()?;
-    let candidate = parent.join(recorded);
-    candidate.exists().then_some(candidate)
+    let bases = [
+        Some(store.root()),
+        Some(Path::new(".")),
+        store.root().parent(),
+    ];
+    bases
+        .into_iter()
+        .flatten()
+        .map(|b| b.join(recorded))
+        .find(|c| c.exists())
 }

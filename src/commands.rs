@@ -8,10 +8,26 @@ use std::path::{Path, PathBuf};
 
 use crate::audit::{self, AuditError};
 use crate::bench::{self, BenchError, BenchOptions};
+use crate::calibrate::batch::{batch as run_batch, BatchSettings};
+use crate::calibrate::diagnostics::Diagnostics;
+use crate::calibrate::sample::{diagnose_table, sample as run_sample, SampleSettings};
+use crate::calibrate::search::{search as run_search, SearchSettings};
+use crate::calibrate::surrogate::TrainSettings;
+use crate::calibrate::train::DEFAULT_TRAIN_FRACTION;
+use crate::calibrate::train::{train_study, train_table, TableSpec, TrainOptions, TrainOutcome};
+use crate::calibrate::verify::verify as run_verify;
+use crate::calibrate::{CalibrateError, StudyDir};
 use crate::log::{inspect, InspectError};
-use crate::manifest::{read_document, read_experiment, ContentId, DocumentKind, ManifestError};
+use crate::manifest::{
+    read_document, read_experiment, ContentId, Document, DocumentKind, ManifestError, Study,
+};
+use crate::scenes::protocol::{progress_enabled, set_quiet};
 use crate::scenes::run_experiment;
-use crate::store::{CacheOutcome, RunError, RunSummary, Store, StoreError};
+use crate::store::{
+    write_atomic, CacheOutcome, InputRef, Lineage, RunError, RunSummary, Store, StoreError,
+};
+use crate::tradeoff::plan::{plan, Knob, PlanError};
+use crate::tradeoff::{self as tradeoff_sweep, report};
 
 /// Which kind of manifest a file holds, as chosen on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -77,6 +93,13 @@ pub enum CommandError {
     /// The benchmark failed or its options are invalid.
     #[error("bench: {0}")]
     Bench(#[from] BenchError),
+    /// The tradeoff sweep could not be planned (a knob does not apply or makes an
+    /// invalid experiment: refused before anything runs).
+    #[error("tradeoff: {0}")]
+    TradeoffPlan(#[from] PlanError),
+    /// A command-line option is malformed (the message names it).
+    #[error("{0}")]
+    Usage(String),
     /// The audit could not run.
     #[error("audit: {0}")]
     Audit(#[from] AuditError),
@@ -87,6 +110,18 @@ pub enum CommandError {
         broken: usize,
         /// Re-runs that did not reproduce their stored outputs.
         differing: usize,
+    },
+    /// A calibration stage failed or its options are invalid.
+    #[error(transparent)]
+    Calibrate(#[from] CalibrateError),
+    /// Some runs of a batch failed (each recorded in its error.json; the
+    /// table was written with their status).
+    #[error("{failed} of {total} run(s) failed; rerun `repose batch` to retry them")]
+    BatchIncomplete {
+        /// Failed runs.
+        failed: usize,
+        /// Runs in the design.
+        total: usize,
     },
 }
 
@@ -99,10 +134,13 @@ impl CommandError {
             CommandError::Store(e) => e.is_invalid_input(),
             CommandError::Inspect(e) => e.is_invalid_input(),
             CommandError::Bench(e) => e.is_invalid_input(),
+            CommandError::TradeoffPlan(_) | CommandError::Usage(_) => true,
             CommandError::Audit(AuditError::Path { .. } | AuditError::NothingToAudit(_)) => true,
             CommandError::Audit(AuditError::Store(e)) => e.is_invalid_input(),
+            CommandError::Calibrate(e) => e.is_invalid_input(),
             CommandError::RunFailed { .. }
             | CommandError::Output(_)
+            | CommandError::BatchIncomplete { .. }
             | CommandError::AuditFailed { .. } => false,
         };
         if invalid {
@@ -389,4 +427,429 @@ pub fn audit(
             differing: report.reruns.iter().filter(|r| !r.identical()).count(),
         })
     }
+}
+
+/// Options of `repose tradeoff`.
+#[derive(Debug, Clone)]
+pub struct TradeoffOptions {
+    /// Knobs to sweep, each with its values (finest first).
+    pub knobs: Vec<Knob>,
+    /// Replicates per point (packing seeds), ≥ 2.
+    pub replicates: usize,
+    /// Runs in parallel.
+    pub threads: usize,
+    /// Output directory (default `<store>/tradeoff/<first 12 hex of the base id>`).
+    pub out_dir: Option<PathBuf>,
+}
+
+/// `repose tradeoff MANIFEST`: sweeps fidelity knobs around the manifest's
+/// scene (see [`crate::tradeoff`]), writes tradeoff.csv / .md / .svg with a
+/// lineage record, and prints the Markdown table.
+pub fn tradeoff(
+    store_root: &Path,
+    manifest: &Path,
+    options: &TradeoffOptions,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
+    let points = plan(&base, &options.knobs, options.replicates)?;
+    let store = Store::open(store_root)?;
+    let total: usize = points.iter().map(|p| p.replicates.len()).sum();
+    let done = points
+        .iter()
+        .flat_map(|p| &p.replicates)
+        .filter(|e| store.run_dir(&e.id()).result_path().is_file())
+        .count();
+    eprintln!(
+        "tradeoff: {} points x {} replicates = {total} runs ({done} already complete) on {} thread(s)",
+        points.len(),
+        options.replicates,
+        options.threads
+    );
+    let outcomes = tradeoff_sweep::run(&store, &points, options.threads);
+    let rows = tradeoff_sweep::summarise(&points, &outcomes);
+    let dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| store.root().join("tradeoff").join(base.id().short(12)));
+    std::fs::create_dir_all(&dir).map_err(StoreError::io(&dir))?;
+    let title = format!(
+        "What accuracy costs: {} ({})",
+        base.scene.kind(),
+        manifest.display()
+    );
+    let csv_path = dir.join("tradeoff.csv");
+    let outputs = [
+        (csv_path.clone(), report::csv(&rows)),
+        (dir.join("tradeoff.md"), report::markdown(&rows, &title)),
+        (dir.join("tradeoff.svg"), report::svg(&rows, &title)),
+    ];
+    let mut lineage = Lineage::new(
+        "tradeoff",
+        serde_json::json!({
+            "knobs": options.knobs.iter().map(|k| (k.name, k.values.clone())).collect::<Vec<_>>(),
+            "replicates": options.replicates,
+        }),
+    )
+    .with_input(InputRef::file("base_manifest", manifest)?);
+    for row in &rows {
+        for id in &row.ids {
+            lineage = lineage.with_input(InputRef::id(row.label.clone(), id));
+        }
+    }
+    for (path, text) in &outputs {
+        write_atomic(path, text.as_bytes()).map_err(StoreError::io(path))?;
+        lineage.write_beside(path)?;
+    }
+    write!(out, "{}", report::markdown(&rows, &title))?;
+    writeln!(out, "\nwritten: {}", dir.display())?;
+    Ok(())
+}
+
+/// Reads and validates a study manifest.
+fn read_study(path: &Path) -> Result<Study, CommandError> {
+    match read_document(path, Some(DocumentKind::Study)).map_err(manifest_error(path))? {
+        Document::Study(study) => Ok(study),
+        Document::Experiment(_) => unreachable!("read as a study"),
+    }
+}
+
+/// The study and its output directory in the store.
+fn open_study(store_root: &Path, path: &Path) -> Result<(Study, StudyDir), CommandError> {
+    let study = read_study(path)?;
+    let dir = StudyDir::new(store_root, &study, path);
+    Ok((study, dir))
+}
+
+/// Prints design diagnostics to `out` and their warnings to `err`.
+fn write_diagnostics(
+    d: &Diagnostics,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<(), CommandError> {
+    writeln!(
+        out,
+        "  points: {}  columns: {}",
+        d.points,
+        d.columns.join(", ")
+    )?;
+    writeln!(
+        out,
+        "  centred L2 discrepancy (squared, Hickernell 1998): {:.6}",
+        d.centred_l2_discrepancy_squared
+    )?;
+    writeln!(
+        out,
+        "  minimum pairwise distance (unit cube): {:.6}",
+        d.min_pairwise_distance
+    )?;
+    for (label, pair) in [
+        ("Pearson", &d.max_abs_pearson),
+        ("Spearman", &d.max_abs_spearman),
+    ] {
+        match pair {
+            Some(p) => writeln!(
+                out,
+                "  max |{label}| correlation: {:.4} ({} vs {})",
+                p.r, p.a, p.b
+            )?,
+            None => writeln!(out, "  max |{label}| correlation: undefined")?,
+        }
+    }
+    for w in &d.warnings {
+        writeln!(err, "warning: {w}")?;
+    }
+    Ok(())
+}
+
+/// `repose sample STUDY`: the study's Latin hypercube, one experiment manifest
+/// per sample, and the design's diagnostics.
+pub fn sample(
+    store_root: &Path,
+    study_path: &Path,
+    settings: &SampleSettings,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_study(store_root, study_path)?;
+    let outcome = run_sample(&dir, &study, settings)?;
+    writeln!(
+        out,
+        "sampled {} points of {} parameter(s) for study {} ({})",
+        outcome.points.len(),
+        outcome.parameters.len(),
+        study.name,
+        dir.id().short(12)
+    )?;
+    if let Some(o) = &outcome.optimisation {
+        writeln!(
+            out,
+            "  optimised: {} of {} exchanges kept, phi_p {:.4} -> {:.4}",
+            o.accepted, o.iterations, o.initial_phi_p, o.final_phi_p
+        )?;
+    }
+    write_diagnostics(&outcome.diagnostics, out, err)?;
+    writeln!(out, "  design: {}", outcome.design_file.display())?;
+    Ok(())
+}
+
+/// `repose sample --diagnose TABLE`: design diagnostics of a CSV table.
+pub fn sample_diagnose(
+    table: &Path,
+    columns: Option<&[String]>,
+    strong_correlation: f64,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let d = diagnose_table(table, columns, strong_correlation)?;
+    writeln!(
+        out,
+        "diagnostics of {} (each column scaled by its own min-max)",
+        table.display()
+    )?;
+    write_diagnostics(&d, out, err)?;
+    if d.degenerate {
+        writeln!(out, "  DEGENERATE: columns with rank correlation ±1")?;
+    }
+    Ok(())
+}
+
+/// `repose batch STUDY`: runs every sampled experiment not yet complete
+/// (`jobs` at a time, each single-threaded) and writes the angle table. The
+/// progress bar replaces the runs' own progress lines, which are silenced.
+pub fn batch(
+    store_root: &Path,
+    study_path: &Path,
+    jobs: usize,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_study(store_root, study_path)?;
+    let store = Store::open(store_root)?;
+    let settings = BatchSettings {
+        jobs,
+        progress: progress_enabled(),
+    };
+    set_quiet(true);
+    let outcome = run_batch(&dir, &study, &store, &settings, |e, run_dir| {
+        run_experiment(e, Some(&run_dir.mcap_path()))
+    })?;
+    writeln!(
+        out,
+        "{} samples: {} complete before, {} computed, {} failed",
+        outcome.total,
+        outcome.cached,
+        outcome.computed,
+        outcome.failures.len()
+    )?;
+    for f in &outcome.failures {
+        writeln!(
+            out,
+            "  sample {} ({}) failed: {}",
+            f.index,
+            f.id.short(12),
+            f.message
+        )?;
+    }
+    writeln!(out, "  angles: {}", outcome.table.display())?;
+    if !outcome.failures.is_empty() {
+        return Err(CommandError::BatchIncomplete {
+            failed: outcome.failures.len(),
+            total: outcome.total,
+        });
+    }
+    Ok(())
+}
+
+/// Prints a training sweep (the Fig. 12 table) and where it was written.
+fn write_sweep(outcome: &TrainOutcome, out: &mut dyn Write) -> Result<(), CommandError> {
+    writeln!(
+        out,
+        "{} training rows, {} validation rows{}",
+        outcome.train_rows,
+        outcome.validation_rows,
+        if outcome.skipped > 0 {
+            format!(", {} without an angle left out", outcome.skipped)
+        } else {
+            String::new()
+        }
+    )?;
+    writeln!(
+        out,
+        "{:>6}  {:>9}  {:>9}  {:>11}  {:>9}",
+        "hidden", "train R2", "valid R2", "valid RMSE", "LM steps"
+    )?;
+    for (i, r) in outcome.sweep.rows.iter().enumerate() {
+        writeln!(
+            out,
+            "{:>6}  {:>9.4}  {:>9.4}  {:>11.3}  {:>9}{}",
+            r.hidden,
+            r.train_r2,
+            r.validation_r2,
+            r.validation_rmse_deg,
+            r.lm_epochs,
+            if i == outcome.sweep.best {
+                "  <- kept"
+            } else {
+                ""
+            }
+        )?;
+    }
+    let best = &outcome.sweep.rows[outcome.sweep.best];
+    writeln!(
+        out,
+        "kept: {} hidden neurons, validation R2 {:.4} (Eq. 7)",
+        best.hidden, best.validation_r2
+    )?;
+    if best.validation_r2 < 0.9 {
+        writeln!(
+            out,
+            "note: below the R2 >= 0.9 that he2019 (§3.4) requires before using the network"
+        )?;
+    }
+    if let Some(r) = outcome.reference_r2 {
+        writeln!(
+            out,
+            "reference predictions on the validation rows: R2 {r:.4} (Eq. 7)"
+        )?;
+    }
+    writeln!(out, "outputs: {}", outcome.out_dir.display())?;
+    Ok(())
+}
+
+/// `repose train STUDY`: the GA-BP hidden-size sweep on the batch's angles;
+/// without `seed`, the genetic algorithm is seeded by the study's design seed.
+pub fn train(
+    store_root: &Path,
+    study_path: &Path,
+    options: &TrainOptions,
+    seed: Option<u64>,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_study(store_root, study_path)?;
+    let mut options = *options;
+    options.settings.seed = seed.unwrap_or(study.design.seed);
+    let outcome = train_study(&dir, &study, &options)?;
+    write_sweep(&outcome, out)
+}
+
+/// `repose train --table FILE`: the same sweep on a CSV table.
+pub fn train_on_table(
+    spec: &TableSpec,
+    out_dir: &Path,
+    options: &TrainOptions,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let outcome = train_table(spec, out_dir, options)?;
+    write_sweep(&outcome, out)
+}
+
+/// `repose search STUDY`: tolerance search over the trained network and
+/// mean-shift clusters of the kept points (the Table 2 equivalent); without
+/// `seed`, the resampling is seeded by the study's design seed.
+pub fn search(
+    store_root: &Path,
+    study_path: &Path,
+    settings: &SearchSettings,
+    seed: Option<u64>,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_study(store_root, study_path)?;
+    let mut settings = *settings;
+    settings.seed = seed.unwrap_or(study.design.seed);
+    let outcome = run_search(&dir, &study, &settings)?;
+    write!(out, "{}", outcome.markdown)?;
+    writeln!(
+        out,
+        "\n{} distinct modes merged into {} cluster(s); outputs: {}",
+        outcome.modes,
+        outcome.clusters.len(),
+        outcome.out_dir.display()
+    )?;
+    Ok(())
+}
+
+/// `repose verify STUDY`: re-simulates the `candidates` largest clusters'
+/// centres in the calibration scene and every verification scene (he2019
+/// Table 3); prints the table. A candidate outside tolerance is a finding,
+/// not an error; a failed run makes the command fail after the table.
+pub fn verify(
+    store_root: &Path,
+    study_path: &Path,
+    jobs: usize,
+    candidates: usize,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_study(store_root, study_path)?;
+    let store = Store::open(store_root)?;
+    let settings = BatchSettings {
+        jobs,
+        progress: progress_enabled(),
+    };
+    set_quiet(true);
+    let outcome = run_verify(&dir, &study, &store, &settings, candidates, |e, run_dir| {
+        run_experiment(e, Some(&run_dir.mcap_path()))
+    })?;
+    write!(out, "{}", outcome.markdown)?;
+    writeln!(out, "  table: {}", outcome.table.display())?;
+    let failed = outcome.rows.iter().filter(|r| r.failure.is_some()).count();
+    if failed > 0 {
+        return Err(CommandError::BatchIncomplete {
+            failed,
+            total: outcome.rows.len(),
+        });
+    }
+    Ok(())
+}
+
+/// The study `repose calibrate` runs without an argument. For now the smoke
+/// study (a seconds-per-run drum, see its description): the he2019 PU study at
+/// the quick funnel profile is not yet set up to finish in 30 minutes (issue 6).
+pub const DEFAULT_STUDY: &str = include_str!("../experiments/calibrate-smoke/study.json");
+
+/// `repose calibrate [STUDY]`: sample → batch → train → search → verify with
+/// each stage's defaults; without a study, the embedded default is written to
+/// `<store>/default-study.json` and calibrated.
+pub fn calibrate(
+    store_root: &Path,
+    study_path: Option<&Path>,
+    jobs: usize,
+    candidates: usize,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let path = match study_path {
+        Some(p) => p.to_path_buf(),
+        None => {
+            std::fs::create_dir_all(store_root).map_err(StoreError::io(store_root))?;
+            let p = store_root.join("default-study.json");
+            write_atomic(&p, DEFAULT_STUDY.as_bytes()).map_err(StoreError::io(&p))?;
+            writeln!(
+                out,
+                "calibrating the embedded default study ({})",
+                p.display()
+            )?;
+            p
+        }
+    };
+    let study = read_study(&path)?;
+    let mut err = io::stderr();
+    writeln!(out, "\n== 1/5 sample")?;
+    sample(store_root, &path, &SampleSettings::default(), out, &mut err)?;
+    writeln!(out, "\n== 2/5 batch ({jobs} at a time)")?;
+    batch(store_root, &path, jobs, out)?;
+    writeln!(out, "\n== 3/5 train")?;
+    let options = TrainOptions {
+        settings: TrainSettings::with_seed(study.design.seed),
+        train_fraction: DEFAULT_TRAIN_FRACTION,
+    };
+    train(store_root, &path, &options, None, out)?;
+    writeln!(out, "\n== 4/5 search")?;
+    search(
+        store_root,
+        &path,
+        &SearchSettings::with_seed(study.design.seed),
+        None,
+        out,
+    )?;
+    writeln!(out, "\n== 5/5 verify ({candidates} candidate(s))")?;
+    verify(store_root, &path, jobs, candidates, out)
 }

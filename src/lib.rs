@@ -18,6 +18,7 @@
 
 pub mod audit;
 pub mod bench;
+pub mod calibrate;
 pub mod commands;
 pub mod dem;
 pub mod log;
@@ -26,3 +27,4 @@ pub mod measure;
 pub mod packing;
 pub mod scenes;
 pub mod store;
+pub mod tradeoff;

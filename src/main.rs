@@ -8,9 +8,18 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use repose::bench::BenchOptions;
-use repose::commands::{self, CommandError, KindArg};
+use repose::calibrate::genetic::GaSettings;
+use repose::calibrate::levenberg::LmSettings;
+use repose::calibrate::lhs::Placement;
+use repose::calibrate::meanshift::Kernel;
+use repose::calibrate::sample::SampleSettings;
+use repose::calibrate::search::SearchSettings;
+use repose::calibrate::surrogate::TrainSettings;
+use repose::calibrate::train::{TableSpec, TrainOptions, DEFAULT_TRAIN_FRACTION};
+use repose::commands::{self, CommandError, KindArg, TradeoffOptions};
 use repose::dem::simulation::{NormalChoice, RollingChoice};
 use repose::store::{DEFAULT_STORE, STORE_ENV};
+use repose::tradeoff::plan::{Knob, KNOB_NAMES};
 
 /// Reproducible calibration of DEM particle parameters against angle-of-repose tests.
 #[derive(Parser)]
@@ -58,6 +67,34 @@ enum Command {
     /// Time the engine on the dense-bed benchmark of ../shared/bench (settle, warm up,
     /// timed segments); progress on stderr.
     Bench(BenchArgs),
+    /// Re-simulate the search's cluster centres in the calibration and
+    /// verification scenes and compare with the measured angles (he2019 Table 3).
+    Verify {
+        /// Study manifest.
+        study: PathBuf,
+        /// Runs at once, each single-threaded [default: the number of CPUs].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// How many clusters (largest first) to verify.
+        #[arg(long, default_value_t = 3)]
+        candidates: usize,
+    },
+    /// The whole he2019 method: sample, batch, train, search, verify. Without a
+    /// study, runs the embedded default (the calibrate-smoke drum study).
+    Calibrate {
+        /// Study manifest [default: the embedded smoke study].
+        study: Option<PathBuf>,
+        /// Runs at once, each single-threaded [default: the number of CPUs].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// How many clusters (largest first) to verify.
+        #[arg(long, default_value_t = 3)]
+        candidates: usize,
+    },
+    /// Measure what accuracy costs in time: sweep fidelity knobs around a scene
+    /// manifest (one at a time, R replicates each) and tabulate angle error vs the
+    /// finest setting against wall time, with the Pareto front.
+    Tradeoff(TradeoffArgs),
     /// Walk a study's outputs back to their manifests through the lineage records,
     /// re-hash every input file and check every referenced run; optionally re-run
     /// some runs and check they reproduce byte for byte.
@@ -76,6 +113,205 @@ enum Command {
         #[command(subcommand)]
         command: RunsCommand,
     },
+    /// Latin hypercube over a study's calibrated parameters (he2019 §3.1): one
+    /// experiment manifest per sample, design diagnostics; or, with --diagnose,
+    /// the diagnostics of a CSV table.
+    Sample(SampleArgs),
+    /// Run every sampled experiment not yet complete (cached, resumable) and
+    /// write the simulated-angle table.
+    Batch {
+        /// Study manifest.
+        study: PathBuf,
+        /// Runs at once, each single-threaded [default: the number of CPUs].
+        #[arg(long)]
+        jobs: Option<usize>,
+    },
+    /// Train the GA-BP network on the batch's angles (he2019 §3.2–3.4), sweeping
+    /// the hidden size; or, with --table, on a CSV table.
+    Train(TrainArgs),
+    /// Predict resampled points, keep those within the target tolerance and
+    /// cluster them by mean shift (he2019 §3.5, Table 2).
+    Search(SearchArgs),
+}
+
+/// Options of `repose sample`.
+#[derive(clap::Args)]
+struct SampleArgs {
+    /// Study manifest.
+    #[arg(required_unless_present = "diagnose", conflicts_with = "diagnose")]
+    study: Option<PathBuf>,
+    /// Diagnose the points of this CSV table instead of sampling (each column
+    /// scaled by its own min-max).
+    #[arg(long, value_name = "TABLE")]
+    diagnose: Option<PathBuf>,
+    /// Table columns to diagnose, comma-separated [default: every numeric column].
+    #[arg(long, value_delimiter = ',', requires = "diagnose")]
+    columns: Option<Vec<String>>,
+    /// Where a sample sits in its stratum: midpoint (he2019 §3.1 step 1) or
+    /// random (Eq. 4).
+    #[arg(long, value_enum, default_value = "midpoint")]
+    placement: Placement,
+    /// Exchanges tried by the lhs_optimised design.
+    #[arg(long, default_value_t = 5000)]
+    optimise_iterations: usize,
+    /// Warn when two columns' |correlation| reaches this.
+    #[arg(long, default_value_t = repose::calibrate::diagnostics::STRONG_CORRELATION)]
+    max_correlation: f64,
+}
+
+/// Options of `repose train`.
+#[derive(clap::Args)]
+struct TrainArgs {
+    /// Study manifest.
+    #[arg(required_unless_present = "table", conflicts_with = "table")]
+    study: Option<PathBuf>,
+    /// Train on this CSV table instead of a study's batch.
+    #[arg(long, requires_all = ["inputs", "target", "out"])]
+    table: Option<PathBuf>,
+    /// Input columns of the table, comma-separated.
+    #[arg(long, value_delimiter = ',')]
+    inputs: Option<Vec<String>>,
+    /// Target column of the table (the angle, degrees).
+    #[arg(long)]
+    target: Option<String>,
+    /// Column of printed predictions to score on the validation rows (Eq. 7).
+    #[arg(long)]
+    reference: Option<String>,
+    /// Output directory for --table.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Fraction of the rows, in design order, that trains; the rest validates.
+    #[arg(long, default_value_t = DEFAULT_TRAIN_FRACTION)]
+    train_fraction: f64,
+    /// Smallest hidden size of the sweep.
+    #[arg(long, default_value_t = 3)]
+    hidden_min: usize,
+    /// Largest hidden size of the sweep.
+    #[arg(long, default_value_t = 12)]
+    hidden_max: usize,
+    /// Seed of the genetic algorithm [default: the study's design seed; 0 for a table].
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Ridge penalty on weights and thresholds (scaled units).
+    #[arg(long, default_value_t = 0.0)]
+    weight_decay: f64,
+    /// Genetic algorithm population.
+    #[arg(long, default_value_t = GaSettings::default().population)]
+    ga_population: usize,
+    /// Genetic algorithm generations.
+    #[arg(long, default_value_t = GaSettings::default().generations)]
+    ga_generations: usize,
+    /// Levenberg-Marquardt steps.
+    #[arg(long, default_value_t = LmSettings::default().epochs)]
+    lm_epochs: usize,
+}
+
+impl TrainArgs {
+    fn options(&self) -> TrainOptions {
+        let mut settings = TrainSettings::with_seed(self.seed.unwrap_or(0));
+        settings.hidden_min = self.hidden_min;
+        settings.hidden_max = self.hidden_max;
+        settings.weight_decay = self.weight_decay;
+        settings.ga.population = self.ga_population;
+        settings.ga.generations = self.ga_generations;
+        settings.lm.epochs = self.lm_epochs;
+        TrainOptions {
+            settings,
+            train_fraction: self.train_fraction,
+        }
+    }
+}
+
+/// Options of `repose search`.
+#[derive(clap::Args)]
+struct SearchArgs {
+    /// Study manifest.
+    study: PathBuf,
+    /// Resampled points.
+    #[arg(long, default_value_t = 300)]
+    samples: usize,
+    /// Seed of the resampling [default: the study's design seed].
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Where a resampled point sits in its stratum.
+    #[arg(long, value_enum, default_value = "random")]
+    placement: Placement,
+    /// Mean-shift kernel.
+    #[arg(long, value_enum, default_value = "flat")]
+    kernel: Kernel,
+    /// Bandwidth in unit-scaled parameters [default: estimated].
+    #[arg(long)]
+    bandwidth: Option<f64>,
+    /// Quantile of the bandwidth estimate (k-th nearest neighbour, k = n * quantile).
+    #[arg(long, default_value_t = 0.3)]
+    quantile: f64,
+}
+
+/// Options of `repose tradeoff`.
+#[derive(clap::Args)]
+struct TradeoffArgs {
+    /// Experiment manifest of the scene (a lab scene).
+    manifest: PathBuf,
+    /// Knobs to sweep (rayleigh_fraction, youngs_modulus_factor, size_factor,
+    /// periodic_slices), comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "rayleigh_fraction,youngs_modulus_factor,size_factor"
+    )]
+    knobs: Vec<String>,
+    /// Values of one knob, finest first, as KNOB=V1,V2,... (repeatable); others
+    /// use their presets.
+    #[arg(long = "values")]
+    values: Vec<String>,
+    /// Replicates (packing seeds) per point, >= 2.
+    #[arg(long, default_value_t = 3)]
+    replicates: usize,
+    /// Runs in parallel.
+    #[arg(long, default_value_t = 2)]
+    threads: usize,
+    /// Output directory (default <store>/tradeoff/<base id prefix>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+impl TradeoffArgs {
+    fn options(&self) -> Result<TradeoffOptions, String> {
+        let mut knobs = Vec::new();
+        for name in &self.knobs {
+            let knob = Knob::preset(name).ok_or_else(|| {
+                format!(
+                    "--knobs: `{name}` is not a knob; known: {}",
+                    KNOB_NAMES.join(", ")
+                )
+            })?;
+            knobs.push(knob);
+        }
+        for spec in &self.values {
+            let (name, list) = spec
+                .split_once('=')
+                .ok_or_else(|| format!("--values `{spec}`: expected KNOB=V1,V2,..."))?;
+            let values = list
+                .split(',')
+                .map(|v| v.trim().parse::<f64>())
+                .collect::<Result<Vec<f64>, _>>()
+                .map_err(|e| format!("--values `{spec}`: {e}"))?;
+            if values.len() < 2 {
+                return Err(format!("--values `{spec}`: needs at least two values"));
+            }
+            let slot = knobs
+                .iter_mut()
+                .find(|k| k.name == name)
+                .ok_or_else(|| format!("--values `{spec}`: `{name}` is not among --knobs"))?;
+            *slot = slot.clone().with_values(values);
+        }
+        Ok(TradeoffOptions {
+            knobs,
+            replicates: self.replicates,
+            threads: self.threads,
+            out_dir: self.out.clone(),
+        })
+    }
 }
 
 /// Options of `repose bench`.
@@ -188,6 +424,26 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             };
             commands::bench(&args.options(), args.json, &mut out, &mut progress)
         }
+        Command::Verify {
+            study,
+            jobs,
+            candidates,
+        } => commands::verify(&cli.store, &study, default_jobs(jobs), candidates, &mut out),
+        Command::Calibrate {
+            study,
+            jobs,
+            candidates,
+        } => commands::calibrate(
+            &cli.store,
+            study.as_deref(),
+            default_jobs(jobs),
+            candidates,
+            &mut out,
+        ),
+        Command::Tradeoff(args) => {
+            let options = args.options().map_err(CommandError::Usage)?;
+            commands::tradeoff(&cli.store, &args.manifest, &options, &mut out)
+        }
         Command::Audit { path, rerun, seed } => {
             commands::audit(&cli.store, &path, rerun, seed, &mut out)
         }
@@ -197,7 +453,77 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         Command::Runs {
             command: RunsCommand::Show { prefix },
         } => commands::runs_show(&cli.store, &prefix, &mut out),
+        Command::Sample(args) => sample(&cli.store, args, &mut out),
+        Command::Batch { study, jobs } => {
+            commands::batch(&cli.store, &study, default_jobs(jobs), &mut out)
+        }
+        Command::Train(args) => train(&cli.store, args, &mut out),
+        Command::Search(args) => {
+            let settings = SearchSettings {
+                samples: args.samples,
+                seed: 0,
+                placement: args.placement,
+                kernel: args.kernel,
+                bandwidth: args.bandwidth,
+                quantile: args.quantile,
+            };
+            commands::search(&cli.store, &args.study, &settings, args.seed, &mut out)
+        }
     }
+}
+
+fn sample(
+    store: &std::path::Path,
+    args: SampleArgs,
+    out: &mut dyn io::Write,
+) -> Result<(), CommandError> {
+    let mut err = io::stderr();
+    match (&args.diagnose, &args.study) {
+        (Some(table), _) => commands::sample_diagnose(
+            table,
+            args.columns.as_deref(),
+            args.max_correlation,
+            out,
+            &mut err,
+        ),
+        (None, Some(study)) => {
+            let settings = SampleSettings {
+                placement: args.placement,
+                optimise_iterations: args.optimise_iterations,
+                strong_correlation: args.max_correlation,
+            };
+            commands::sample(store, study, &settings, out, &mut err)
+        }
+        (None, None) => unreachable!("clap requires STUDY or --diagnose"),
+    }
+}
+
+fn train(
+    store: &std::path::Path,
+    args: TrainArgs,
+    out: &mut dyn io::Write,
+) -> Result<(), CommandError> {
+    let options = args.options();
+    match (&args.table, &args.study) {
+        (Some(table), _) => {
+            let inputs = args.inputs.clone().unwrap_or_default();
+            let spec = TableSpec {
+                path: table,
+                inputs: &inputs,
+                target: args.target.as_deref().unwrap_or_default(),
+                reference: args.reference.as_deref(),
+            };
+            let out_dir = args.out.clone().unwrap_or_default();
+            commands::train_on_table(&spec, &out_dir, &options, out)
+        }
+        (None, Some(study)) => commands::train(store, study, &options, args.seed, out),
+        (None, None) => unreachable!("clap requires STUDY or --table"),
+    }
+}
+
+/// `--jobs`, or the number of CPUs.
+fn default_jobs(jobs: Option<usize>) -> usize {
+    jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
 fn main() -> ExitCode {

@@ -36,6 +36,17 @@ fn setup(tmp: &Path) -> (Store, std::path::PathBuf) {
         .with_input(InputRef::id("run", &experiment.id()))
         .write_beside(&table)
         .unwrap();
+    // A second table names the run by its result file, relative to the store
+    // root (as the calibration stages record it).
+    let result = store.run_dir(&experiment.id()).result_path();
+    let mut by_file = InputRef::file("run_result", &result).unwrap();
+    by_file.id_or_path = format!("{}/result.json", experiment.id());
+    let fit = out.join("fit.csv");
+    fs::write(&fit, "x\n").unwrap();
+    Lineage::new("train", serde_json::json!({}))
+        .with_input(by_file)
+        .write_beside(&fit)
+        .unwrap();
     (store, out)
 }
 
@@ -44,8 +55,8 @@ fn a_clean_chain_passes_and_reruns_reproduce() {
     let tmp = tempfile::tempdir().unwrap();
     let (store, out) = setup(tmp.path());
     let report = audit(&store, &out, 1, 0).unwrap();
-    assert_eq!(report.records, 1);
-    assert_eq!(report.files_checked, 1);
+    assert_eq!(report.records, 2);
+    assert_eq!(report.files_checked, 2);
     assert_eq!(report.runs_checked, 1);
     assert_eq!(report.reruns.len(), 1);
     assert!(report.is_clean(), "{report:#?}");

@@ -258,29 +258,41 @@ fn scene() -> impl Strategy<Value = Scene> {
                 funnel_height_m: f[2],
                 outlet_tilt_deg: f[3],
                 outlet_height_m: f[4],
+                outlet_tube_length_m: None,
                 platform_diameter_m: f[5],
                 brush_rpm,
+                brush_blades: None,
+                brush_gap_m: None,
+                brush_width_m: None,
                 fill_fraction: f[6],
+                fill_height_m: None,
                 fill_time_s: f[7],
                 standing_time_s: f[8],
                 total_time_s: f[9],
                 settle_time_s: f[10],
+                sample_interval_s: None,
                 funnel_material: a,
                 platform_material: b,
             })
         });
-    let baffle = (prop::collection::vec(float(), 6), name(), name()).prop_map(|(f, a, b)| {
-        Scene::BaffleLift(BaffleLiftScene {
-            box_length_m: f[0],
-            box_width_m: f[1],
-            box_height_m: f[2],
-            powder_mass_kg: f[3],
-            lift_speed_m_s: f[4],
-            settle_time_s: f[5],
-            box_material: a,
-            floor_material: b,
-        })
-    });
+    let optional = prop::collection::vec(prop::option::of(float()), 4);
+    let baffle =
+        (prop::collection::vec(float(), 6), optional, name(), name()).prop_map(|(f, o, a, b)| {
+            Scene::BaffleLift(BaffleLiftScene {
+                box_length_m: f[0],
+                box_width_m: f[1],
+                box_height_m: f[2],
+                powder_mass_kg: f[3],
+                lift_speed_m_s: f[4],
+                settle_time_s: f[5],
+                box_material: a,
+                floor_material: b,
+                periodic_slice_m: o[0],
+                floor_overhang_m: o[1],
+                settle_max_s: o[2],
+                sample_interval_s: o[3],
+            })
+        });
     let drum = (prop::collection::vec(float(), 6), name()).prop_map(|(f, w)| {
         Scene::Drum(DrumScene {
             inner_diameter_m: f[0],
@@ -313,7 +325,7 @@ fn scene() -> impl Strategy<Value = Scene> {
         })
     });
     let pile = (
-        prop::collection::vec(float(), 7),
+        prop::collection::vec(float(), 9),
         any::<u64>(),
         name(),
         name(),
@@ -328,6 +340,8 @@ fn scene() -> impl Strategy<Value = Scene> {
                 particle_count,
                 insertion_rate_per_s: f[5],
                 settle_time_s: f[6],
+                insertion_interval_s: f[7],
+                sample_interval_s: f[8],
                 funnel_material: a,
                 disk_material: b,
             })

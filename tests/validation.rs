@@ -808,3 +808,135 @@ reject!(
     "verification[1].scene.sample_interval_s",
     "(0, 0.05]"
 );
+// --- static pile: insertion and sampling intervals
+reject!(
+    static_pile_insertion_interval_positive,
+    with_scene(BAFFLE, static_pile()),
+    "/verification/0/scene/insertion_interval_s",
+    Some(json!(0)),
+    "verification[0].scene.insertion_interval_s",
+    "> 0"
+);
+reject!(
+    static_pile_samples_at_insertion_windows,
+    with_scene(BAFFLE, static_pile()),
+    "/verification/0/scene/sample_interval_s",
+    Some(json!(0.001)),
+    "verification[0].scene.sample_interval_s",
+    ">= insertion_interval_s = 0.01"
+);
+
+// --- baffle_lift optional fields
+reject!(
+    baffle_slice_within_the_box_width,
+    study(),
+    "/verification/0/scene/periodic_slice_m",
+    Some(json!(0.07)),
+    "verification[0].scene.periodic_slice_m",
+    "<= box_width_m = 0.06"
+);
+reject!(
+    baffle_slice_positive,
+    study(),
+    "/verification/0/scene/periodic_slice_m",
+    Some(json!(0)),
+    "verification[0].scene.periodic_slice_m",
+    "> 0"
+);
+reject!(
+    baffle_floor_overhang_positive,
+    study(),
+    "/verification/0/scene/floor_overhang_m",
+    Some(json!(-0.01)),
+    "verification[0].scene.floor_overhang_m",
+    "> 0"
+);
+reject!(
+    baffle_settle_max_positive,
+    study(),
+    "/verification/0/scene/settle_max_s",
+    Some(json!(0)),
+    "verification[0].scene.settle_max_s",
+    "> 0"
+);
+reject!(
+    baffle_sample_interval_at_most_50_ms,
+    study(),
+    "/verification/0/scene/sample_interval_s",
+    Some(json!(0.1)),
+    "verification[0].scene.sample_interval_s",
+    "(0, 0.05]"
+);
+
+// --- funnel_pile fields added with the simulated scene (issue 4)
+reject!(
+    funnel_tube_length_positive,
+    study(),
+    "/calibration/scene/outlet_tube_length_m",
+    Some(json!(0)),
+    "calibration.scene.outlet_tube_length_m",
+    "> 0"
+);
+reject!(
+    funnel_tube_clears_the_platform,
+    study(),
+    "/calibration/scene/outlet_tube_length_m",
+    Some(json!(0.07)),
+    "calibration.scene.outlet_height_m",
+    "the tube would reach the platform"
+);
+reject!(
+    funnel_brush_blade_count,
+    study(),
+    "/calibration/scene/brush_blades",
+    Some(json!(9)),
+    "calibration.scene.brush_blades",
+    "1 to 8"
+);
+reject!(
+    funnel_brush_gap_non_negative,
+    study(),
+    "/calibration/scene/brush_gap_m",
+    Some(json!(-0.001)),
+    "calibration.scene.brush_gap_m",
+    ">= 0"
+);
+reject!(
+    funnel_brush_width_positive,
+    study(),
+    "/calibration/scene/brush_width_m",
+    Some(json!(0)),
+    "calibration.scene.brush_width_m",
+    "> 0"
+);
+reject!(
+    funnel_brush_inside_the_funnel,
+    study(),
+    "/calibration/scene/brush_width_m",
+    Some(json!(0.06)),
+    "calibration.scene.brush_width_m",
+    "brush_gap_m + brush_width_m < funnel_top_diameter_m / 2"
+);
+reject!(
+    funnel_fill_height_within_the_cone,
+    study(),
+    "/calibration/scene/fill_height_m",
+    Some(json!(0.2)),
+    "calibration.scene.fill_height_m",
+    "(0, 0.095]"
+);
+reject!(
+    funnel_sample_interval_positive,
+    study(),
+    "/calibration/scene/sample_interval_s",
+    Some(json!(0)),
+    "calibration.scene.sample_interval_s",
+    "> 0"
+);
+
+#[test]
+fn funnel_brush_settings_need_a_brush() {
+    let doc = edit(study(), "/calibration/scene/brush_rpm", None);
+    let doc = edit(doc, "/calibration/scene/brush_gap_m", Some(json!(0.002)));
+    assert_rejects(doc, "calibration.scene.brush_gap_m", "requires brush_rpm");
+}

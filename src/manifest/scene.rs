@@ -135,28 +135,129 @@ pub struct FunnelPileScene {
     pub funnel_height_m: f64,
     /// Tilt of the outlet, degrees, in [0, 90) (he2019: 7).
     pub outlet_tilt_deg: f64,
-    /// Height of the outlet above the platform, m (paper silent; examples 0.060).
+    /// Height of the outlet above the platform, m (paper silent; examples 0.060):
+    /// the height of the cone's lower rim, where the outlet tube starts.
     pub outlet_height_m: f64,
+    /// Length of the straight outlet tube below the cone, along its tilted axis, m,
+    /// positive; its lower end (tube length · cos tilt + outlet radius · sin tilt
+    /// below the rim) must stay above the platform. Paper silent; absent: one
+    /// outlet diameter.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outlet_tube_length_m: Option<f64>,
     /// Receiving platform diameter, m (he2019: 0.094).
     pub platform_diameter_m: f64,
     /// Brush speed, rpm, > 0; absent means no brush (the effect is not simulated).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub brush_rpm: Option<f64>,
+    /// Number of brush blades, evenly spaced in azimuth, 1 to 8 (paper silent;
+    /// absent: 2). Only with `brush_rpm`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub brush_blades: Option<u32>,
+    /// Gap between each blade's outer edge and the funnel wall, m, >= 0 (paper
+    /// silent; absent: 0.001, a stirrer's clearance; keep it above one particle
+    /// diameter so that no single particle can be trapped between the moving
+    /// edge and the wall). Only with `brush_rpm`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub brush_gap_m: Option<f64>,
+    /// Width of each blade, m, measured from its outer edge inwards across the
+    /// wall's slope, > 0, with gap + width < the funnel top radius (paper silent;
+    /// absent: the width at which a blade reaches the axis at the outlet, outlet
+    /// radius / cos of the cone half-angle, less the gap, and at least one gap).
+    /// Only with `brush_rpm`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub brush_width_m: Option<f64>,
     /// Solid volume fraction the factory fills the funnel to, below the random close
     /// packing limit 0.64 (he2019's "filling rate 0.56").
     pub fill_fraction: f64,
+    /// Height above the outlet up to which the funnel is filled, m, in
+    /// (0, funnel_height_m]; absent: the whole cone (he2019). A lower fill is a
+    /// smaller charge: fewer particles, for the cheaper profiles.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fill_height_m: Option<f64>,
     /// Factory generation time, s (he2019: 0.01).
     pub fill_time_s: f64,
     /// Standing time after filling, before the brush starts, s (he2019: 3).
     pub standing_time_s: f64,
-    /// Total simulated time, s (he2019: 20).
+    /// Total simulated time, s (he2019: 20): fill, stand, discharge (the brush
+    /// turning) and settle; the discharge lasts what the other phases leave.
     pub total_time_s: f64,
-    /// Final settling time inside the total, s (he2019: 2).
+    /// Final settling time inside the total, s (he2019: 2); the brush stands still
+    /// during it, and it ends early once the pile is at rest.
     pub settle_time_s: f64,
+    /// Interval between angle samples, log frames and the removal of particles
+    /// that fell off the platform, s, > 0 (absent: 0.02).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample_interval_s: Option<f64>,
     /// Funnel (and brush) wall material name.
     pub funnel_material: String,
     /// Platform wall material name.
     pub platform_material: String,
+}
+
+impl FunnelPileScene {
+    /// Blades when `brush_blades` is absent.
+    pub const DEFAULT_BRUSH_BLADES: u32 = 2;
+    /// Blade-to-wall gap when `brush_gap_m` is absent, m.
+    pub const DEFAULT_BRUSH_GAP_M: f64 = 0.001;
+    /// Sample interval when `sample_interval_s` is absent, s.
+    pub const DEFAULT_SAMPLE_INTERVAL_S: f64 = 0.02;
+
+    /// Half-angle of the cone (between the wall and the axis), radians.
+    pub fn cone_half_angle_rad(&self) -> f64 {
+        (0.5 * (self.funnel_top_diameter_m - self.funnel_outlet_diameter_m) / self.funnel_height_m)
+            .atan()
+    }
+
+    /// Length of the outlet tube, m (`outlet_tube_length_m`, or one outlet diameter).
+    pub fn outlet_tube_length(&self) -> f64 {
+        self.outlet_tube_length_m
+            .unwrap_or(self.funnel_outlet_diameter_m)
+    }
+
+    /// How far the tube's lowest point lies below the cone's lower rim, m: the
+    /// tube's length along its tilted axis plus its radius times the sine of the tilt.
+    pub fn outlet_tube_drop(&self) -> f64 {
+        let tilt = self.outlet_tilt_deg.to_radians();
+        self.outlet_tube_length() * tilt.cos() + 0.5 * self.funnel_outlet_diameter_m * tilt.sin()
+    }
+
+    /// Number of brush blades (0 without a brush).
+    pub fn brush_blade_count(&self) -> u32 {
+        match self.brush_rpm {
+            Some(_) => self.brush_blades.unwrap_or(Self::DEFAULT_BRUSH_BLADES),
+            None => 0,
+        }
+    }
+
+    /// Gap between blade and wall, m (`brush_gap_m`, or [`Self::DEFAULT_BRUSH_GAP_M`]).
+    pub fn brush_gap(&self) -> f64 {
+        self.brush_gap_m.unwrap_or(Self::DEFAULT_BRUSH_GAP_M)
+    }
+
+    /// Blade width, m (`brush_width_m`, or what reaches the axis at the outlet:
+    /// outlet radius / cos of the half-angle less the gap, at least one gap).
+    pub fn brush_width(&self) -> f64 {
+        self.brush_width_m.unwrap_or_else(|| {
+            let gap = self.brush_gap();
+            (0.5 * self.funnel_outlet_diameter_m / self.cone_half_angle_rad().cos() - gap).max(gap)
+        })
+    }
+
+    /// Height of the charge above the outlet, m (`fill_height_m`, or the whole cone).
+    pub fn fill_height(&self) -> f64 {
+        self.fill_height_m.unwrap_or(self.funnel_height_m)
+    }
+
+    /// Interval between samples, s.
+    pub fn sample_interval(&self) -> f64 {
+        self.sample_interval_s
+            .unwrap_or(Self::DEFAULT_SAMPLE_INTERVAL_S)
+    }
+
+    /// How long the brush turns: the total time less fill, standing and settling, s.
+    pub fn discharge_time(&self) -> f64 {
+        self.total_time_s - self.fill_time_s - self.standing_time_s - self.settle_time_s
+    }
 }
 
 /// he2019 §3.6.1: a box holds the powder; one side (the baffle) is lifted at a
@@ -174,12 +275,63 @@ pub struct BaffleLiftScene {
     pub powder_mass_kg: f64,
     /// Baffle lift speed, m/s (he2019: 0.1).
     pub lift_speed_m_s: f64,
-    /// Settling time after the baffle is clear, s.
+    /// Settling time after the baffle is clear, s (it ends earlier once the
+    /// powder is at rest).
     pub settle_time_s: f64,
     /// Box and baffle wall material name (he2019: Plexiglas).
     pub box_material: String,
     /// Floor wall material name.
     pub floor_material: String,
+    /// Thickness of a slice across the box width simulated instead of the whole
+    /// box, periodic along the width (y), m, in (0, box_width_m]; absent: the
+    /// whole box with its two side walls. A slice has no side walls, so it
+    /// leaves out their friction (which steepens a real slope near them) and
+    /// its run-out heap is a ridge rather than a fan; it costs box_width_m /
+    /// slice times fewer particles. The powder mass placed is
+    /// `powder_mass_kg` · slice / box_width_m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub periodic_slice_m: Option<f64>,
+    /// How far the floor reaches past the opening and past each side wall, m, must
+    /// be > 0 (he2019 is silent: the box stands on a bench); powder that runs off
+    /// its edge is removed. Absent: `box_height_m`, which holds the run-out heap
+    /// of a full box at angles down to ~25° (see `scenes::baffle`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor_overhang_m: Option<f64>,
+    /// Longest time the placed powder may take to come to rest before the baffle
+    /// is lifted, s, > 0 (it lifts earlier once the mean kinetic energy per
+    /// particle stays below the rest threshold). Absent: 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settle_max_s: Option<f64>,
+    /// Interval between samples (angle, traces, log frames, removal of powder
+    /// that left the floor), s, in (0, 0.05]. Absent: 0.02.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample_interval_s: Option<f64>,
+}
+
+impl BaffleLiftScene {
+    /// Default of [`Self::settle_max_s`], s.
+    pub const DEFAULT_SETTLE_MAX_S: f64 = 1.0;
+    /// Default of [`Self::sample_interval_s`], s.
+    pub const DEFAULT_SAMPLE_INTERVAL_S: f64 = 0.02;
+    /// Largest [`Self::sample_interval_s`], s: powder leaving the floor must be
+    /// removed before it falls out of the simulated domain (see `scenes::baffle`).
+    pub const MAX_SAMPLE_INTERVAL_S: f64 = 0.05;
+
+    /// The floor's reach past the opening and the side walls, m.
+    pub fn floor_overhang(&self) -> f64 {
+        self.floor_overhang_m.unwrap_or(self.box_height_m)
+    }
+
+    /// Longest pre-lift settling time, s.
+    pub fn settle_max(&self) -> f64 {
+        self.settle_max_s.unwrap_or(Self::DEFAULT_SETTLE_MAX_S)
+    }
+
+    /// Sampling interval, s.
+    pub fn sample_interval(&self) -> f64 {
+        self.sample_interval_s
+            .unwrap_or(Self::DEFAULT_SAMPLE_INTERVAL_S)
+    }
 }
 
 /// Rotating drum: fill, rotate at constant speed, stop and stand (he2019 §3.6.2:
@@ -283,12 +435,45 @@ pub struct StaticPileScene {
     pub particle_count: u64,
     /// Generation rate, particles per second, > 0 (cai2024: 5000).
     pub insertion_rate_per_s: f64,
-    /// Settling time after the last particle is generated, s.
+    /// Longest settling time after the last particle is generated, s, ≥ 0 (it
+    /// ends earlier once the pile is at rest: the mean kinetic energy per
+    /// particle below 1e-6 of m g d for 0.05 s).
     pub settle_time_s: f64,
+    /// Window of the rate factory, s, > 0: the particles due in each window
+    /// appear together at its end (paper silent; default 0.01, he2019's
+    /// generation interval).
+    #[serde(
+        default = "default_static_pile_insertion_interval_s",
+        skip_serializing_if = "is_default_static_pile_insertion_interval_s"
+    )]
+    pub insertion_interval_s: f64,
+    /// Interval between trace samples and log frames, s, ≥ `insertion_interval_s`
+    /// (rounded to a whole number of insertion windows); default 0.02.
+    #[serde(
+        default = "default_static_pile_sample_interval_s",
+        skip_serializing_if = "is_default_static_pile_sample_interval_s"
+    )]
+    pub sample_interval_s: f64,
     /// Funnel wall material name.
     pub funnel_material: String,
     /// Disk wall material name.
     pub disk_material: String,
+}
+
+fn default_static_pile_insertion_interval_s() -> f64 {
+    0.01
+}
+
+fn is_default_static_pile_insertion_interval_s(v: &f64) -> bool {
+    *v == default_static_pile_insertion_interval_s()
+}
+
+fn default_static_pile_sample_interval_s() -> f64 {
+    0.02
+}
+
+fn is_default_static_pile_sample_interval_s(v: &f64) -> bool {
+    *v == default_static_pile_sample_interval_s()
 }
 
 fn default_drum_settle_max_s() -> f64 {

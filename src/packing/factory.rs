@@ -9,8 +9,11 @@
 //! `attempts_per_particle` random centres in the region, checked against the
 //! current particles and the ones created in the same window; one that finds no
 //! free place is skipped and counted in the shortfall (not carried over: a full
-//! region stays full until particles leave it). The ChaCha8 stream lives in the
-//! factory, so the same seed, call sequence and snapshots give the same particles.
+//! region stays full until particles leave it), unless the caller hands it back
+//! with [`RateFactory::carry_over`], which adds it to the next window's due
+//! particles (an EDEM factory with a total number keeps trying this way). The
+//! ChaCha8 stream lives in the factory, so the same seed, call sequence and
+//! snapshots give the same particles.
 
 use super::distribution::{SizeDistribution, SizeSampler};
 use super::grid::Grid;
@@ -61,6 +64,7 @@ pub struct RateFactory {
     t_start_s: f64,
     t_last_s: f64,
     due_so_far: u64,
+    carried: usize,
 }
 
 impl RateFactory {
@@ -90,7 +94,14 @@ impl RateFactory {
             t_start_s,
             t_last_s: t_start_s,
             due_so_far: 0,
+            carried: 0,
         })
+    }
+
+    /// Adds `n` particles to those the next [`RateFactory::insert`] creates
+    /// (e.g. a shortfall the caller wants retried rather than dropped).
+    pub fn carry_over(&mut self, n: usize) {
+        self.carried += n;
     }
 
     /// Creates the particles due between the previous call (or the start) and
@@ -117,7 +128,8 @@ impl RateFactory {
         }
         self.t_last_s = t_end_s;
         let due = (self.spec.rate_per_s * (t_end_s - self.t_start_s)).floor() as u64;
-        let requested = due.saturating_sub(self.due_so_far) as usize;
+        let requested = due.saturating_sub(self.due_so_far) as usize + self.carried;
+        self.carried = 0;
         self.due_so_far = due.max(self.due_so_far);
         // Only particles that can touch the region matter.
         let r_new = 0.5 * self.sampler.max_diameter();
@@ -213,6 +225,30 @@ mod tests {
             all[..50].to_vec(),
             "same seed, same particles"
         );
+    }
+
+    /// A shortfall handed back is tried again in the next window, on top of
+    /// that window's own particles (50 per 0.01 s at 5000 /s), and placed once
+    /// the region has room.
+    #[test]
+    fn carried_shortfall_is_retried() {
+        let mut s = spec();
+        s.region = Region::Box {
+            min_m: Vec3::zeros(),
+            max_m: Vec3::new(0.002, 0.002, 0.002),
+        };
+        let mut f = RateFactory::new(s, 0.0).unwrap();
+        let first = f.insert(0.01, &[], &[]).unwrap();
+        assert!(first.shortfall > 0, "{first:?}");
+        f.carry_over(first.shortfall);
+        // The region is empty again (the first particles "left"): 50 new ones
+        // plus the carried shortfall are due, and as few fit as before.
+        let second = f.insert(0.02, &[], &[]).unwrap();
+        assert_eq!(second.requested, 50 + first.shortfall);
+        assert_eq!(second.particles.len() + second.shortfall, second.requested);
+        // Not carried again: the next window has only its own 50.
+        let third = f.insert(0.03, &[], &[]).unwrap();
+        assert_eq!(third.requested, 50);
     }
 
     /// A region that holds only a few spheres reports the rest as shortfall.

@@ -17,7 +17,7 @@
 pub mod coarse;
 pub mod distribution;
 pub mod factory;
-mod grid;
+pub(crate) mod grid;
 pub mod place;
 pub mod region;
 

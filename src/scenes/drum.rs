@@ -12,8 +12,7 @@
 //! in the square inscribed in the drum's cross-section, as many as fill
 //! `fill_fraction` of the drum volume at a bulk solid fraction of
 //! [`BULK_SOLID_FRACTION`]; they settle (`settle`, at most `settle_max_s`,
-//! ending once the mean kinetic energy per particle stays below
-//! [`REST_ENERGY_FRACTION`] · m g d for [`REST_HOLD_S`]); the drum turns at
+//! ending once the bed is at rest, [`SettleCriterion::at_rest`]); the drum turns at
 //! `rpm` for `rotation_time_s` (`rotate`) and then stands for
 //! `standing_time_s` (`stand`).
 //!
@@ -45,11 +44,6 @@ use std::path::Path;
 /// Solid fraction of the poured bed used to turn the bulk fill fraction into a
 /// particle count (random loose packing of spheres, ≈ 0.60).
 pub const BULK_SOLID_FRACTION: f64 = 0.6;
-/// The bed is at rest when its mean kinetic energy per particle is below this
-/// fraction of m g d (the energy of lifting a mean particle by one diameter).
-pub const REST_ENERGY_FRACTION: f64 = 1e-6;
-/// How long the bed must stay at rest before the drum starts, s.
-pub const REST_HOLD_S: f64 = 0.05;
 /// Lattice spacing factor used when random placement cannot reach the count.
 const LATTICE_SPACING: f64 = 1.05;
 
@@ -176,13 +170,7 @@ pub fn run(
     let settle = Phase {
         name: "settle",
         max_duration_s: scene.settle_max_s,
-        settle: Some(SettleCriterion {
-            mean_kinetic_energy_j: REST_ENERGY_FRACTION
-                * mass
-                * physics::STANDARD_GRAVITY_M_S2
-                * d_mean,
-            hold_s: REST_HOLD_S,
-        }),
+        settle: Some(SettleCriterion::at_rest(mass, d_mean)),
     };
     let dt = plan.dt_s;
     let every = scene.sample_interval_s;

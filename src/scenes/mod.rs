@@ -3,11 +3,14 @@
 //! [`run_experiment`] is the runner `repose run` hands to
 //! [`crate::store::Store::run_cached`].
 
+pub mod baffle;
 pub mod drum;
+pub mod funnel;
 pub mod hopper;
 pub mod pair;
 pub mod physics;
 pub mod protocol;
+pub mod static_pile;
 
 use std::path::Path;
 
@@ -18,12 +21,6 @@ use crate::store::RunResult;
 /// Why a scene could not be run.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// The scene kind has no simulation yet.
-    #[error("scene kind `{kind}` is not simulated yet")]
-    NotYetSimulated {
-        /// The scene's `kind` tag.
-        kind: &'static str,
-    },
     /// No stable time step exists for the manifest's settings.
     #[error("time_step: {0}")]
     TimeStep(#[from] crate::dem::timestep::TimeStepError),
@@ -36,6 +33,15 @@ pub enum SceneError {
     /// The hopper scene failed.
     #[error(transparent)]
     Hopper(#[from] hopper::HopperError),
+    /// The static pile scene failed.
+    #[error(transparent)]
+    StaticPile(#[from] static_pile::StaticPileError),
+    /// The baffle-lift scene failed.
+    #[error(transparent)]
+    Baffle(#[from] baffle::BaffleError),
+    /// The funnel_pile scene failed.
+    #[error(transparent)]
+    Funnel(#[from] funnel::FunnelError),
     /// The run log could not be written.
     #[error(transparent)]
     Log(#[from] LogError),
@@ -43,9 +49,8 @@ pub enum SceneError {
 
 /// Runs the experiment's scene and returns its result; with `log`, also writes
 /// the run's MCAP log there (atomically: the file appears only complete, and
-/// only when the run succeeds). The lab scenes are simulated from issue 4 on;
-/// until then they return [`SceneError::NotYetSimulated`] (the store records it
-/// in error.json).
+/// only when the run succeeds). A failed run's error is what the store records
+/// in error.json.
 pub fn run_experiment(
     experiment: &Experiment,
     log: Option<&Path>,
@@ -54,7 +59,9 @@ pub fn run_experiment(
         Scene::Pair(scene) => pair::run(experiment, scene, log),
         Scene::Drum(scene) => drum::run(experiment, scene, log),
         Scene::Hopper(scene) => hopper::run(experiment, scene, log),
-        other => Err(SceneError::NotYetSimulated { kind: other.kind() }),
+        Scene::StaticPile(scene) => static_pile::run(experiment, scene, log),
+        Scene::BaffleLift(scene) => baffle::run(experiment, scene, log),
+        Scene::FunnelPile(scene) => funnel::run(experiment, scene, log),
     }?;
     result.coarse_graining = physics::coarse_graining_report(experiment);
     Ok(result)

@@ -25,6 +25,29 @@ pub struct SettleCriterion {
     pub hold_s: f64,
 }
 
+impl SettleCriterion {
+    /// The lab scenes' 'bed at rest': the mean kinetic energy per particle below
+    /// [`REST_ENERGY_FRACTION`] · m g d for [`REST_HOLD_S`], with m (kg) and d (m)
+    /// the mass and diameter of a representative particle.
+    pub fn at_rest(mass_kg: f64, diameter_m: f64) -> Self {
+        Self {
+            mean_kinetic_energy_j: REST_ENERGY_FRACTION
+                * mass_kg
+                * STANDARD_GRAVITY_M_S2
+                * diameter_m,
+            hold_s: REST_HOLD_S,
+        }
+    }
+}
+
+/// The bed is at rest when its mean kinetic energy per particle is below this
+/// fraction of m g d (the energy of lifting a representative particle by one
+/// diameter).
+pub const REST_ENERGY_FRACTION: f64 = 1e-6;
+/// How long the bed must stay below the rest threshold, s.
+pub const REST_HOLD_S: f64 = 0.05;
+pub use super::physics::STANDARD_GRAVITY_M_S2;
+
 /// One phase of a protocol.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Phase {
@@ -185,11 +208,17 @@ pub fn set_quiet(quiet: bool) {
     QUIET.store(quiet, Ordering::Relaxed);
 }
 
+/// True when progress may be shown on stderr: not `--quiet`, and stderr is a
+/// terminal (batch logs and CI stay clean). [`Progress::on_stderr`] and the
+/// calibration batch's progress bar both decide by it.
+pub fn progress_enabled() -> bool {
+    !QUIET.load(Ordering::Relaxed) && std::io::stderr().is_terminal()
+}
+
 impl Progress {
-    /// The reporter scenes use: silent under `--quiet` and when stderr is not a
-    /// terminal (batch logs and CI stay clean).
+    /// The reporter scenes use: silent unless [`progress_enabled`].
     pub fn on_stderr() -> Self {
-        Self::new(QUIET.load(Ordering::Relaxed) || !std::io::stderr().is_terminal())
+        Self::new(!progress_enabled())
     }
 
     /// A progress reporter; `quiet` silences it.

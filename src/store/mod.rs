@@ -115,7 +115,8 @@ impl StoreError {
         )
     }
 
-    fn io(path: &Path) -> impl FnOnce(io::Error) -> StoreError + '_ {
+    /// Wraps an I/O error on `path` (for `map_err`).
+    pub fn io(path: &Path) -> impl FnOnce(io::Error) -> StoreError + '_ {
         move |source| StoreError::Io {
             path: path.to_path_buf(),
             source,
@@ -219,7 +220,7 @@ impl RunDir {
 
 /// Test-only fault injection: called between temp write and rename of every file.
 #[cfg(test)]
-type FaultHook = Box<dyn Fn(&Path) -> io::Result<()>>;
+type FaultHook = Box<dyn Fn(&Path) -> io::Result<()> + Send + Sync>;
 
 /// A run store rooted at a directory.
 pub struct Store {

@@ -109,15 +109,64 @@ fn check_funnel(c: &mut Checker, path: &str, s: &FunnelPileScene) {
         Interval::closed_open(0.0, 90.0),
     );
     c.positive(&join(path, "outlet_height_m"), s.outlet_height_m);
+    if let Some(l) = s.outlet_tube_length_m {
+        c.positive(&join(path, "outlet_tube_length_m"), l);
+    }
+    let drop = s.outlet_tube_drop();
+    if drop.is_finite() && s.outlet_height_m.is_finite() && drop >= s.outlet_height_m {
+        c.fail(
+            &join(path, "outlet_height_m"),
+            number(s.outlet_height_m),
+            format!(
+                "must exceed the outlet tube's drop below the cone, length cos(tilt) + radius sin(tilt) = {} (the tube would reach the platform)",
+                number(drop)
+            ),
+        );
+    }
     c.positive(&join(path, "platform_diameter_m"), s.platform_diameter_m);
     if let Some(rpm) = s.brush_rpm {
         c.positive(&join(path, "brush_rpm"), rpm);
+    }
+    if let Some(n) = s.brush_blades {
+        brush_only(c, path, "brush_blades", n.to_string(), s);
+        if !(1..=8).contains(&n) {
+            c.fail(&join(path, "brush_blades"), n.to_string(), "must be 1 to 8");
+        }
+    }
+    if let Some(g) = s.brush_gap_m {
+        brush_only(c, path, "brush_gap_m", number(g), s);
+        c.non_negative(&join(path, "brush_gap_m"), g);
+    }
+    if let Some(w) = s.brush_width_m {
+        brush_only(c, path, "brush_width_m", number(w), s);
+        c.positive(&join(path, "brush_width_m"), w);
+    }
+    let reach = s.brush_gap() + s.brush_width();
+    if s.brush_rpm.is_some() && reach.is_finite() && reach >= 0.5 * s.funnel_top_diameter_m {
+        c.fail(
+            &join(path, "brush_width_m"),
+            number(s.brush_width()),
+            format!(
+                "must leave brush_gap_m + brush_width_m < funnel_top_diameter_m / 2 = {} (the blade would cross the axis at the top)",
+                number(0.5 * s.funnel_top_diameter_m)
+            ),
+        );
     }
     c.within(
         &join(path, "fill_fraction"),
         s.fill_fraction,
         Interval::open(0.0, PACKING_LIMIT),
     );
+    if let Some(h) = s.fill_height_m {
+        c.within(
+            &join(path, "fill_height_m"),
+            h,
+            Interval::open_closed(0.0, s.funnel_height_m),
+        );
+    }
+    if let Some(dt) = s.sample_interval_s {
+        c.positive(&join(path, "sample_interval_s"), dt);
+    }
     c.positive(&join(path, "fill_time_s"), s.fill_time_s);
     c.non_negative(&join(path, "standing_time_s"), s.standing_time_s);
     c.positive(&join(path, "total_time_s"), s.total_time_s);
@@ -132,6 +181,17 @@ fn check_funnel(c: &mut Checker, path: &str, s: &FunnelPileScene) {
     }
 }
 
+/// A brush setting is refused when there is no brush (`brush_rpm` absent).
+fn brush_only(c: &mut Checker, path: &str, field: &str, value: String, s: &FunnelPileScene) {
+    if s.brush_rpm.is_none() {
+        c.fail(
+            &join(path, field),
+            value,
+            "requires brush_rpm (without it there is no brush)",
+        );
+    }
+}
+
 fn check_baffle(c: &mut Checker, path: &str, s: &BaffleLiftScene, density_kg_m3: f64) {
     c.positive(&join(path, "box_length_m"), s.box_length_m);
     c.positive(&join(path, "box_width_m"), s.box_width_m);
@@ -139,6 +199,29 @@ fn check_baffle(c: &mut Checker, path: &str, s: &BaffleLiftScene, density_kg_m3:
     c.positive(&join(path, "powder_mass_kg"), s.powder_mass_kg);
     c.positive(&join(path, "lift_speed_m_s"), s.lift_speed_m_s);
     c.non_negative(&join(path, "settle_time_s"), s.settle_time_s);
+    if let Some(slice) = s.periodic_slice_m {
+        c.positive(&join(path, "periodic_slice_m"), slice);
+        if slice.is_finite() && s.box_width_m.is_finite() && slice > s.box_width_m {
+            c.fail(
+                &join(path, "periodic_slice_m"),
+                number(slice),
+                format!("must be <= box_width_m = {}", number(s.box_width_m)),
+            );
+        }
+    }
+    if let Some(v) = s.floor_overhang_m {
+        c.positive(&join(path, "floor_overhang_m"), v);
+    }
+    if let Some(v) = s.settle_max_s {
+        c.positive(&join(path, "settle_max_s"), v);
+    }
+    if let Some(v) = s.sample_interval_s {
+        c.within(
+            &join(path, "sample_interval_s"),
+            v,
+            Interval::open_closed(0.0, BaffleLiftScene::MAX_SAMPLE_INTERVAL_S),
+        );
+    }
     let box_volume = s.box_length_m * s.box_width_m * s.box_height_m;
     let max_mass = box_volume * PACKING_LIMIT * density_kg_m3;
     if max_mass.is_finite() && max_mass > 0.0 && s.powder_mass_kg > max_mass {
@@ -263,4 +346,20 @@ fn check_static_pile(c: &mut Checker, path: &str, s: &StaticPileScene) {
     }
     c.positive(&join(path, "insertion_rate_per_s"), s.insertion_rate_per_s);
     c.non_negative(&join(path, "settle_time_s"), s.settle_time_s);
+    c.positive(&join(path, "insertion_interval_s"), s.insertion_interval_s);
+    if s.sample_interval_s.is_finite()
+        && s.insertion_interval_s.is_finite()
+        && s.sample_interval_s < s.insertion_interval_s
+    {
+        c.fail(
+            &join(path, "sample_interval_s"),
+            number(s.sample_interval_s),
+            format!(
+                "must be >= insertion_interval_s = {} (samples are taken at insertion windows)",
+                number(s.insertion_interval_s)
+            ),
+        );
+    } else {
+        c.positive(&join(path, "sample_interval_s"), s.sample_interval_s);
+    }
 }

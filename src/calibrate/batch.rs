@@ -1,0 +1,338 @@
+//! `repose batch STUDY`: runs every sampled experiment that is not complete
+//! and writes the simulated-angle table (the equivalent of he2019's Table A1).
+//!
+//! Runs go through [`Store::run_cached`], so a complete run is never repeated
+//! and a batch killed midway resumes where it stopped: finished runs are
+//! complete in the store (written atomically), interrupted ones are simply run
+//! again. `jobs` worker threads take runs from a shared queue; each runs its
+//! experiment inside its own one-thread rayon pool, so a run is single-threaded
+//! inside (the engine's results do not depend on its thread count anyway) and
+//! never steals another run's work — an outer rayon pool would let a worker
+//! waiting on an inner pool pick up further runs. A failed run is recorded in
+//! its `error.json` by the store, reported at the end, and does not stop the
+//! others; the next batch tries it again.
+//!
+//! The runner is a parameter so tests can inject a fast fake; the command
+//! passes [`crate::scenes::run_experiment`] with the run's MCAP log, as
+//! `repose run` does.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::time::Duration;
+
+use serde_json::json;
+
+use super::progress::BatchProgress;
+use super::sample::{design_path, experiment_path};
+use super::table::{parse_number, Cell, CsvWriter, Table};
+use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
+use crate::manifest::{read_experiment, ContentId, Experiment, Study};
+use crate::store::{RunDir, RunResult, RunStatus, Store};
+
+/// Options of the batch stage.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BatchSettings {
+    /// Runs simulated at once (≥ 1).
+    pub jobs: usize,
+    /// Draw the progress bar on stderr.
+    pub progress: bool,
+}
+
+/// One row of design.csv.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DesignRow {
+    /// Sample index.
+    pub index: usize,
+    /// Parameter values, physical units, in the study's parameter order.
+    pub point: Vec<f64>,
+    /// The experiment id.
+    pub id: ContentId,
+}
+
+/// A run that failed in this batch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Failure {
+    /// Sample index.
+    pub index: usize,
+    /// Experiment id.
+    pub id: ContentId,
+    /// Why it failed.
+    pub message: String,
+}
+
+/// What the batch did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BatchOutcome {
+    /// Samples in the design.
+    pub total: usize,
+    /// Runs complete before the batch started.
+    pub cached: usize,
+    /// Runs simulated and completed by this batch.
+    pub computed: usize,
+    /// Runs that failed in this batch.
+    pub failures: Vec<Failure>,
+    /// angles.csv.
+    pub table: PathBuf,
+}
+
+/// `batch/angles.csv`.
+pub fn angles_path(dir: &StudyDir) -> PathBuf {
+    dir.stage(Stage::Batch).join("angles.csv")
+}
+
+/// Reads `sample/design.csv`, checking its columns against the study.
+pub fn read_design(dir: &StudyDir, study: &Study) -> Result<Vec<DesignRow>, CalibrateError> {
+    let path = dir.require(design_path(dir), Stage::Sample)?;
+    let table = Table::read(&path)?;
+    let names = parameter_names(study);
+    let mut expected = vec!["index".to_string()];
+    expected.extend(names.iter().cloned());
+    expected.push("experiment_id".to_string());
+    if table.header != expected {
+        return Err(CalibrateError::Inconsistent {
+            path,
+            message: format!(
+                "columns {} differ from the study's ({}): rerun `repose sample`",
+                table.header.join(","),
+                expected.join(",")
+            ),
+        });
+    }
+    let index = table.numbers(&path, "index")?;
+    let columns = names
+        .iter()
+        .map(|n| table.numbers(&path, n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let id_column = table.require(&path, "experiment_id")?;
+    let mut rows = Vec::with_capacity(table.rows.len());
+    for (i, cells) in table.rows.iter().enumerate() {
+        let id =
+            ContentId::parse(&cells[id_column]).ok_or_else(|| CalibrateError::Inconsistent {
+                path: path.clone(),
+                message: format!(
+                    "line {}: `{}` is not an experiment id",
+                    i + 2,
+                    cells[id_column]
+                ),
+            })?;
+        rows.push(DesignRow {
+            index: index[i] as usize,
+            point: columns.iter().map(|c| c[i]).collect(),
+            id,
+        });
+    }
+    Ok(rows)
+}
+
+/// Loads the manifest of a design row and checks that it hashes to the row's id.
+fn load_experiment(dir: &StudyDir, row: &DesignRow) -> Result<Experiment, CalibrateError> {
+    let path = experiment_path(dir, row.index);
+    let experiment = read_experiment(&path).map_err(|e| CalibrateError::Inconsistent {
+        path: path.clone(),
+        message: format!("{e}: rerun `repose sample`"),
+    })?;
+    if experiment.id() != row.id {
+        return Err(CalibrateError::Inconsistent {
+            path,
+            message: format!(
+                "hashes to {}, but design.csv lists {}: rerun `repose sample`",
+                experiment.id(),
+                row.id
+            ),
+        });
+    }
+    Ok(experiment)
+}
+
+/// Runs the batch stage with `runner` (see the module docs).
+pub fn batch<E, F>(
+    dir: &StudyDir,
+    study: &Study,
+    store: &Store,
+    settings: &BatchSettings,
+    runner: F,
+) -> Result<BatchOutcome, CalibrateError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    if settings.jobs == 0 {
+        return Err(CalibrateError::Settings(
+            "--jobs = 0: must be >= 1".to_string(),
+        ));
+    }
+    let design = read_design(dir, study)?;
+    let experiments = design
+        .iter()
+        .map(|row| load_experiment(dir, row))
+        .collect::<Result<Vec<_>, _>>()?;
+    let pending: Vec<usize> = (0..design.len())
+        .filter(|&i| store.status(&design[i].id) != RunStatus::Complete)
+        .collect();
+    let cached = design.len() - pending.len();
+    let mut progress = BatchProgress::new(settings.progress, design.len(), cached);
+    let failures = run_pending(
+        &pending,
+        &experiments,
+        store,
+        settings.jobs,
+        &runner,
+        &mut progress,
+    )?;
+    progress.finish();
+    let failures: Vec<Failure> = failures
+        .into_iter()
+        .map(|(i, message)| Failure {
+            index: design[i].index,
+            id: design[i].id.clone(),
+            message,
+        })
+        .collect();
+    let table = write_angles(dir, study, store, &design, &failures)?;
+    Ok(BatchOutcome {
+        total: design.len(),
+        cached,
+        computed: pending.len() - failures.len(),
+        failures,
+        table,
+    })
+}
+
+/// Runs the pending experiments on `jobs` workers; returns the failures as
+/// (position in the design, message), sorted.
+pub(crate) fn run_pending<E, F>(
+    pending: &[usize],
+    experiments: &[Experiment],
+    store: &Store,
+    jobs: usize,
+    runner: &F,
+    progress: &mut BatchProgress,
+) -> Result<Vec<(usize, String)>, CalibrateError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let next = AtomicUsize::new(0);
+    let (sender, receiver) = mpsc::channel::<(usize, Result<(), String>)>();
+    let mut failures = Vec::new();
+    std::thread::scope(|scope| -> Result<(), CalibrateError> {
+        let mut workers = Vec::new();
+        for _ in 0..jobs.min(pending.len()) {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .map_err(|e| CalibrateError::Settings(format!("cannot start a worker: {e}")))?;
+            let sender = sender.clone();
+            let next = &next;
+            workers.push(scope.spawn(move || loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                let Some(&i) = pending.get(k) else { break };
+                let outcome = pool.install(|| {
+                    store
+                        .run_cached(&experiments[i], runner)
+                        .map(|_| ())
+                        .map_err(|e| e.to_string())
+                });
+                if sender.send((i, outcome)).is_err() {
+                    break;
+                }
+            }));
+        }
+        drop(sender);
+        loop {
+            match receiver.recv_timeout(Duration::from_millis(500)) {
+                Ok((i, outcome)) => {
+                    progress.finished_one(outcome.is_err());
+                    if let Err(message) = outcome {
+                        failures.push((i, message));
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) => progress.tick(),
+                Err(RecvTimeoutError::Disconnected) => break,
+            }
+        }
+        Ok(())
+    })?;
+    failures.sort();
+    Ok(failures)
+}
+
+/// Writes angles.csv from the store's state of every design row.
+fn write_angles(
+    dir: &StudyDir,
+    study: &Study,
+    store: &Store,
+    design: &[DesignRow],
+    failures: &[Failure],
+) -> Result<PathBuf, CalibrateError> {
+    let names = parameter_names(study);
+    let mut header = vec!["index".to_string()];
+    header.extend(names.iter().cloned());
+    header.extend(["experiment_id", "angle_deg", "status"].map(String::from));
+    let mut csv = CsvWriter::new(&header);
+    let mut lineage = dir
+        .lineage(Stage::Batch, json!({ "angle": "headline_angle_deg" }))
+        .with_input(dir.input("design", &design_path(dir))?);
+    for row in design {
+        let failed_now = failures.iter().any(|f| f.index == row.index);
+        let status = match store.status(&row.id) {
+            _ if failed_now => RunStatus::Failed,
+            s => s,
+        };
+        let angle = if status == RunStatus::Complete {
+            let result_file = store.run_dir(&row.id).result_path();
+            lineage = lineage.with_input(dir.input("result", &result_file)?);
+            store
+                .load_result(&row.id)?
+                .and_then(|r| r.headline_angle_deg)
+        } else {
+            None
+        };
+        let mut cells = vec![Cell::Integer(row.index as u64)];
+        cells.extend(row.point.iter().map(|v| Cell::Number(*v)));
+        cells.push(Cell::Text(row.id.to_string()));
+        cells.push(angle.map_or(Cell::Empty, Cell::Number));
+        cells.push(Cell::Text(status.to_string()));
+        csv.row(&cells);
+    }
+    let path = angles_path(dir);
+    super::create_dir(&dir.stage(Stage::Batch))?;
+    write_output(&path, csv.finish().as_bytes(), &lineage)?;
+    Ok(path)
+}
+
+/// One row of angles.csv.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AngleRow {
+    /// Sample index.
+    pub index: usize,
+    /// Parameter values, physical units.
+    pub point: Vec<f64>,
+    /// The simulated angle, degrees (`None` unless the run is complete).
+    pub angle_deg: Option<f64>,
+}
+
+/// Reads `batch/angles.csv` for `study`.
+pub fn read_angles(
+    dir: &StudyDir,
+    study: &Study,
+) -> Result<(PathBuf, Vec<AngleRow>), CalibrateError> {
+    let path = dir.require(angles_path(dir), Stage::Batch)?;
+    let table = Table::read(&path)?;
+    let names = parameter_names(study);
+    let index = table.numbers(&path, "index")?;
+    let columns = names
+        .iter()
+        .map(|n| table.numbers(&path, n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let angle = table.require(&path, "angle_deg")?;
+    let rows = (0..table.rows.len())
+        .map(|i| AngleRow {
+            index: index[i] as usize,
+            point: columns.iter().map(|c| c[i]).collect(),
+            angle_deg: parse_number(&table.rows[i][angle]),
+        })
+        .collect();
+    Ok((path, rows))
+}

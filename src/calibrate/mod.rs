@@ -1,0 +1,371 @@
+//! The he2019 §3 calibration stages: `sample`, `batch`, `train`, `search`, `verify`.
+//!
+//! ```text
+//! study.json ── sample ──▶ design.csv + one experiment manifest per sample
+//!            ── batch  ──▶ angles.csv (the Table A1 equivalent; runs cached in the store)
+//!            ── train  ──▶ sweep.csv (Fig. 12) + model.json + parity.svg (Fig. 13)
+//!            ── search ──▶ points.csv + clusters.csv/.md (Table 2) + scatter.svg (Fig. 14)
+//!            ── verify ──▶ verification.csv/.md (Table 3)
+//! ```
+//!
+//! # Layout
+//!
+//! A study's outputs live in the run store (`--store`, default `runs/`), in a
+//! directory named by the study's name and the first 12 hex digits of its id:
+//!
+//! ```text
+//! <store>/studies/<name>-<id12>/
+//!   study.json                      canonical JSON of the study (sha256 = study id)
+//!   sample/design.csv               index, one column per calibrated parameter
+//!                                   (physical units), experiment_id
+//!   sample/diagnostics.json         CD², min distance, correlations, warnings
+//!   sample/experiments/<index>.json one experiment manifest per sample (canonical
+//!                                   JSON: its sha256 is the experiment id)
+//!   batch/angles.csv                index, parameters, experiment_id, angle_deg, status
+//!   train/sweep.csv                 hidden size, train/validation R² and RMSE, ...
+//!   train/model.json                the kept network with its scaling (search reuses it)
+//!   train/parity.svg                predicted vs simulated, train and validation marked
+//!   search/points.csv               resampled points, predicted angle, kept, cluster
+//!   search/clusters.csv, .md        centres (physical units), sizes, predicted angle
+//!   search/scatter.svg              scatter matrix of the kept points by cluster
+//!   verify/verification.csv, .md    each candidate in every scene: simulated and
+//!                                   measured angle, relative error, pass/fail
+//! ```
+//!
+//! The runs themselves stay where `repose run` puts them (`<store>/<id>/`), so a
+//! sample shared by two studies, or run by hand, is simulated once.
+//!
+//! Sample indices are 0-based (`sample_index` of the experiment's seeds);
+//! he2019's Table A1 numbers its rows from 1.
+//!
+//! # Provenance
+//!
+//! Beside every output file `F` (except the per-sample manifests, which are
+//! content-addressed and listed with their ids in design.csv) lies
+//! `F.lineage.json` ([`crate::store::Lineage`]): the stage, the repose version,
+//! every stage setting, and every input — the study by id, each input file by
+//! its path relative to the store root and the sha256 of its bytes, each run
+//! result (`<id>/result.json`) by its sha256. An audit walks these records back
+//! from any table to the study and the runs.
+//!
+//! Every file is written atomically ([`crate::store::write_atomic`]); each stage
+//! writes its main table last, so a stage killed midway leaves its previous
+//! (or no) table, never a partial one. Outputs are pure functions of the inputs
+//! and settings (no times, host names or thread counts), so re-running a stage
+//! reproduces them byte for byte. Each stage refuses to start when the stage it
+//! reads has not run, naming the command to run first.
+//!
+//! Randomness comes from ChaCha8 streams of the study's design seed (or a seed
+//! given on the command line), one stream per purpose ([`Stream`]).
+
+pub mod batch;
+pub mod diagnostics;
+pub mod genetic;
+pub mod levenberg;
+pub mod lhs;
+pub mod meanshift;
+pub mod metrics;
+pub mod network;
+pub mod objective;
+pub mod progress;
+pub mod sample;
+pub mod search;
+pub mod surrogate;
+pub mod svg;
+pub mod table;
+pub mod train;
+pub mod verify;
+
+use std::path::{Path, PathBuf};
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use sha2::{Digest, Sha256};
+
+use crate::manifest::{canonical_json, ContentId, Study, ValidationErrors};
+use crate::store::{write_atomic, InputRef, Lineage, StoreError};
+use table::TableError;
+
+/// The purposes that draw random numbers; each gets its own ChaCha stream of
+/// a seed, so adding draws to one never shifts another.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stream {
+    /// The sampled design's strata positions and permutations.
+    Design = 1,
+    /// Exchanges of the optimised Latin hypercube.
+    Optimise = 2,
+    /// The search stage's resampled points.
+    Search = 3,
+    /// The genetic algorithm (one sub-stream per hidden size).
+    Genetic = 4,
+}
+
+/// The ChaCha8 stream for `purpose` (and sub-stream `index`) of `seed`.
+pub fn rng(seed: u64, purpose: Stream, index: u64) -> ChaCha8Rng {
+    let mut r = ChaCha8Rng::seed_from_u64(seed);
+    r.set_stream(((purpose as u64) << 32) | (index & 0xffff_ffff));
+    r
+}
+
+/// The stages, in pipeline order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// `repose sample`.
+    Sample,
+    /// `repose batch`.
+    Batch,
+    /// `repose train`.
+    Train,
+    /// `repose search`.
+    Search,
+    /// `repose verify`.
+    Verify,
+}
+
+impl Stage {
+    /// The stage's name (its subcommand and its directory).
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Sample => "sample",
+            Stage::Batch => "batch",
+            Stage::Train => "train",
+            Stage::Search => "search",
+            Stage::Verify => "verify",
+        }
+    }
+}
+
+/// Why a stage failed.
+#[derive(Debug, thiserror::Error)]
+pub enum CalibrateError {
+    /// The stage this one reads has not run.
+    #[error("{} does not exist: run `repose {} {}` first", missing.display(), stage.name(), study.display())]
+    MissingStage {
+        /// The file that should exist.
+        missing: PathBuf,
+        /// The stage that writes it.
+        stage: Stage,
+        /// The study manifest, as given.
+        study: PathBuf,
+    },
+    /// A stage option is invalid.
+    #[error("{0}")]
+    Settings(String),
+    /// The study asks for something these stages do not do.
+    #[error("{0}")]
+    Unsupported(String),
+    /// A design point does not make a valid experiment.
+    #[error("sample {index}: the design point makes an invalid experiment:\n{errors}")]
+    InvalidPoint {
+        /// The sample index.
+        index: usize,
+        /// What is wrong.
+        errors: ValidationErrors,
+    },
+    /// A stage file is inconsistent with the others (changed outside repose).
+    #[error("{}: {message}", path.display())]
+    Inconsistent {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A table could not be read.
+    #[error(transparent)]
+    Table(#[from] TableError),
+    /// The store failed.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// Training could not run.
+    #[error(transparent)]
+    Train(#[from] surrogate::TrainError),
+    /// The search kept no point.
+    #[error("{0}")]
+    NothingKept(String),
+}
+
+impl CalibrateError {
+    /// True when the user's input (options, files, stage order) is at fault.
+    pub fn is_invalid_input(&self) -> bool {
+        match self {
+            CalibrateError::MissingStage { .. }
+            | CalibrateError::Settings(_)
+            | CalibrateError::Unsupported(_)
+            | CalibrateError::InvalidPoint { .. }
+            | CalibrateError::Train(_) => true,
+            CalibrateError::Table(e) => !matches!(e, TableError::Io { .. }),
+            CalibrateError::Store(e) => e.is_invalid_input(),
+            CalibrateError::Inconsistent { .. } | CalibrateError::NothingKept(_) => false,
+        }
+    }
+}
+
+/// A study's output directory in the store (see the module docs).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StudyDir {
+    store_root: PathBuf,
+    path: PathBuf,
+    id: ContentId,
+    source: PathBuf,
+}
+
+impl StudyDir {
+    /// The directory of `study` in the store at `store_root`; `source` is the
+    /// study file as the user gave it (for messages).
+    pub fn new(store_root: &Path, study: &Study, source: &Path) -> StudyDir {
+        let id = study.id();
+        let path = store_root
+            .join("studies")
+            .join(format!("{}-{}", study.name, id.short(12)));
+        StudyDir {
+            store_root: store_root.to_path_buf(),
+            path,
+            id,
+            source: source.to_path_buf(),
+        }
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The study id.
+    pub fn id(&self) -> &ContentId {
+        &self.id
+    }
+
+    /// The store root.
+    pub fn store_root(&self) -> &Path {
+        &self.store_root
+    }
+
+    /// A stage's directory.
+    pub fn stage(&self, stage: Stage) -> PathBuf {
+        self.path.join(stage.name())
+    }
+
+    /// `study.json` in the directory.
+    pub fn study_file(&self) -> PathBuf {
+        self.path.join("study.json")
+    }
+
+    /// Creates the directory and the stage's directory, and writes the
+    /// study's canonical JSON (unchanged bytes if already there).
+    fn prepare(&self, study: &Study, stage: Stage) -> Result<(), CalibrateError> {
+        create_dir(&self.stage(stage))?;
+        let bytes = canonical_json(study);
+        let current = std::fs::read(self.study_file()).ok();
+        if current.as_deref() != Some(bytes.as_bytes()) {
+            write_file(&self.study_file(), bytes.as_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// `path` if it exists, else the error telling which stage to run.
+    fn require(&self, path: PathBuf, stage: Stage) -> Result<PathBuf, CalibrateError> {
+        if path.is_file() {
+            Ok(path)
+        } else {
+            Err(CalibrateError::MissingStage {
+                missing: path,
+                stage,
+                study: self.source.clone(),
+            })
+        }
+    }
+
+    /// A lineage record of `stage` with the study as its first input.
+    fn lineage(&self, stage: Stage, parameters: serde_json::Value) -> Lineage {
+        Lineage::new(stage.name(), parameters).with_input(InputRef::id("study", &self.id))
+    }
+
+    /// An input reference to a file of the store, by its path relative to the
+    /// store root and the sha256 of its bytes.
+    fn input(&self, role: &str, path: &Path) -> Result<InputRef, CalibrateError> {
+        file_input(role, path, Some(&self.store_root))
+    }
+}
+
+/// An input reference to a file: its path (relative to `root` when it lies
+/// inside it) and the sha256 of its bytes.
+fn file_input(role: &str, path: &Path, root: Option<&Path>) -> Result<InputRef, CalibrateError> {
+    let bytes = std::fs::read(path).map_err(|source| StoreError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let shown = root.and_then(|r| path.strip_prefix(r).ok()).unwrap_or(path);
+    Ok(InputRef {
+        role: role.to_string(),
+        id_or_path: shown.display().to_string(),
+        sha256: hex::encode(Sha256::digest(&bytes)),
+    })
+}
+
+fn create_dir(path: &Path) -> Result<(), CalibrateError> {
+    std::fs::create_dir_all(path).map_err(|source| {
+        StoreError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+        .into()
+    })
+}
+
+fn write_file(path: &Path, bytes: &[u8]) -> Result<(), CalibrateError> {
+    write_atomic(path, bytes).map_err(|source| {
+        StoreError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+        .into()
+    })
+}
+
+/// Writes an output atomically, then its lineage record beside it.
+fn write_output(path: &Path, bytes: &[u8], lineage: &Lineage) -> Result<(), CalibrateError> {
+    write_file(path, bytes)?;
+    lineage.write_beside(path)?;
+    Ok(())
+}
+
+/// The name serde gives a unit enum variant (e.g. `full_factorial`), as
+/// manifests and the command line spell it.
+fn serde_name<T: serde::Serialize>(value: T) -> String {
+    match serde_json::to_value(value) {
+        Ok(serde_json::Value::String(s)) => s,
+        other => format!("{other:?}"),
+    }
+}
+
+/// Pretty JSON with a final newline.
+fn json_bytes<T: serde::Serialize>(value: &T) -> Vec<u8> {
+    let mut bytes = serde_json::to_vec_pretty(value).expect("stage records serialise");
+    bytes.push(b'\n');
+    bytes
+}
+
+/// The calibrated parameters' addresses, in the study's (sorted) order.
+pub fn parameter_names(study: &Study) -> Vec<String> {
+    study.parameters.keys().cloned().collect()
+}
+
+/// Maps unit-cube points onto the study's parameter ranges.
+pub fn to_physical(study: &Study, unit: &[f64]) -> Vec<f64> {
+    study
+        .parameters
+        .values()
+        .zip(unit)
+        .map(|(r, u)| r.min + u * (r.max - r.min))
+        .collect()
+}
+
+/// Maps physical points onto the unit cube of the study's ranges.
+pub fn to_unit(study: &Study, physical: &[f64]) -> Vec<f64> {
+    study
+        .parameters
+        .values()
+        .zip(physical)
+        .map(|(r, x)| (x - r.min) / (r.max - r.min))
+        .collect()
+}

@@ -1,0 +1,333 @@
+//! `repose search STUDY`: he2019 §3.5 — resample the parameter space by Latin
+//! hypercube, predict each point's angle with the trained network, keep the
+//! points whose relative deviation from the measured angle is within the
+//! tolerance (Eq. 8–10: |pred − target| / target ≤ tol, inputs within their
+//! ranges by construction; target and tolerance from the study's calibration
+//! scene), and cluster the kept points by mean shift in unit-scaled parameters
+//! (each range mapped onto [0, 1]). The centres, in physical units, with the
+//! size of their cluster and the network's angle at the centre are the
+//! equivalent of he2019's Table 2.
+//!
+//! The bandwidth is given (unit-scaled) or estimated from the kept points by
+//! [`super::meanshift::estimate_bandwidth`] with a configurable quantile
+//! (default 0.3, scikit-learn's); both choices are recorded.
+
+use std::fmt::Write;
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use super::lhs::{latin_hypercube, Placement};
+use super::meanshift::{estimate_bandwidth, mean_shift, Kernel};
+use super::surrogate::Model;
+use super::svg::scatter_matrix;
+use super::table::{Cell, CsvWriter};
+use super::{
+    parameter_names, rng, serde_name, to_physical, write_output, CalibrateError, Stage, Stream,
+    StudyDir,
+};
+use crate::manifest::Study;
+
+/// Options of the search stage.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SearchSettings {
+    /// Resampled points (he2019: 300).
+    pub samples: usize,
+    /// Seed of the resampling stream.
+    pub seed: u64,
+    /// Where a resampled point sits in its stratum.
+    pub placement: Placement,
+    /// Mean-shift kernel.
+    pub kernel: Kernel,
+    /// Bandwidth in unit-scaled parameters; `None` to estimate it.
+    pub bandwidth: Option<f64>,
+    /// Quantile of the bandwidth estimate (used when `bandwidth` is `None`).
+    pub quantile: f64,
+}
+
+impl SearchSettings {
+    /// he2019's 300 points, random placement within strata (Eq. 4), the flat
+    /// kernel, bandwidth estimated with quantile 0.3.
+    pub fn with_seed(seed: u64) -> SearchSettings {
+        SearchSettings {
+            samples: 300,
+            seed,
+            placement: Placement::Random,
+            kernel: Kernel::Flat,
+            bandwidth: None,
+            quantile: 0.3,
+        }
+    }
+
+    fn check(&self) -> Result<(), CalibrateError> {
+        let fail = |m: String| Err(CalibrateError::Settings(m));
+        if self.samples < 1 {
+            return fail("--samples = 0: must be >= 1".to_string());
+        }
+        if !(self.quantile > 0.0 && self.quantile <= 1.0) {
+            return fail(format!("--quantile = {}: must be in (0, 1]", self.quantile));
+        }
+        if let Some(h) = self.bandwidth.filter(|h| !(h.is_finite() && *h > 0.0)) {
+            return fail(format!("--bandwidth = {h}: must be a finite number > 0"));
+        }
+        Ok(())
+    }
+}
+
+/// One cluster of kept points (a row of the Table 2 equivalent).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ClusterRow {
+    /// Group number, 1 = largest.
+    pub group: usize,
+    /// Kept points in the cluster.
+    pub size: usize,
+    /// Centre, physical units, in parameter order.
+    pub centre: Vec<f64>,
+    /// The network's angle at the centre, degrees.
+    pub predicted_angle_deg: f64,
+}
+
+/// What the search found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SearchOutcome {
+    /// Parameter addresses (column order).
+    pub parameters: Vec<String>,
+    /// Predicted angle of every resampled point, degrees.
+    pub predicted: Vec<f64>,
+    /// Indices of the kept points.
+    pub kept: Vec<usize>,
+    /// Bandwidth used (unit-scaled).
+    pub bandwidth: f64,
+    /// Distinct modes before merging.
+    pub modes: usize,
+    /// The clusters, largest first.
+    pub clusters: Vec<ClusterRow>,
+    /// The Table 2 equivalent as Markdown (also in clusters.md).
+    pub markdown: String,
+    /// Where the outputs were written.
+    pub out_dir: PathBuf,
+}
+
+/// Runs the search stage.
+pub fn search(
+    dir: &StudyDir,
+    study: &Study,
+    settings: &SearchSettings,
+) -> Result<SearchOutcome, CalibrateError> {
+    settings.check()?;
+    let model_file = dir.require(dir.stage(Stage::Train).join("model.json"), Stage::Train)?;
+    let model = load_model(&model_file)?;
+    let names = parameter_names(study);
+    let model_inputs: Vec<String> = model.inputs.iter().map(|s| s.name.clone()).collect();
+    if model_inputs != names {
+        return Err(CalibrateError::Inconsistent {
+            path: model_file,
+            message: format!(
+                "the model's inputs ({}) are not the study's parameters ({}): rerun `repose train`",
+                model_inputs.join(", "),
+                names.join(", ")
+            ),
+        });
+    }
+    let target = &study.calibration;
+    let unit = latin_hypercube(
+        settings.samples,
+        names.len(),
+        settings.placement,
+        &mut rng(settings.seed, Stream::Search, 0),
+    );
+    let physical: Vec<Vec<f64>> = unit.iter().map(|u| to_physical(study, u)).collect();
+    let predicted: Vec<f64> = physical.iter().map(|x| model.predict(x)).collect();
+    let deviation = |p: f64| (p - target.target_angle_deg).abs() / target.target_angle_deg;
+    let kept: Vec<usize> = (0..predicted.len())
+        .filter(|&i| deviation(predicted[i]) <= target.tolerance_fraction)
+        .collect();
+    if kept.is_empty() {
+        let lo = predicted.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = predicted.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        return Err(CalibrateError::NothingKept(format!(
+            "none of the {} predicted angles ({lo:.2}–{hi:.2} deg) is within {}% of the target \
+             {} deg of `{}`: the parameter ranges may not reach the target",
+            predicted.len(),
+            target.tolerance_fraction * 100.0,
+            target.target_angle_deg,
+            target.name
+        )));
+    }
+    let kept_unit: Vec<Vec<f64>> = kept.iter().map(|&i| unit[i].clone()).collect();
+    let bandwidth = match settings.bandwidth {
+        Some(h) => h,
+        None => estimate_bandwidth(&kept_unit, settings.quantile),
+    };
+    if bandwidth <= 0.0 {
+        return Err(CalibrateError::Settings(format!(
+            "the estimated bandwidth is 0 ({} kept point(s), quantile {}): raise --quantile or give --bandwidth",
+            kept.len(),
+            settings.quantile
+        )));
+    }
+    let clustering = mean_shift(&kept_unit, settings.kernel, bandwidth);
+    let clusters: Vec<ClusterRow> = clustering
+        .centres
+        .iter()
+        .zip(&clustering.sizes)
+        .enumerate()
+        .map(|(k, (c, &size))| {
+            let centre = to_physical(study, c);
+            ClusterRow {
+                group: k + 1,
+                size,
+                predicted_angle_deg: model.predict(&centre),
+                centre,
+            }
+        })
+        .collect();
+    let mut label = vec![None; predicted.len()];
+    for (&i, &l) in kept.iter().zip(&clustering.labels) {
+        label[i] = Some(l + 1);
+    }
+
+    let out_dir = dir.stage(Stage::Search);
+    dir.prepare(study, Stage::Search)?;
+    let lineage = dir
+        .lineage(
+            Stage::Search,
+            json!({ "settings": settings, "bandwidth_used": bandwidth,
+                    "target_angle_deg": target.target_angle_deg,
+                    "tolerance_fraction": target.tolerance_fraction }),
+        )
+        .with_input(dir.input("model", &model_file)?);
+    let markdown = markdown(study, settings, &names, &clusters, kept.len(), bandwidth);
+    let ranges: Vec<(f64, f64)> = study.parameters.values().map(|r| (r.min, r.max)).collect();
+    let svg = scatter_matrix(
+        &names,
+        &ranges,
+        &kept_unit,
+        &clustering.labels,
+        &clustering.centres,
+        &format!(
+            "{} of {} points within {}% of {} deg",
+            kept.len(),
+            predicted.len(),
+            target.tolerance_fraction * 100.0,
+            target.target_angle_deg
+        ),
+    );
+    write_output(
+        &out_dir.join("points.csv"),
+        points_csv(&names, &physical, &predicted, &label).as_bytes(),
+        &lineage,
+    )?;
+    write_output(&out_dir.join("scatter.svg"), svg.as_bytes(), &lineage)?;
+    write_output(&out_dir.join("clusters.md"), markdown.as_bytes(), &lineage)?;
+    write_output(
+        &out_dir.join("clusters.csv"),
+        clusters_csv(&names, &clusters).as_bytes(),
+        &lineage,
+    )?;
+    Ok(SearchOutcome {
+        parameters: names,
+        predicted,
+        kept,
+        bandwidth,
+        modes: clustering.modes,
+        clusters,
+        markdown,
+        out_dir,
+    })
+}
+
+fn load_model(path: &std::path::Path) -> Result<Model, CalibrateError> {
+    let inconsistent = |message: String| CalibrateError::Inconsistent {
+        path: path.to_path_buf(),
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(|e| inconsistent(e.to_string()))?;
+    let model: Model = serde_json::from_slice(&bytes).map_err(|e| inconsistent(e.to_string()))?;
+    model.check().map_err(inconsistent)?;
+    Ok(model)
+}
+
+fn points_csv(
+    names: &[String],
+    physical: &[Vec<f64>],
+    predicted: &[f64],
+    label: &[Option<usize>],
+) -> String {
+    let mut header = vec!["index".to_string()];
+    header.extend(names.iter().cloned());
+    header.extend(["predicted_angle_deg", "kept", "cluster"].map(String::from));
+    let mut csv = CsvWriter::new(&header);
+    for (i, x) in physical.iter().enumerate() {
+        let mut cells = vec![Cell::Integer(i as u64)];
+        cells.extend(x.iter().map(|v| Cell::Number(*v)));
+        cells.push(Cell::Number(predicted[i]));
+        cells.push(Cell::Text(
+            if label[i].is_some() { "yes" } else { "no" }.to_string(),
+        ));
+        cells.push(label[i].map_or(Cell::Empty, |l| Cell::Integer(l as u64)));
+        csv.row(&cells);
+    }
+    csv.finish()
+}
+
+fn clusters_csv(names: &[String], clusters: &[ClusterRow]) -> String {
+    let mut header = vec!["group".to_string(), "size".to_string()];
+    header.extend(names.iter().cloned());
+    header.push("predicted_angle_deg".to_string());
+    let mut csv = CsvWriter::new(&header);
+    for c in clusters {
+        let mut cells = vec![Cell::Integer(c.group as u64), Cell::Integer(c.size as u64)];
+        cells.extend(c.centre.iter().map(|v| Cell::Number(*v)));
+        cells.push(Cell::Number(c.predicted_angle_deg));
+        csv.row(&cells);
+    }
+    csv.finish()
+}
+
+fn markdown(
+    study: &Study,
+    settings: &SearchSettings,
+    names: &[String],
+    clusters: &[ClusterRow],
+    kept: usize,
+    bandwidth: f64,
+) -> String {
+    let t = &study.calibration;
+    let how = match settings.bandwidth {
+        Some(_) => "given".to_string(),
+        None => format!("estimated, quantile {}", settings.quantile),
+    };
+    let mut s = String::new();
+    let _ = writeln!(s, "# Mean-shift clusters of `{}`\n", study.name);
+    let _ = writeln!(
+        s,
+        "{kept} of {} resampled points predict `{}` within {}% of {} deg; \
+         {} kernel, bandwidth {bandwidth:.4} (unit-scaled, {how}).\n",
+        settings.samples,
+        t.name,
+        t.tolerance_fraction * 100.0,
+        t.target_angle_deg,
+        serde_name(settings.kernel)
+    );
+    let _ = writeln!(
+        s,
+        "| group | size | {} | predicted angle (deg) |",
+        names.join(" | ")
+    );
+    let _ = writeln!(s, "|---|---|{}---|", "---|".repeat(names.len()));
+    for c in clusters {
+        let centre: Vec<String> = c.centre.iter().map(|v| format!("{v:.6}")).collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.2} |",
+            c.group,
+            c.size,
+            centre.join(" | "),
+            c.predicted_angle_deg
+        );
+    }
+    s
+}

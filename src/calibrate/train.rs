@@ -1,0 +1,349 @@
+//! `repose train STUDY`: the GA-BP network sweep on the batch's angles (he2019
+//! §3.2–3.4), and `repose train --table`: the same on any CSV table (e.g.
+//! he2019's printed Table A1).
+//!
+//! Split: the first `train_fraction` of the design (by sample index, rounded
+//! to whole rows) trains, the rest validates — he2019's 80 of 120, the default
+//! fraction 2/3. A run without an angle (failed, or never run) is left out of
+//! whichever part it belongs to and counted.
+//!
+//! Outputs (each with its lineage record): `sweep.csv` (one row per hidden
+//! size: the Fig. 12 table), `model.json` (the kept network, see
+//! [`super::surrogate::Model`]), `parity.svg` (Fig. 13: predicted against
+//! simulated, train and validation marked) and `summary.json` (the split, the
+//! kept size and, for a table with printed predictions, their R²).
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+use serde_json::json;
+
+use super::batch::read_angles;
+use super::metrics::r_squared;
+use super::surrogate::{sweep, Dataset, Scale, Sweep, TrainSettings};
+use super::svg::{parity_plot, ParityPoint};
+use super::table::{parse_number, Cell, CsvWriter, Table};
+use super::{
+    create_dir, file_input, json_bytes, parameter_names, serde_name, write_output, CalibrateError,
+    Stage, StudyDir,
+};
+use crate::manifest::Study;
+use crate::store::Lineage;
+
+/// he2019's split: 80 of 120 samples train.
+pub const DEFAULT_TRAIN_FRACTION: f64 = 2.0 / 3.0;
+
+/// Options of the train stage.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TrainOptions {
+    /// Network sweep settings.
+    pub settings: TrainSettings,
+    /// Fraction of the rows (in design order) that trains, in (0, 1).
+    pub train_fraction: f64,
+}
+
+/// A CSV table to train on.
+#[derive(Debug, Clone, Copy)]
+pub struct TableSpec<'a> {
+    /// The table.
+    pub path: &'a Path,
+    /// Input columns.
+    pub inputs: &'a [String],
+    /// Target column (the angle, degrees).
+    pub target: &'a str,
+    /// Optional column of printed predictions to score on the validation rows.
+    pub reference: Option<&'a str>,
+}
+
+/// What the train stage produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainOutcome {
+    /// The sweep and the kept model.
+    pub sweep: Sweep,
+    /// Rows used for training.
+    pub train_rows: usize,
+    /// Rows used for validation.
+    pub validation_rows: usize,
+    /// Rows without an angle, left out.
+    pub skipped: usize,
+    /// Eq. 7 R² of the table's reference predictions on the validation rows.
+    pub reference_r2: Option<f64>,
+    /// Where the outputs were written.
+    pub out_dir: PathBuf,
+}
+
+/// Contents of summary.json.
+#[derive(Debug, Serialize)]
+struct Summary {
+    train_rows: usize,
+    validation_rows: usize,
+    skipped_rows: usize,
+    best_hidden: usize,
+    best_train_r2: f64,
+    best_validation_r2: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reference_validation_r2: Option<f64>,
+}
+
+impl TrainOptions {
+    /// What is wrong with these options, if anything.
+    fn check(&self) -> Result<(), CalibrateError> {
+        let f = self.train_fraction;
+        if !(f > 0.0 && f < 1.0) {
+            return Err(CalibrateError::Settings(format!(
+                "--train-fraction = {f}: must be in (0, 1)"
+            )));
+        }
+        self.settings.check().map_err(CalibrateError::Settings)
+    }
+
+    /// The row index where validation starts for `n` rows.
+    fn split_at(&self, n: usize) -> usize {
+        (n as f64 * self.train_fraction).round() as usize
+    }
+}
+
+/// Trains on the study's batch/angles.csv and writes into `train/`.
+pub fn train_study(
+    dir: &StudyDir,
+    study: &Study,
+    options: &TrainOptions,
+) -> Result<TrainOutcome, CalibrateError> {
+    options.check()?;
+    let (angles_file, rows) = read_angles(dir, study)?;
+    let cut = options.split_at(rows.len());
+    let inputs = study
+        .parameters
+        .iter()
+        .map(|(name, r)| Scale {
+            name: name.clone(),
+            min: r.min,
+            max: r.max,
+        })
+        .collect();
+    let with_angle: Vec<usize> = (0..rows.len())
+        .filter(|&i| rows[i].angle_deg.is_some())
+        .collect();
+    let data = Dataset {
+        inputs,
+        target: "angle_deg".to_string(),
+        rows: rows.iter().map(|r| r.point.clone()).collect(),
+        targets: rows
+            .iter()
+            .map(|r| r.angle_deg.unwrap_or(f64::NAN))
+            .collect(),
+        train: with_angle.iter().copied().filter(|&i| i < cut).collect(),
+        validation: with_angle.iter().copied().filter(|&i| i >= cut).collect(),
+    };
+    debug_assert_eq!(
+        parameter_names(study),
+        data.inputs
+            .iter()
+            .map(|s| s.name.clone())
+            .collect::<Vec<_>>()
+    );
+    let out_dir = dir.stage(Stage::Train);
+    dir.prepare(study, Stage::Train)?;
+    let lineage = dir
+        .lineage(Stage::Train, json!(options))
+        .with_input(dir.input("angles", &angles_file)?);
+    let skipped = rows.len() - with_angle.len();
+    run(&data, options, &out_dir, &lineage, skipped, None)
+}
+
+/// Trains on a CSV table and writes into `out_dir`. Inputs are scaled by the
+/// training rows' min–max (a table has no ranges).
+pub fn train_table(
+    spec: &TableSpec,
+    out_dir: &Path,
+    options: &TrainOptions,
+) -> Result<TrainOutcome, CalibrateError> {
+    options.check()?;
+    let table = Table::read(spec.path)?;
+    let n = table.rows.len();
+    let cut = options.split_at(n);
+    let columns = spec
+        .inputs
+        .iter()
+        .map(|c| table.numbers(spec.path, c))
+        .collect::<Result<Vec<_>, _>>()?;
+    let targets = table.numbers(spec.path, spec.target)?;
+    let mut inputs = Vec::new();
+    for (name, values) in spec.inputs.iter().zip(&columns) {
+        let train = &values[..cut.min(n)];
+        let min = train.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = train.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if min >= max {
+            return Err(CalibrateError::Settings(format!(
+                "{}: input column `{name}` is constant over the training rows",
+                spec.path.display()
+            )));
+        }
+        inputs.push(Scale {
+            name: name.clone(),
+            min,
+            max,
+        });
+    }
+    let data = Dataset {
+        inputs,
+        target: spec.target.to_string(),
+        rows: (0..n)
+            .map(|i| columns.iter().map(|c| c[i]).collect())
+            .collect(),
+        targets,
+        train: (0..cut.min(n)).collect(),
+        validation: (cut.min(n)..n).collect(),
+    };
+    let reference = match spec.reference {
+        None => None,
+        Some(column) => Some(reference_r2(&table, spec.path, column, &data)?),
+    };
+    create_dir(out_dir)?;
+    let lineage = Lineage::new(
+        Stage::Train.name(),
+        json!({
+            "options": options,
+            "inputs": spec.inputs,
+            "target": spec.target,
+            "reference": spec.reference,
+        }),
+    )
+    .with_input(file_input("table", spec.path, None)?);
+    run(&data, options, out_dir, &lineage, 0, reference)
+}
+
+/// Eq. 7 R² of a column of printed predictions on the validation rows.
+fn reference_r2(
+    table: &Table,
+    path: &Path,
+    column: &str,
+    data: &Dataset,
+) -> Result<f64, CalibrateError> {
+    let k = table.require(path, column)?;
+    let mut predicted = Vec::new();
+    for &i in &data.validation {
+        let cell = &table.rows[i][k];
+        predicted.push(parse_number(cell).ok_or_else(|| {
+            CalibrateError::Settings(format!(
+                "{}:{}: reference column `{column}` = `{cell}`: every validation row needs a number",
+                path.display(),
+                i + 2
+            ))
+        })?);
+    }
+    let simulated: Vec<f64> = data.validation.iter().map(|&i| data.targets[i]).collect();
+    r_squared(&simulated, &predicted).ok_or_else(|| {
+        CalibrateError::Settings("the validation angles are all equal: R² undefined".to_string())
+    })
+}
+
+/// Sweeps, then writes sweep.csv, model.json, parity.svg and summary.json.
+fn run(
+    data: &Dataset,
+    options: &TrainOptions,
+    out_dir: &Path,
+    lineage: &Lineage,
+    skipped: usize,
+    reference_r2: Option<f64>,
+) -> Result<TrainOutcome, CalibrateError> {
+    let result = sweep(data, &options.settings)?;
+    let best = &result.rows[result.best];
+    write_output(
+        &out_dir.join("model.json"),
+        &json_bytes(&result.model),
+        lineage,
+    )?;
+    let mut points = Vec::new();
+    for (rows, train) in [(&data.train, true), (&data.validation, false)] {
+        for &i in rows.iter() {
+            points.push(ParityPoint {
+                simulated: data.targets[i],
+                predicted: result.model.predict(&data.rows[i]),
+                train,
+            });
+        }
+    }
+    let mut legend = vec![
+        format!(
+            "train (n = {}): R² = {:.3}",
+            data.train.len(),
+            best.train_r2
+        ),
+        format!(
+            "validation (n = {}): R² = {:.3}",
+            data.validation.len(),
+            best.validation_r2
+        ),
+    ];
+    if let Some(r) = reference_r2 {
+        legend.push(format!("printed predictions, validation: R² = {r:.3}"));
+    }
+    let title = format!("GA-BP network, {} hidden neurons", best.hidden);
+    write_output(
+        &out_dir.join("parity.svg"),
+        parity_plot(&points, &title, &legend).as_bytes(),
+        lineage,
+    )?;
+    let summary = Summary {
+        train_rows: data.train.len(),
+        validation_rows: data.validation.len(),
+        skipped_rows: skipped,
+        best_hidden: best.hidden,
+        best_train_r2: best.train_r2,
+        best_validation_r2: best.validation_r2,
+        reference_validation_r2: reference_r2,
+    };
+    write_output(
+        &out_dir.join("summary.json"),
+        &json_bytes(&summary),
+        lineage,
+    )?;
+    write_output(
+        &out_dir.join("sweep.csv"),
+        sweep_csv(&result).as_bytes(),
+        lineage,
+    )?;
+    Ok(TrainOutcome {
+        train_rows: data.train.len(),
+        validation_rows: data.validation.len(),
+        skipped,
+        reference_r2,
+        out_dir: out_dir.to_path_buf(),
+        sweep: result,
+    })
+}
+
+/// Header of sweep.csv.
+pub const SWEEP_HEADER: [&str; 10] = [
+    "hidden",
+    "train_r2",
+    "validation_r2",
+    "train_rmse_deg",
+    "validation_rmse_deg",
+    "ga_objective",
+    "lm_objective",
+    "lm_epochs",
+    "lm_stop",
+    "kept",
+];
+
+/// The sweep as CSV (one row per hidden size; `kept` marks the chosen one).
+pub fn sweep_csv(sweep: &Sweep) -> String {
+    let mut csv = CsvWriter::new(&SWEEP_HEADER);
+    for (i, r) in sweep.rows.iter().enumerate() {
+        csv.row(&[
+            Cell::Integer(r.hidden as u64),
+            Cell::Number(r.train_r2),
+            Cell::Number(r.validation_r2),
+            Cell::Number(r.train_rmse_deg),
+            Cell::Number(r.validation_rmse_deg),
+            Cell::Number(r.ga_objective),
+            Cell::Number(r.lm_objective),
+            Cell::Integer(r.lm_epochs as u64),
+            Cell::Text(serde_name(r.lm_stop)),
+            Cell::Text(if i == sweep.best { "yes" } else { "no" }.to_string()),
+        ]);
+    }
+    csv.finish()
+}

@@ -1,0 +1,504 @@
+//! The `funnel_pile` scene: he2019's modified FBS-104 funnel flow meter
+//! (§2.1, §2.3.2), the calibration test of the GA-BP study.
+//!
+//! # Geometry ([`geometry`])
+//!
+//! The platform is a disk of `platform_diameter_m` (he2019: 94 mm) whose top
+//! face is z = 0. Above it hangs the funnel, a cone frustum on the same axis
+//! from the outlet (`funnel_outlet_diameter_m`, its rim at `outlet_height_m`)
+//! to the top rim (`funnel_top_diameter_m`, he2019: 120 mm,
+//! `funnel_height_m` higher). he2019 says only that "the funnel outlet was
+//! designed to have a small 7° angle of inclination to reduce the material
+//! drop rate"; a sloped outlet that slows the drop is read here as a short
+//! straight tube of the outlet's diameter hanging from the cone's rim with its
+//! axis tilted `outlet_tilt_deg` from the vertical (towards +x): the stream
+//! slides along the tube's lower side and leaves it off-axis. The tube is
+//! `outlet_tube_length_m` long (paper silent; default one outlet diameter).
+//! Its top rim is centred on the cone's lower rim, so the two meet except for
+//! a sliver at most `outlet radius · sin(tilt)` wide (0.6 mm for a 10 mm
+//! outlet at 7°). The pile can grow no higher than the tube's exit: the
+//! outlet height must leave room for the angle sought (atan(exit height /
+//! platform radius) bounds a pile covering the platform).
+//!
+//! The brush (he2019: "the material slides down along the funnel wall with the
+//! brush at 60 rpm"; the standard funnel testers' stirrer) exists only when
+//! `brush_rpm` is given: without it no brush wall is built at all. It is
+//! `brush_blades` flat rectangles (default 2, evenly spaced) in meridian
+//! planes, each with its outer long edge parallel to the cone wall at
+//! `brush_gap_m` from it (default 1 mm, a stirrer's clearance), reaching
+//! `brush_width_m` further inwards across the slope (default: far enough to
+//! touch the axis at the outlet), from the top rim's height down into the
+//! throat until the blade's inner lower corner is level with the outlet rim.
+//! They turn about the funnel axis at `brush_rpm` during the discharge only.
+//! Paper silent on all of it: blade count, gap, width and shape are choices.
+//! The gap must exceed one particle diameter: a particle trapped between a
+//! kinematic edge and the wall is crushed until the overlap check stops the
+//! run (measured with a zero gap and 6 mm particles: 30 % overlap within
+//! 0.07 s of brushing).
+//!
+//! # Protocol
+//!
+//! - `fill` (`fill_time_s`; he2019: fill rate 0.56 generated in 0.01 s): the
+//!   charge — `fill_fraction` of the volume of the cone up to `fill_height_m`
+//!   above the outlet (default the whole cone) — is laid out and released
+//!   bottom-up one layer at a time ([`fill`]'s module docs).
+//! - `stand` (`standing_time_s`, he2019: 3 s): the charge rests in the funnel,
+//!   brush still. A cohesive powder arches over the outlet; a free-flowing one
+//!   already runs out.
+//! - `discharge` (the rest of `total_time_s`): the brush turns.
+//! - `settle` (at most `settle_time_s`, he2019: the last 2 of 20 s): the brush
+//!   stands; the phase ends early once the pile is at rest (mean kinetic energy
+//!   per particle below 1e-6 m g d for 0.05 s, [`SettleCriterion::at_rest`]).
+//!
+//! Every `sample_interval_s` (default 0.02 s): particles whose centre has
+//! sunk [`geometry::REMOVAL_DEPTH_DIAMETERS`] mean diameters below the
+//! platform's face, or left the keep zone sideways, are removed
+//! (`Simulation::retain`): they fell off the platform. The simulation box
+//! extends beyond that zone by what the fastest particle (free fall from the
+//! funnel top plus the brush tip speed) travels in one interval, so a falling
+//! particle is always removed before it can leave the box and trip the health
+//! check. Traces: kinetic energy, contacts, overlap, `discharged` (particles
+//! whose centre is below the tube's lowest point), `removed` (cumulative) and
+//! `angle` (the pile angle when measurable); the MCAP log gets a frame at each
+//! sample.
+//!
+//! # Measurement ([`pile_angles`])
+//!
+//! he2019 §2.2: the pile's side silhouette, boundary points between 10 % and
+//! 90 % of the pile height, least-squares lines left and right, their mean
+//! ([`crate::measure::pile`], bins one mean diameter wide, the left/right
+//! split at the apex so the off-axis stream of the tilted tube does not bias
+//! it). The pile is every particle whose centre is on the platform
+//! (0 ≤ z < the tube's lowest point, within the platform radius) moving
+//! slower than [`PILE_SPEED_LIMIT_M_S`] (a particle still falling from the
+//! funnel is not part of the silhouette). he2019 photographs one side; a
+//! simulation can look from all of them, and a pile of a few hundred coarse
+//! particles is rough, so the scene fits four side views 45° apart
+//! ([`VIEW_AZIMUTHS_DEG`]), reports every flank's angle, R² and point count,
+//! and gives the mean of the eight flanks as the angle of repose. A fit with
+//! R² below [`R2_FLOOR`] is flagged (`angle_r2_below_floor` = 1), not
+//! hidden. A pile too low or too narrow to fit fails the run with a "not
+//! measurable" error; [`simulate`] still gives such a run's counts.
+
+pub mod fill;
+pub mod geometry;
+
+use self::geometry::FunnelGeometry;
+use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::{physics, SceneError};
+use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::particles::Particles;
+use crate::dem::simulation::{Simulation, SimulationSetup, World};
+use crate::dem::vec3::Vec3;
+use crate::log::{AngleSample, LogError, LogOptions, RunLog, Trace};
+use crate::manifest::scene::FunnelPileScene;
+use crate::manifest::Experiment;
+use crate::measure::pile::{pile_angle, PileAngle, PileSpec};
+use crate::measure::MeasureError;
+use crate::packing::PackingError;
+use crate::store::RunResult;
+use std::path::Path;
+
+/// Particles faster than this (m/s) are not part of the pile's silhouette.
+pub const PILE_SPEED_LIMIT_M_S: f64 = 0.05;
+/// A flank fit with an R² below this is flagged in the result. For a straight
+/// flank of height 0.8 H sampled in bins of one diameter d with a surface
+/// roughness of about 0.3 d, R² ≈ 1 − 12 (0.3 d)² / (0.8 H)², above 0.95 for
+/// H ≥ 8 d; below 0.9 the flank is not a line (clumps, a crater, a cliff).
+pub const R2_FLOOR: f64 = 0.9;
+
+/// Why a funnel run failed beyond the engine's own errors.
+#[derive(Debug, thiserror::Error)]
+pub enum FunnelError {
+    /// The charge could not be laid out.
+    #[error("funnel_pile fill: {0}")]
+    Packing(#[from] PackingError),
+    /// The charge region holds no particle.
+    #[error("funnel_pile fill: the charge region (fill_height_m = {fill_height_m} m above the outlet, fill_fraction = {fill_fraction}) holds no particle")]
+    EmptyCharge {
+        /// Height of the charge, m.
+        fill_height_m: f64,
+        /// Requested solid fraction.
+        fill_fraction: f64,
+    },
+    /// The engine refused the setup.
+    #[error("funnel_pile: {0}")]
+    Setup(#[from] crate::dem::simulation::SetupError),
+    /// The simulation became unhealthy.
+    #[error(transparent)]
+    Health(#[from] HealthError),
+    /// A wall could not be built.
+    #[error("funnel_pile wall: {0}")]
+    Wall(#[from] crate::dem::walls::WallError),
+    /// The domain could not be built.
+    #[error("funnel_pile domain: {0}")]
+    Domain(#[from] crate::dem::domain::DomainError),
+    /// No angle could be measured at the end.
+    #[error("funnel_pile: pile angle not measurable: {0}")]
+    Angle(#[from] MeasureError),
+    /// The run log could not be written.
+    #[error(transparent)]
+    Log(#[from] LogError),
+}
+
+/// Azimuths of the side views, degrees from +x (the profile coordinate's
+/// direction): four views 45° apart.
+pub const VIEW_AZIMUTHS_DEG: [u32; 4] = [0, 45, 90, 135];
+
+/// The pile seen from the sides of [`VIEW_AZIMUTHS_DEG`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PileAngles {
+    /// One profile fit per view, in the order of [`VIEW_AZIMUTHS_DEG`].
+    pub views: [PileAngle; 4],
+}
+
+impl PileAngles {
+    /// Mean of every flank angle, degrees: the angle of repose.
+    pub fn mean_deg(&self) -> f64 {
+        self.views.iter().map(|v| v.mean_deg).sum::<f64>() / self.views.len() as f64
+    }
+
+    /// Mean of the left flanks, degrees.
+    pub fn left_deg(&self) -> f64 {
+        self.views.iter().map(|v| v.left_deg).sum::<f64>() / self.views.len() as f64
+    }
+
+    /// Mean of the right flanks, degrees.
+    pub fn right_deg(&self) -> f64 {
+        self.views.iter().map(|v| v.right_deg).sum::<f64>() / self.views.len() as f64
+    }
+
+    /// Smallest R² of the flank fits.
+    pub fn min_r2(&self) -> f64 {
+        self.views
+            .iter()
+            .flat_map(|v| [v.r2_left, v.r2_right])
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Pile height above the platform, m.
+    pub fn height_m(&self) -> f64 {
+        self.views[0].height_m
+    }
+}
+
+/// The pile: centres and radii of the particles on the platform moving slower
+/// than [`PILE_SPEED_LIMIT_M_S`].
+fn pile_particles(p: &Particles, geom: &FunnelGeometry) -> (Vec<Vec3>, Vec<f64>) {
+    (0..p.len())
+        .filter(|&i| {
+            geom.on_platform(&p.position[i]) && p.velocity[i].norm() < PILE_SPEED_LIMIT_M_S
+        })
+        .map(|i| (p.position[i], p.radius[i]))
+        .unzip()
+}
+
+/// Height of the pile's highest particle top above the platform, m (0 without
+/// a pile); measured even when the angle is not.
+pub fn pile_height_m(p: &Particles, geom: &FunnelGeometry) -> f64 {
+    let (positions, radii) = pile_particles(p, geom);
+    positions
+        .iter()
+        .zip(&radii)
+        .map(|(x, r)| x.z + r)
+        .fold(0.0, f64::max)
+}
+
+/// The pile's angles (see the module docs) in the particles' current state.
+pub fn pile_angles(p: &Particles, geom: &FunnelGeometry) -> Result<PileAngles, MeasureError> {
+    let (positions, radii) = pile_particles(p, geom);
+    let base = PileSpec::new(0.0, geom.d_mean_m);
+    let view = |az: u32| {
+        let spec = PileSpec {
+            azimuth_rad: f64::from(az).to_radians(),
+            ..base
+        };
+        pile_angle(&positions, &radii, &spec)
+    };
+    let [a, b, c, d] = VIEW_AZIMUTHS_DEG;
+    Ok(PileAngles {
+        views: [view(a)?, view(b)?, view(c)?, view(d)?],
+    })
+}
+
+/// Removes fallen particles and records traces, angles and log frames.
+struct FunnelSampler<'a> {
+    geom: &'a FunnelGeometry,
+    traces: Traces,
+    log: Option<&'a mut RunLog>,
+    /// Particles inserted so far.
+    charged: usize,
+    /// Particles removed so far (fell off the platform).
+    removed: usize,
+}
+
+impl FunnelSampler<'_> {
+    /// Particles that have left the funnel: inserted less those whose centre
+    /// is still above the tube's lowest point.
+    fn discharged(&self, p: &Particles) -> usize {
+        let inside = p
+            .position
+            .iter()
+            .filter(|x| x.z >= self.geom.exit_z_m)
+            .count();
+        self.charged - inside
+    }
+}
+
+impl Sampler for FunnelSampler<'_> {
+    type Error = FunnelError;
+
+    fn sample(&mut self, _phase: &'static str, sim: &mut Simulation) -> Result<(), FunnelError> {
+        let geom = self.geom;
+        self.removed += sim.retain(|p, i| geom.keeps(&p.position[i]))?;
+        let t = sim.world().time_s;
+        self.traces.push_engine_state(sim);
+        let discharged = self.discharged(&sim.world().particles) as f64;
+        self.traces.push("discharged", "1", t, discharged);
+        self.traces.push("removed", "1", t, self.removed as f64);
+        let angles = pile_angles(&sim.world().particles, geom).ok();
+        if let Some(a) = angles {
+            self.traces.push("angle", "deg", t, a.mean_deg());
+        }
+        if let Some(log) = self.log.as_deref_mut() {
+            log.record(sim)?;
+            log.scalar(Trace::Discharged, t, discharged)?;
+            if let Some(a) = angles {
+                log.angle(
+                    t,
+                    &AngleSample {
+                        left_deg: a.left_deg(),
+                        right_deg: a.right_deg(),
+                        mean_deg: a.mean_deg(),
+                        fit_r2: a.min_r2(),
+                    },
+                )?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A finished funnel simulation before its pile is measured.
+#[derive(Debug)]
+pub struct FunnelOutcome {
+    /// The result so far: counts, times and traces, no angle yet.
+    pub result: RunResult,
+    /// The final state.
+    pub world: World,
+    /// The scene's geometry.
+    pub geometry: FunnelGeometry,
+}
+
+/// Runs a `funnel_pile` experiment (see the module docs); with `log`, writes
+/// its MCAP log there (only when the run succeeds).
+pub fn run(
+    exp: &Experiment,
+    scene: &FunnelPileScene,
+    log: Option<&Path>,
+) -> Result<RunResult, SceneError> {
+    let mut log_file = match log {
+        Some(path) => Some(RunLog::create(
+            path,
+            exp,
+            LogOptions {
+                speed_scale_m_s: speed_scale(exp, scene)?,
+                ..LogOptions::default()
+            },
+        )?),
+        None => None,
+    };
+    let FunnelOutcome {
+        mut result,
+        world,
+        geometry,
+    } = simulate(exp, scene, log_file.as_mut())?;
+    let angles = pile_angles(&world.particles, &geometry).map_err(FunnelError::from)?;
+    put_angles(&mut result, &angles);
+    if let Some(log) = log_file {
+        log.finish()?;
+    }
+    Ok(result)
+}
+
+/// The colour scale of the log: the speed bound of the geometry, m/s.
+fn speed_scale(exp: &Experiment, scene: &FunnelPileScene) -> Result<f64, SceneError> {
+    let (_, d_mean) =
+        physics::diameter_bounds(&physics::size_distribution(exp)).map_err(FunnelError::from)?;
+    Ok(FunnelGeometry::new(scene, d_mean).speed_bound_m_s)
+}
+
+/// Every angle with its fit diagnostics; the headline is the mean over all
+/// flanks.
+fn put_angles(result: &mut RunResult, a: &PileAngles) {
+    let mut put = |k: String, v: f64| {
+        result.measurements.insert(k, v);
+    };
+    for (az, p) in VIEW_AZIMUTHS_DEG.iter().zip(&a.views) {
+        let view = format!("angle_az{az:03}");
+        put(format!("{view}_left_deg"), p.left_deg);
+        put(format!("{view}_right_deg"), p.right_deg);
+        put(format!("{view}_deg"), p.mean_deg);
+        put(format!("{view}_r2_left"), p.r2_left);
+        put(format!("{view}_r2_right"), p.r2_right);
+        put(format!("{view}_points_left"), p.points_left as f64);
+        put(format!("{view}_points_right"), p.points_right as f64);
+    }
+    put("angle_deg".into(), a.mean_deg());
+    put("angle_min_r2".into(), a.min_r2());
+    put("angle_r2_floor".into(), R2_FLOOR);
+    put(
+        "angle_r2_below_floor".into(),
+        f64::from(u8::from(a.min_r2() < R2_FLOOR)),
+    );
+    result.headline_angle_deg = Some(a.mean_deg());
+}
+
+/// Runs the protocol (fill, stand, discharge, settle) and returns the final
+/// state with the counts and traces; the pile is not measured here, so a run
+/// whose powder never reaches the platform still reports how much left the
+/// funnel.
+pub fn simulate(
+    exp: &Experiment,
+    scene: &FunnelPileScene,
+    log: Option<&mut RunLog>,
+) -> Result<FunnelOutcome, SceneError> {
+    let contact = physics::contact_setup(
+        exp,
+        &[
+            scene.funnel_material.as_str(),
+            scene.platform_material.as_str(),
+        ],
+    );
+    let rho = exp.material.particle.density_kg_m3;
+    let sizes = physics::size_distribution(exp);
+    let (d_min, d_mean) = physics::diameter_bounds(&sizes).map_err(FunnelError::from)?;
+    let plan = physics::time_step(exp, &contact, 0.5 * d_min)?;
+    let dt = plan.dt_s;
+    let geom = FunnelGeometry::new(scene, d_mean);
+    let brush_start = scene.fill_time_s + scene.standing_time_s;
+    let brush_end = scene.total_time_s - scene.settle_time_s;
+    let walls = geometry::walls(scene, &geom, brush_start, brush_end).map_err(FunnelError::from)?;
+    let blades = walls.len() - 3;
+    let charge = fill::lay_out(
+        |h| geom.charge_region(h),
+        scene.fill_height(),
+        scene.funnel_height_m,
+        &sizes,
+        scene.fill_fraction,
+        exp.seeds.packing_seed,
+        d_mean,
+        &walls,
+    )
+    .map_err(FunnelError::from)?;
+    let mut layers = charge.layers.iter();
+    let Some(first) = layers.next() else {
+        return Err(FunnelError::EmptyCharge {
+            fill_height_m: scene.fill_height(),
+            fill_fraction: scene.fill_fraction,
+        }
+        .into());
+    };
+    let mut particles = Particles::default();
+    for p in first {
+        particles.push(p, rho);
+    }
+    let world = World::new(particles, walls, geom.domain().map_err(FunnelError::from)?);
+    let setup = SimulationSetup {
+        contact,
+        density_kg_m3: rho,
+        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -geometry::G_M_S2)),
+        dt_s: dt,
+        skin_m: 0.1 * d_mean,
+        health: HealthLimits::default(),
+    };
+    let mut sim = Simulation::new(world, &setup).map_err(FunnelError::from)?;
+
+    // Fill: layer k is released at k / n of the generation time.
+    let n = charge.layers.len();
+    let step_at = |k: usize| (scene.fill_time_s * k as f64 / n as f64 / dt).round() as u64;
+    let mut charged = first.len();
+    let mut skipped = 0;
+    for (k, layer) in layers.enumerate() {
+        sim.advance(step_at(k + 1) - step_at(k))
+            .map_err(FunnelError::from)?;
+        let w = sim.world();
+        let free = fill::free_sites(layer, &w.particles.position, &w.particles.radius);
+        skipped += layer.len() - free.len();
+        charged += free.len();
+        sim.insert(&free).map_err(FunnelError::from)?;
+    }
+    sim.advance(step_at(n) - step_at(n - 1))
+        .map_err(FunnelError::from)?;
+
+    let mut sampler = FunnelSampler {
+        geom: &geom,
+        traces: Traces::default(),
+        log,
+        charged,
+        removed: 0,
+    };
+    let mut progress = Progress::on_stderr();
+    let every = geom.sample_interval_s;
+    let now = |sim: &Simulation| sim.world().time_s;
+    let stand = Phase {
+        name: "stand",
+        max_duration_s: brush_start - now(&sim),
+        settle: None,
+    };
+    run_phase(&mut sim, &stand, dt, every, &mut sampler, &mut progress)?;
+    let discharge = Phase {
+        name: "discharge",
+        max_duration_s: brush_end - now(&sim),
+        settle: None,
+    };
+    run_phase(&mut sim, &discharge, dt, every, &mut sampler, &mut progress)?;
+    let settle = Phase {
+        name: "settle",
+        max_duration_s: scene.settle_time_s,
+        settle: Some(SettleCriterion::at_rest(
+            rho * std::f64::consts::PI / 6.0 * d_mean.powi(3),
+            d_mean,
+        )),
+    };
+    let settled = run_phase(&mut sim, &settle, dt, every, &mut sampler, &mut progress)?;
+
+    let w = sim.world();
+    let discharged = sampler.discharged(&w.particles);
+    let removed = sampler.removed;
+    let on_platform = w
+        .particles
+        .position
+        .iter()
+        .filter(|x| geom.on_platform(x))
+        .count();
+    let traces = std::mem::take(&mut sampler.traces);
+    let mut result = RunResult::new(exp, sim.kernel_name());
+    result.traces = traces.into_map();
+    let mut put = |k: &str, v: f64| {
+        result.measurements.insert(k.to_string(), v);
+    };
+    put("dt_s", dt);
+    put("steps", w.step as f64);
+    put("end_time_s", w.time_s);
+    put("settled", f64::from(u8::from(settled.settled)));
+    put("brush_blades", blades as f64);
+    put("brush_start_s", brush_start);
+    put("brush_end_s", brush_end);
+    put("particles_charged", charged as f64);
+    put("charge_height_m", charge.height_m);
+    put("charge_lattice_spacing", charge.spacing);
+    put("charge_sites_at_brush", charge.dropped_at_walls as f64);
+    put("charge_sites_occupied", skipped as f64);
+    put("discharged", discharged as f64);
+    put("discharged_fraction", discharged as f64 / charged as f64);
+    put("left_in_funnel", (charged - discharged) as f64);
+    put("removed", removed as f64);
+    put("on_platform", on_platform as f64);
+    put("pile_height_m", pile_height_m(&w.particles, &geom));
+    Ok(FunnelOutcome {
+        result,
+        world: w.clone(),
+        geometry: geom,
+    })
+}

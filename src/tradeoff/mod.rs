@@ -1,0 +1,171 @@
+//! `repose tradeoff`: what accuracy costs in time, measured on the user's own
+//! scene.
+//!
+//! [`plan`] turns a base experiment and fidelity knobs into a reference point
+//! and one-knob-away points, each with replicates (packing seeds); [`run`]
+//! runs them all through the store (cached, resumable, parallel over runs) and
+//! [`summarise`] turns the results into rows: angle mean ± 95 % CI, error vs
+//! the reference with its Welch CI, wall time, particle-steps, speed-up,
+//! health, and whether the point is on the Pareto front of (|error|, wall
+//! time). [`report`] writes them as CSV, Markdown and SVG.
+
+pub mod plan;
+pub mod report;
+pub mod stats;
+
+use rayon::prelude::*;
+
+use crate::manifest::{ContentId, Experiment};
+use crate::scenes::run_experiment;
+use crate::store::{RunResult, Store, TimingRecord};
+use plan::Point;
+use stats::{difference_ci, mean_ci, pareto_front, MeanCi};
+
+/// The outcome of one replicate.
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    /// The experiment id.
+    pub id: ContentId,
+    /// Its result, when the run stayed healthy.
+    pub result: Option<RunResult>,
+    /// Why it failed, otherwise.
+    pub failure: Option<String>,
+    /// Wall time of the run when it was computed (timing.json), s.
+    pub wall_time_s: Option<f64>,
+}
+
+/// Runs every replicate of every point (cached by id; already complete runs
+/// are not repeated), in parallel over runs on `threads` threads; outcomes in
+/// plan order.
+pub fn run(store: &Store, points: &[Point], threads: usize) -> Vec<Vec<Outcome>> {
+    let all: Vec<&Experiment> = points.iter().flat_map(|p| &p.replicates).collect();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()
+        .expect("a thread pool can be built");
+    let mut flat: Vec<Outcome> = pool.install(|| {
+        all.par_iter()
+            .map(|e| run_one(store, e))
+            .collect::<Vec<_>>()
+    });
+    let mut out = Vec::new();
+    for p in points {
+        let rest = flat.split_off(p.replicates.len());
+        out.push(std::mem::replace(&mut flat, rest));
+    }
+    out
+}
+
+fn run_one(store: &Store, e: &Experiment) -> Outcome {
+    let id = e.id();
+    let outcome = store.run_cached(e, |e, dir| run_experiment(e, Some(&dir.mcap_path())));
+    let timing: Option<TimingRecord> = Store::read_json(&store.run_dir(&id).timing_path()).ok();
+    match outcome {
+        Ok((result, _)) => Outcome {
+            id,
+            result: Some(result),
+            failure: None,
+            wall_time_s: timing.map(|t| t.wall_time_s),
+        },
+        Err(err) => Outcome {
+            id,
+            result: None,
+            failure: Some(err.to_string()),
+            wall_time_s: None,
+        },
+    }
+}
+
+/// One row of the tradeoff table.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// `reference` or `knob=value`.
+    pub label: String,
+    /// The knob (or `reference`).
+    pub knob: &'static str,
+    /// The knob's value.
+    pub value: Option<f64>,
+    /// Replicates run.
+    pub replicates: usize,
+    /// Replicates that stayed healthy and gave an angle.
+    pub healthy: usize,
+    /// Headline angle over healthy replicates, degrees.
+    pub angle: Option<MeanCi>,
+    /// Angle − reference angle and its 95 % CI half-width, degrees.
+    pub error_deg: Option<(f64, f64)>,
+    /// Mean wall time per run, s.
+    pub wall_time_s: Option<f64>,
+    /// Time step the runs used (the engine takes min(fraction · T_R, t_c / 20),
+    /// so a step-fraction knob stops mattering once the contact time binds), s.
+    pub dt_s: Option<f64>,
+    /// Mean particle-steps per run (particles × steps as the scene reports).
+    pub particle_steps: Option<f64>,
+    /// Reference wall time / this wall time.
+    pub speed_up: Option<f64>,
+    /// On the Pareto front of (|error|, wall time).
+    pub pareto: bool,
+    /// Ids of the replicates, in seed order.
+    pub ids: Vec<ContentId>,
+    /// The first failure, if any replicate failed.
+    pub failure: Option<String>,
+}
+
+fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let v: Vec<f64> = values.collect();
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+/// The table: one row per point, the reference first.
+pub fn summarise(points: &[Point], outcomes: &[Vec<Outcome>]) -> Vec<Row> {
+    let mut rows: Vec<Row> = points
+        .iter()
+        .zip(outcomes)
+        .map(|(p, o)| {
+            let angles: Vec<f64> = o
+                .iter()
+                .filter_map(|x| x.result.as_ref()?.headline_angle_deg)
+                .collect();
+            let particle_steps = mean(o.iter().filter_map(|x| {
+                let m = &x.result.as_ref()?.measurements;
+                Some(m.get("particles")? * m.get("steps")?)
+            }));
+            let dt_s = mean(
+                o.iter()
+                    .filter_map(|x| x.result.as_ref()?.measurements.get("dt_s").copied()),
+            );
+            Row {
+                label: p.label(),
+                dt_s,
+                knob: p.knob,
+                value: p.value,
+                replicates: o.len(),
+                healthy: angles.len(),
+                angle: mean_ci(&angles),
+                error_deg: None,
+                wall_time_s: mean(o.iter().filter_map(|x| x.wall_time_s)),
+                particle_steps,
+                speed_up: None,
+                pareto: false,
+                ids: o.iter().map(|x| x.id.clone()).collect(),
+                failure: o.iter().find_map(|x| x.failure.clone()),
+            }
+        })
+        .collect();
+    let reference = rows.first().and_then(|r| r.angle.zip(r.wall_time_s));
+    if let Some((ref_angle, ref_time)) = reference {
+        for row in &mut rows {
+            row.error_deg = row.angle.map(|a| difference_ci(&a, &ref_angle));
+            row.speed_up = row.wall_time_s.map(|t| ref_time / t);
+        }
+    }
+    let candidates: Vec<(usize, (f64, f64))> = rows
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| Some((i, (r.error_deg?.0.abs(), r.wall_time_s?))))
+        .collect();
+    let coords: Vec<(f64, f64)> = candidates.iter().map(|c| c.1).collect();
+    for k in pareto_front(&coords) {
+        rows[candidates[k].0].pareto = true;
+    }
+    rows
+}
