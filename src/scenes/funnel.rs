@@ -379,7 +379,6 @@ pub fn simulate(
     let brush_start = scene.fill_time_s + scene.standing_time_s;
     let brush_end = scene.total_time_s - scene.settle_time_s;
     let walls = geometry::walls(scene, &geom, brush_start, brush_end).map_err(FunnelError::from)?;
-    let blades = walls.len() - 3;
     let charge = fill::lay_out(
         |h| geom.charge_region(h),
         scene.fill_height(),
@@ -482,7 +481,7 @@ pub fn simulate(
     put("steps", w.step as f64);
     put("end_time_s", w.time_s);
     put("settled", f64::from(u8::from(settled.settled)));
-    put("brush_blades", blades as f64);
+    put("brush_blades", f64::from(scene.brush_blade_count()));
     put("brush_start_s", brush_start);
     put("brush_end_s", brush_end);
     put("particles_charged", charged as f64);
