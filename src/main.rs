@@ -80,9 +80,10 @@ enum Command {
         candidates: usize,
     },
     /// The whole he2019 method: sample, batch, train, search, verify. Without a
-    /// study, runs the embedded default (the calibrate-smoke drum study).
+    /// study, runs the embedded default (he2019 at the quick profile,
+    /// experiments/he2019-quick/study.json).
     Calibrate {
-        /// Study manifest [default: the embedded smoke study].
+        /// Study manifest [default: the embedded he2019-quick study].
         study: Option<PathBuf>,
         /// Runs at once, each single-threaded [default: the number of CPUs].
         #[arg(long)]

@@ -347,19 +347,26 @@ fn train_and_search_recover_the_fake_response_and_rerun_byte_identically() {
         assert!((c.predicted_angle_deg - 30.0).abs() < 3.0, "{c:?}");
     }
 
-    // Verify: each candidate re-simulated in the calibration scene (the study
-    // has no verification scenes). The fake DEM's angle at a centre is known,
-    // so the table's simulated angle, relative error and verdict are checked
-    // against it.
+    // Verify: each candidate re-simulated in the calibration scene and the
+    // study's verification scene (the drum at 15 rpm, target 28 deg). The fake
+    // DEM's angle at a centre is known (it ignores the rpm), so the table's
+    // simulated angle, relative error and verdict are checked against it.
     let checked = verify(&dir, &s, &store, &settings(2), 2, |e, d| fake.run(e, d)).unwrap();
-    assert_eq!(checked.rows.len(), found.clusters.len().min(2));
-    for (row, cluster) in checked.rows.iter().zip(&found.clusters) {
-        assert_eq!((row.group, row.scene.as_str()), (cluster.group, "drum"));
+    let candidates = found.clusters.len().min(2);
+    assert_eq!(checked.rows.len(), 2 * candidates);
+    for (k, row) in checked.rows.iter().enumerate() {
+        let cluster = &found.clusters[k / 2];
+        let (scene, measured) = [("drum", 30.0), ("drum15", 28.0)][k % 2];
+        assert_eq!((row.group, row.scene.as_str()), (cluster.group, scene));
+        assert_eq!(row.measured_deg, measured);
         let (mu_r, mu) = (cluster.centre[0], cluster.centre[1]);
         let truth = 20.0 + 30.0 * mu + 40.0 * mu_r;
         assert_eq!(row.simulated_deg, Some(truth));
-        assert_eq!(row.relative_error, Some((truth - 30.0).abs() / 30.0));
-        assert_eq!(row.passes(), (truth - 30.0).abs() / 30.0 <= 0.05);
+        assert_eq!(
+            row.relative_error,
+            Some((truth - measured).abs() / measured)
+        );
+        assert_eq!(row.passes(), (truth - measured).abs() / measured <= 0.05);
     }
 
     let first = snapshot(dir.path());
