@@ -253,7 +253,7 @@ struct TradeoffArgs {
     /// Experiment manifest of the scene (a lab scene).
     manifest: PathBuf,
     /// Knobs to sweep (rayleigh_fraction, youngs_modulus_factor, size_factor,
-    /// periodic_slices), comma-separated.
+    /// periodic_slices, stop_threshold, stop_hold), comma-separated.
     #[arg(
         long,
         value_delimiter = ',',
