@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 use crate::audit::{self, AuditError};
 use crate::bench::{self, BenchError, BenchOptions};
 use crate::calibrate::batch::{batch as run_batch, BatchSettings};
+use crate::calibrate::curve;
 use crate::calibrate::diagnostics::Diagnostics;
-use crate::calibrate::sample::{diagnose_table, sample as run_sample, SampleSettings};
+use crate::calibrate::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
 use crate::calibrate::search::{search as run_search, SearchSettings};
 use crate::calibrate::surrogate::TrainSettings;
 use crate::calibrate::train::DEFAULT_TRAIN_FRACTION;
@@ -503,6 +504,34 @@ pub fn tradeoff(
     }
     write!(out, "{}", report::markdown(&rows, &title))?;
     writeln!(out, "\nwritten: {}", dir.display())?;
+    Ok(())
+}
+
+/// `repose learning-curve STUDY`: samples the study if it has no design yet,
+/// runs the batch (cached, resumable), then trains and searches on nested
+/// prefixes of the design (see [`crate::calibrate::curve`]); prints the table.
+pub fn learning_curve(
+    store_root: &Path,
+    study_path: &Path,
+    sizes: Option<&[usize]>,
+    jobs: usize,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_study(store_root, study_path)?;
+    if !design_path(&dir).is_file() {
+        sample(
+            store_root,
+            study_path,
+            &SampleSettings::default(),
+            out,
+            &mut io::stderr(),
+        )?;
+    }
+    batch(store_root, study_path, jobs, out)?;
+    let store = Store::open(store_root)?;
+    let outcome = curve::learning_curve(&dir, &study, &store, sizes)?;
+    write!(out, "\n{}", outcome.markdown)?;
+    writeln!(out, "\noutputs: {}", outcome.out_dir.display())?;
     Ok(())
 }
 

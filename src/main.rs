@@ -96,6 +96,21 @@ enum Command {
     /// manifest (one at a time, R replicates each) and tabulate angle error vs the
     /// finest setting against wall time, with the Pareto front.
     Tradeoff(TradeoffArgs),
+    /// Accuracy vs number of DEM simulations for a study: train on nested
+    /// prefixes of its design (fixed validation rows), with validation R², the
+    /// calibrated parameters' spread and the DEM time of each size. Runs the
+    /// sample (if missing) and batch stages first (cached, resumable).
+    LearningCurve {
+        /// Study manifest.
+        study: PathBuf,
+        /// Training-set sizes, increasing, comma-separated [default: a quarter,
+        /// half, three quarters and all of the design's training rows].
+        #[arg(long, value_delimiter = ',')]
+        sizes: Option<Vec<usize>>,
+        /// Runs at once, each single-threaded [default: the number of CPUs].
+        #[arg(long)]
+        jobs: Option<usize>,
+    },
     /// Walk a study's outputs back to their manifests through the lineage records,
     /// re-hash every input file and check every referenced run; optionally re-run
     /// some runs and check they reproduce byte for byte.
@@ -254,7 +269,7 @@ struct TradeoffArgs {
     /// Experiment manifest of the scene (a lab scene).
     manifest: PathBuf,
     /// Knobs to sweep (rayleigh_fraction, youngs_modulus_factor, size_factor,
-    /// periodic_slices), comma-separated.
+    /// periodic_slices, stop_threshold, stop_hold), comma-separated.
     #[arg(
         long,
         value_delimiter = ',',
@@ -445,6 +460,13 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             let options = args.options().map_err(CommandError::Usage)?;
             commands::tradeoff(&cli.store, &args.manifest, &options, &mut out)
         }
+        Command::LearningCurve { study, sizes, jobs } => commands::learning_curve(
+            &cli.store,
+            &study,
+            sizes.as_deref(),
+            default_jobs(jobs),
+            &mut out,
+        ),
         Command::Audit { path, rerun, seed } => {
             commands::audit(&cli.store, &path, rerun, seed, &mut out)
         }

@@ -12,10 +12,10 @@ use repose::manifest::scene::{
     BaffleLiftScene, DrumScene, FunnelPileScene, HopperScene, StaticPileScene,
 };
 use repose::manifest::{
-    canonical_json, parse_document, parse_experiment, CoarseGraining, CoarseGrainingRule, Contact,
-    ContactModel, ContentId, Experiment, Material, NormalModel, PairMode, PairParams, PairScene,
-    ParticleMaterial, Partner, Profile, RollingModel, Scene, Seeds, SizeDistribution, TimeStep,
-    WallMaterial, WallStiffness,
+    canonical_json, parse_document, parse_experiment, AtRest, CoarseGraining, CoarseGrainingRule,
+    Contact, ContactModel, ContentId, Experiment, Material, NormalModel, PairMode, PairParams,
+    PairScene, ParticleMaterial, Partner, Profile, RollingModel, Scene, Seeds, SizeDistribution,
+    TimeStep, WallMaterial, WallStiffness,
 };
 use serde_json::{json, Value};
 
@@ -102,9 +102,23 @@ fn spelled_out_defaults_hash_like_omitted_ones() {
     let lean = edit(lean, "/contact/model/clip_tensile_normal_force", None);
     assert_eq!(id_of(&lean.to_string()), base);
     assert_eq!(
-        id_of(&edit(full, "/scene/pull_speed_m_s", Some(Value::Null)).to_string()),
+        id_of(&edit(full.clone(), "/scene/pull_speed_m_s", Some(Value::Null)).to_string()),
         base
     );
+    let rest = json!({"kinetic_energy_fraction": 1e-6, "hold_s": 0.05});
+    assert_eq!(id_of(&edit(full, "/at_rest", Some(rest)).to_string()), base);
+}
+
+#[test]
+fn a_stop_criterion_other_than_the_default_is_hashed() {
+    let drum = common::example("drum/smoke.json");
+    let base = id_of(&drum.to_string());
+    let looser = edit(
+        drum,
+        "/at_rest",
+        Some(json!({"kinetic_energy_fraction": 1e-5})),
+    );
+    assert_ne!(id_of(&looser.to_string()), base);
 }
 
 #[test]
@@ -364,6 +378,7 @@ prop_compose! {
         time_step in (float(), float()),
         coarse in prop::option::of((float(), float(), prop_oneof![
             Just(CoarseGrainingRule::SurfaceEnergyProportional), Just(CoarseGrainingRule::CohesionNumber)])),
+        at_rest in (float(), float()),
     ) -> Experiment {
         Experiment {
             schema_version: versions.0,
@@ -382,6 +397,7 @@ prop_compose! {
             seeds: Seeds { design_seed: seeds.0, sample_index: seeds.1, packing_seed: seeds.2 },
             time_step: TimeStep { rayleigh_fraction: time_step.0, design_impact_speed_m_s: time_step.1 },
             coarse_graining: coarse.map(|(size_factor, youngs_modulus_factor, rule)| CoarseGraining { size_factor, youngs_modulus_factor, rule }),
+            at_rest: AtRest { kinetic_energy_fraction: at_rest.0, hold_s: at_rest.1 },
         }
     }
 }

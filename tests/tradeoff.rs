@@ -48,6 +48,72 @@ fn a_step_fraction_beyond_the_stable_limit_is_refused_before_running() {
 }
 
 #[test]
+fn the_stop_knobs_edit_only_the_at_rest_block() {
+    let base = base();
+    let knobs = [
+        Knob::preset("stop_threshold").unwrap(),
+        Knob::preset("stop_hold").unwrap(),
+    ];
+    let points = plan(&base, &knobs, 2).unwrap();
+    let labels: Vec<String> = points.iter().map(|p| p.label()).collect();
+    assert_eq!(
+        labels,
+        [
+            "reference",
+            "stop_threshold=1",
+            "stop_threshold=10",
+            "stop_hold=1",
+            "stop_hold=0.5"
+        ]
+    );
+    // drum_tiny omits `at_rest`, so its criterion is the default (1e-6 m g d
+    // for 0.05 s); the reference takes both finest presets (0.1x, 2x).
+    let (f0, h0) = (1e-6, 0.05);
+    let expected = [
+        (f0 * 0.1, h0 * 2.0),
+        (f0, h0 * 2.0),
+        (f0 * 10.0, h0 * 2.0),
+        (f0 * 0.1, h0),
+        (f0 * 0.1, h0 * 0.5),
+    ];
+    for (p, (fraction, hold)) in points.iter().zip(expected) {
+        for (r, e) in p.replicates.iter().enumerate() {
+            let rest = e.at_rest;
+            assert!(
+                (rest.kinetic_energy_fraction / fraction - 1.0).abs() < 1e-12
+                    && (rest.hold_s / hold - 1.0).abs() < 1e-12,
+                "{}: {rest:?}",
+                p.label()
+            );
+            // Nothing but the criterion and the packing seed moved.
+            let mut back = e.clone();
+            back.at_rest = base.at_rest;
+            back.seeds.packing_seed -= r as u64;
+            assert_eq!(back, base, "{}", p.label());
+        }
+    }
+    // Every point is a distinct experiment.
+    let mut ids: Vec<_> = points.iter().map(|p| p.replicates[0].id()).collect();
+    ids.sort();
+    ids.dedup();
+    assert_eq!(ids.len(), points.len());
+}
+
+#[test]
+fn a_stop_knob_on_a_scene_that_never_settles_is_refused() {
+    let pair =
+        read_experiment(&common::root().join("experiments/validation/pair_hertz_rigid_wall.json"))
+            .unwrap();
+    match plan(&pair, &[Knob::preset("stop_hold").unwrap()], 2) {
+        Err(PlanError::Invalid { knob, errors, .. }) => {
+            assert_eq!(knob, "stop_hold");
+            assert!(errors.to_string().contains("at_rest"), "{errors}");
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+}
+
+#[test]
 fn sweep_of_the_step_fraction_on_a_tiny_drum() {
     let tmp = tempfile::tempdir().unwrap();
     let store = Store::open(tmp.path()).unwrap();

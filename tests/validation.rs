@@ -808,6 +808,58 @@ reject!(
     "verification[1].scene.sample_interval_s",
     "(0, 0.05]"
 );
+// --- at_rest: the stop criterion of settling phases
+fn drum() -> Value {
+    common::example("drum/smoke.json")
+}
+
+reject!(
+    at_rest_fraction_positive,
+    drum(),
+    "/at_rest",
+    Some(json!({"kinetic_energy_fraction": 0, "hold_s": 0.05})),
+    "at_rest.kinetic_energy_fraction",
+    "must be in (0, 1]"
+);
+reject!(
+    at_rest_fraction_at_most_one,
+    drum(),
+    "/at_rest",
+    Some(json!({"kinetic_energy_fraction": 2})),
+    "at_rest.kinetic_energy_fraction",
+    "must be in (0, 1]"
+);
+reject!(
+    at_rest_hold_positive,
+    drum(),
+    "/at_rest",
+    Some(json!({"hold_s": -0.01})),
+    "at_rest.hold_s",
+    "must be a finite number > 0"
+);
+reject!(
+    at_rest_not_for_pair_scenes,
+    pair_wall(),
+    "/at_rest",
+    Some(json!({"hold_s": 0.1})),
+    "at_rest",
+    "must be absent for a pair scene"
+);
+
+#[test]
+fn at_rest_fields_default_separately_and_unknown_ones_are_refused() {
+    let hold_only = edit(drum(), "/at_rest", Some(json!({"hold_s": 0.2})));
+    let e = repose::manifest::parse_experiment(&hold_only.to_string()).unwrap();
+    assert_eq!(e.at_rest.hold_s, 0.2);
+    assert_eq!(
+        e.at_rest.kinetic_energy_fraction,
+        repose::manifest::experiment::DEFAULT_REST_ENERGY_FRACTION
+    );
+    let typo = edit(drum(), "/at_rest", Some(json!({"hold": 0.2})));
+    let err = parse_document(&typo.to_string(), None).unwrap_err();
+    assert!(err.to_string().contains("unknown field `hold`"), "{err}");
+}
+
 // --- static pile: insertion and sampling intervals
 reject!(
     static_pile_insertion_interval_positive,

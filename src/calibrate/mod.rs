@@ -30,6 +30,9 @@
 //!   search/scatter.svg              scatter matrix of the kept points by cluster
 //!   verify/verification.csv, .md    each candidate in every scene: simulated and
 //!                                   measured angle, relative error, pass/fail
+//!   learning-curve/curve.csv, .md   validation R², parameter spread and DEM time
+//!   learning-curve/curve.svg        against the number of training runs
+//!                                   (see [`curve`])
 //! ```
 //!
 //! The runs themselves stay where `repose run` puts them (`<store>/<id>/`), so a
@@ -59,6 +62,7 @@
 //! given on the command line), one stream per purpose ([`Stream`]).
 
 pub mod batch;
+pub mod curve;
 pub mod diagnostics;
 pub mod genetic;
 pub mod levenberg;
@@ -120,6 +124,8 @@ pub enum Stage {
     Search,
     /// `repose verify`.
     Verify,
+    /// `repose learning-curve` (reads the batch; not part of `calibrate`).
+    LearningCurve,
 }
 
 impl Stage {
@@ -131,6 +137,7 @@ impl Stage {
             Stage::Train => "train",
             Stage::Search => "search",
             Stage::Verify => "verify",
+            Stage::LearningCurve => "learning-curve",
         }
     }
 }

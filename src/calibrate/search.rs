@@ -132,58 +132,15 @@ pub fn search(
         });
     }
     let target = &study.calibration;
-    let unit = latin_hypercube(
-        settings.samples,
-        names.len(),
-        settings.placement,
-        &mut rng(settings.seed, Stream::Search, 0),
-    );
-    let physical: Vec<Vec<f64>> = unit.iter().map(|u| to_physical(study, u)).collect();
-    let predicted: Vec<f64> = physical.iter().map(|x| model.predict(x)).collect();
-    let deviation = |p: f64| (p - target.target_angle_deg).abs() / target.target_angle_deg;
-    let kept: Vec<usize> = (0..predicted.len())
-        .filter(|&i| deviation(predicted[i]) <= target.tolerance_fraction)
-        .collect();
-    if kept.is_empty() {
-        let lo = predicted.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = predicted.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        return Err(CalibrateError::NothingKept(format!(
-            "none of the {} predicted angles ({lo:.2}–{hi:.2} deg) is within {}% of the target \
-             {} deg of `{}`: the parameter ranges may not reach the target",
-            predicted.len(),
-            target.tolerance_fraction * 100.0,
-            target.target_angle_deg,
-            target.name
-        )));
-    }
-    let kept_unit: Vec<Vec<f64>> = kept.iter().map(|&i| unit[i].clone()).collect();
-    let bandwidth = match settings.bandwidth {
-        Some(h) => h,
-        None => estimate_bandwidth(&kept_unit, settings.quantile),
-    };
-    if bandwidth <= 0.0 {
-        return Err(CalibrateError::Settings(format!(
-            "the estimated bandwidth is 0 ({} kept point(s), quantile {}): raise --quantile or give --bandwidth",
-            kept.len(),
-            settings.quantile
-        )));
-    }
-    let clustering = mean_shift(&kept_unit, settings.kernel, bandwidth);
-    let clusters: Vec<ClusterRow> = clustering
-        .centres
-        .iter()
-        .zip(&clustering.sizes)
-        .enumerate()
-        .map(|(k, (c, &size))| {
-            let centre = to_physical(study, c);
-            ClusterRow {
-                group: k + 1,
-                size,
-                predicted_angle_deg: model.predict(&centre),
-                centre,
-            }
-        })
-        .collect();
+    let Found {
+        physical,
+        predicted,
+        kept,
+        kept_unit,
+        bandwidth,
+        clustering,
+        clusters,
+    } = find(study, &model, settings)?;
     let mut label = vec![None; predicted.len()];
     for (&i, &l) in kept.iter().zip(&clustering.labels) {
         label[i] = Some(l + 1);
@@ -236,6 +193,101 @@ pub fn search(
         clusters,
         markdown,
         out_dir,
+    })
+}
+
+/// The search without its outputs: the resampled points, their predicted
+/// angles, the kept ones and their mean-shift clusters. `search` writes these;
+/// the learning curve ([`super::curve`]) calls it once per training size.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Found {
+    /// The same points, physical units.
+    pub physical: Vec<Vec<f64>>,
+    /// Predicted angle of every point, degrees.
+    pub predicted: Vec<f64>,
+    /// Indices of the kept points.
+    pub kept: Vec<usize>,
+    /// The kept points, unit-scaled.
+    pub kept_unit: Vec<Vec<f64>>,
+    /// Bandwidth used (unit-scaled).
+    pub bandwidth: f64,
+    /// The mean-shift result on the kept points.
+    pub clustering: super::meanshift::Clustering,
+    /// The clusters, largest first.
+    pub clusters: Vec<ClusterRow>,
+}
+
+/// Resamples the study's ranges, predicts with `model`, keeps the points
+/// within tolerance and clusters them (see the module docs).
+pub fn find(
+    study: &Study,
+    model: &Model,
+    settings: &SearchSettings,
+) -> Result<Found, CalibrateError> {
+    settings.check()?;
+    let target = &study.calibration;
+    let names = parameter_names(study);
+    let unit = latin_hypercube(
+        settings.samples,
+        names.len(),
+        settings.placement,
+        &mut rng(settings.seed, Stream::Search, 0),
+    );
+    let physical: Vec<Vec<f64>> = unit.iter().map(|u| to_physical(study, u)).collect();
+    let predicted: Vec<f64> = physical.iter().map(|x| model.predict(x)).collect();
+    let deviation = |p: f64| (p - target.target_angle_deg).abs() / target.target_angle_deg;
+    let kept: Vec<usize> = (0..predicted.len())
+        .filter(|&i| deviation(predicted[i]) <= target.tolerance_fraction)
+        .collect();
+    if kept.is_empty() {
+        let lo = predicted.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = predicted.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        return Err(CalibrateError::NothingKept(format!(
+            "none of the {} predicted angles ({lo:.2}–{hi:.2} deg) is within {}% of the target \
+             {} deg of `{}`: the parameter ranges may not reach the target",
+            predicted.len(),
+            target.tolerance_fraction * 100.0,
+            target.target_angle_deg,
+            target.name
+        )));
+    }
+    let kept_unit: Vec<Vec<f64>> = kept.iter().map(|&i| unit[i].clone()).collect();
+    let bandwidth = match settings.bandwidth {
+        Some(h) => h,
+        None => estimate_bandwidth(&kept_unit, settings.quantile),
+    };
+    if bandwidth <= 0.0 {
+        return Err(CalibrateError::Settings(format!(
+            "the estimated bandwidth is 0 ({} kept point(s), quantile {}): raise --quantile or give --bandwidth",
+            kept.len(),
+            settings.quantile
+        )));
+    }
+    let clustering = mean_shift(&kept_unit, settings.kernel, bandwidth);
+    let clusters: Vec<ClusterRow> = clustering
+        .centres
+        .iter()
+        .zip(&clustering.sizes)
+        .enumerate()
+        .map(|(k, (c, &size))| {
+            let centre = to_physical(study, c);
+            ClusterRow {
+                group: k + 1,
+                size,
+                predicted_angle_deg: model.predict(&centre),
+                centre,
+            }
+        })
+        .collect();
+
+    Ok(Found {
+        physical,
+        predicted,
+        kept,
+        kept_unit,
+        bandwidth,
+        clustering,
+        clusters,
     })
 }
 

@@ -1,5 +1,6 @@
-//! Hand-written SVG plots: the parity plot of `train` (he2019 Fig. 13) and the
-//! scatter matrix of `search` (Fig. 14b). Coordinates are printed with two
+//! Hand-written SVG plots: the parity plot of `train` (he2019 Fig. 13), the
+//! scatter matrix of `search` (Fig. 14b) and the learning curve of
+//! `learning-curve` (R² and spread against DEM runs). Coordinates are printed with two
 //! decimals, so identical data give identical files.
 
 use std::fmt::Write;
@@ -202,6 +203,110 @@ pub fn parity_plot(points: &[ParityPoint], title: &str, legend: &[String]) -> St
 
 fn frame(svg: &mut Svg, x: &Axis, y: &Axis) {
     svg.rect(x.p0, y.p1, x.p1 - x.p0, y.p0 - y.p1, "none", "#333");
+}
+
+/// One size of the learning curve plot.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurvePoint {
+    /// DEM runs trained on.
+    pub size: usize,
+    /// Validation R² of the kept network.
+    pub validation_r2: f64,
+    /// Mean relative spread of the kept search points (none if nothing kept).
+    pub relative_spread: Option<f64>,
+    /// Summed DEM wall time of the runs, s.
+    pub dem_wall_s: f64,
+}
+
+/// The learning curve: validation R² (top panel) and the calibrated
+/// parameters' relative spread (bottom panel) against the number of DEM runs,
+/// each R² point labelled with the DEM wall time it cost.
+pub fn learning_curve_plot(points: &[CurvePoint], title: &str) -> String {
+    let (width, height, margin) = (560.0, 560.0, 64.0);
+    let max_n = points.iter().map(|p| p.size).max().unwrap_or(1) as f64;
+    let x = Axis {
+        lo: 0.0,
+        hi: max_n * 1.05,
+        p0: margin,
+        p1: width - 24.0,
+    };
+    let r2_lo = points
+        .iter()
+        .map(|p| p.validation_r2)
+        .fold(0.0, f64::min)
+        .max(-1.0);
+    let top = Axis {
+        lo: r2_lo,
+        hi: 1.0,
+        p0: 260.0,
+        p1: 48.0,
+    };
+    let spread_hi = points
+        .iter()
+        .filter_map(|p| p.relative_spread)
+        .fold(0.0, f64::max)
+        .max(0.05)
+        * 1.1;
+    let bottom = Axis {
+        lo: 0.0,
+        hi: spread_hi,
+        p0: height - margin,
+        p1: 310.0,
+    };
+    let mut svg = Svg::new(width, height);
+    svg.text(width / 2.0, 24.0, 15.0, "middle", title);
+    for (y, label) in [
+        (&top, "validation R²"),
+        (&bottom, "relative spread of kept points"),
+    ] {
+        frame(&mut svg, &x, y);
+        for t in y.ticks() {
+            svg.line(x.p0 - 5.0, y.map(t), x.p0, y.map(t), "#333", 1.0);
+            svg.text(x.p0 - 8.0, y.map(t) + 4.0, 11.0, "end", &format!("{t}"));
+        }
+        for t in x.ticks() {
+            svg.line(x.map(t), y.p0, x.map(t), y.p0 + 5.0, "#333", 1.0);
+            svg.text(x.map(t), y.p0 + 18.0, 11.0, "middle", &format!("{t}"));
+        }
+        svg.vertical_text(18.0, (y.p0 + y.p1) / 2.0, 13.0, label);
+    }
+    svg.text(
+        (x.p0 + x.p1) / 2.0,
+        height - 16.0,
+        13.0,
+        "middle",
+        "DEM runs in the training set",
+    );
+    let mut previous: Option<(f64, f64)> = None;
+    for p in points {
+        let (cx, cy) = (x.map(p.size as f64), top.map(p.validation_r2.max(r2_lo)));
+        if let Some((px, py)) = previous {
+            svg.line(px, py, cx, cy, PALETTE[0], 1.5);
+        }
+        previous = Some((cx, cy));
+        svg.circle(cx, cy, 4.0, PALETTE[0], "none");
+        svg.text(
+            cx,
+            cy - 9.0,
+            10.0,
+            "middle",
+            &format!("{:.0} s", p.dem_wall_s),
+        );
+    }
+    let mut previous: Option<(f64, f64)> = None;
+    for p in points {
+        let Some(spread) = p.relative_spread else {
+            previous = None;
+            continue;
+        };
+        let (cx, cy) = (x.map(p.size as f64), bottom.map(spread));
+        if let Some((px, py)) = previous {
+            svg.line(px, py, cx, cy, PALETTE[1], 1.5);
+        }
+        previous = Some((cx, cy));
+        svg.rect(cx - 3.5, cy - 3.5, 7.0, 7.0, PALETTE[1], "#333");
+    }
+    svg.finish()
 }
 
 /// The scatter matrix of kept search points: cell (row i, column j) plots

@@ -38,6 +38,11 @@ pub struct Experiment {
     /// keeps cohesion similar; absent: the particles are simulated as given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coarse_graining: Option<CoarseGraining>,
+    /// When a settling phase may end early (every scene that settles uses it);
+    /// absent: [`AtRest::default`]. Default values are not serialised, so a
+    /// manifest that spells them out hashes like one that omits the block.
+    #[serde(default, skip_serializing_if = "AtRest::is_default")]
+    pub at_rest: AtRest,
 }
 
 /// Fidelity profile: `smoke` (seconds, CI), `quick` (minutes, the default) or
@@ -329,4 +334,54 @@ pub const DEFAULT_RAYLEIGH_FRACTION: f64 = 0.2;
 
 fn default_rayleigh_fraction() -> f64 {
     DEFAULT_RAYLEIGH_FRACTION
+}
+
+/// The stop criterion of settling phases: the bed is at rest once the mean
+/// kinetic energy per particle stays below `kinetic_energy_fraction` · m g d
+/// for `hold_s` of simulated time, with m (kg) and d (m) the mass and diameter
+/// of the scene's representative particle (m g d: the energy of lifting it by
+/// one diameter). A looser threshold or a shorter hold ends phases sooner and
+/// costs less; `repose tradeoff` measures what it does to the angle.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AtRest {
+    /// Threshold on the mean kinetic energy per particle as a fraction of
+    /// m g d, in (0, 1]; default [`DEFAULT_REST_ENERGY_FRACTION`].
+    #[serde(default = "default_rest_energy_fraction")]
+    pub kinetic_energy_fraction: f64,
+    /// How long the energy must stay below the threshold, s, > 0; default
+    /// [`DEFAULT_REST_HOLD_S`].
+    #[serde(default = "default_rest_hold_s")]
+    pub hold_s: f64,
+}
+
+/// The default rest threshold, a fraction of m g d (the value every scene used
+/// before the criterion became a manifest option).
+pub const DEFAULT_REST_ENERGY_FRACTION: f64 = 1e-6;
+/// The default hold time below the rest threshold, s.
+pub const DEFAULT_REST_HOLD_S: f64 = 0.05;
+
+fn default_rest_energy_fraction() -> f64 {
+    DEFAULT_REST_ENERGY_FRACTION
+}
+
+fn default_rest_hold_s() -> f64 {
+    DEFAULT_REST_HOLD_S
+}
+
+impl Default for AtRest {
+    fn default() -> Self {
+        Self {
+            kinetic_energy_fraction: DEFAULT_REST_ENERGY_FRACTION,
+            hold_s: DEFAULT_REST_HOLD_S,
+        }
+    }
+}
+
+impl AtRest {
+    /// True for the default criterion (then the block is left out of the
+    /// canonical JSON, keeping the ids of manifests that omit it).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
 }

@@ -361,7 +361,8 @@ pub struct DrumScene {
     pub periodic_slice_m: Option<f64>,
     /// Longest time the poured bed may take to come to rest before the drum
     /// starts, s, > 0 (it starts earlier once the mean kinetic energy per
-    /// particle stays below 1e-6 of m g d for 0.05 s); default 1.
+    /// particle stays below the experiment's `at_rest` threshold, by default
+    /// 1e-6 of m g d for 0.05 s); default 1.
     #[serde(default = "default_drum_settle_max_s")]
     pub settle_max_s: f64,
     /// Interval between angle samples and log frames, s, > 0; default 0.02.
@@ -437,7 +438,8 @@ pub struct StaticPileScene {
     pub insertion_rate_per_s: f64,
     /// Longest settling time after the last particle is generated, s, ≥ 0 (it
     /// ends earlier once the pile is at rest: the mean kinetic energy per
-    /// particle below 1e-6 of m g d for 0.05 s).
+    /// particle below the experiment's `at_rest` threshold, by default 1e-6 of
+    /// m g d for 0.05 s).
     pub settle_time_s: f64,
     /// Window of the rate factory, s, > 0: the particles due in each window
     /// appear together at its end (paper silent; default 0.01, he2019's

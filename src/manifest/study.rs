@@ -11,8 +11,8 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use super::experiment::{
-    CoarseGraining, Contact, ContactModel, Experiment, Material, PairParams, Profile, Seeds,
-    TimeStep, PAIR_PARAM_FIELDS,
+    AtRest, CoarseGraining, Contact, ContactModel, Experiment, Material, PairParams, Profile,
+    Seeds, TimeStep, PAIR_PARAM_FIELDS,
 };
 use super::scene::Scene;
 use super::validate::{validate_experiment, FieldError, ValidationErrors};
@@ -233,6 +233,7 @@ impl Study {
             },
             time_step: self.time_step,
             coarse_graining: self.coarse_graining,
+            at_rest: AtRest::default(),
         };
         validate_experiment(&experiment)?;
         Ok(experiment)

@@ -411,8 +411,11 @@ pub fn run(
         removed: Tally::default(),
     };
     let mut progress = Progress::on_stderr();
-    let at_rest =
-        SettleCriterion::at_rest(rho * std::f64::consts::PI / 6.0 * d_mean.powi(3), d_mean);
+    let at_rest = SettleCriterion::at_rest(
+        &exp.at_rest,
+        rho * std::f64::consts::PI / 6.0 * d_mean.powi(3),
+        d_mean,
+    );
     let dt = plan.dt_s;
 
     let settle = Phase {

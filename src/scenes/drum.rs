@@ -170,7 +170,7 @@ pub fn run(
     let settle = Phase {
         name: "settle",
         max_duration_s: scene.settle_max_s,
-        settle: Some(SettleCriterion::at_rest(mass, d_mean)),
+        settle: Some(SettleCriterion::at_rest(&exp.at_rest, mass, d_mean)),
     };
     let dt = plan.dt_s;
     let every = scene.sample_interval_s;

@@ -48,7 +48,8 @@
 //! - `discharge` (the rest of `total_time_s`): the brush turns.
 //! - `settle` (at most `settle_time_s`, he2019: the last 2 of 20 s): the brush
 //!   stands; the phase ends early once the pile is at rest (mean kinetic energy
-//!   per particle below 1e-6 m g d for 0.05 s, [`SettleCriterion::at_rest`]).
+//!   per particle below the manifest's `at_rest` threshold, by default 1e-6
+//!   m g d for 0.05 s, [`SettleCriterion::at_rest`]).
 //!
 //! Every `sample_interval_s` (default 0.02 s): particles whose centre has
 //! sunk [`geometry::REMOVAL_DEPTH_DIAMETERS`] mean diameters below the
@@ -456,6 +457,7 @@ pub fn simulate(
         name: "settle",
         max_duration_s: scene.settle_time_s,
         settle: Some(SettleCriterion::at_rest(
+            &exp.at_rest,
             rho * std::f64::consts::PI / 6.0 * d_mean.powi(3),
             d_mean,
         )),

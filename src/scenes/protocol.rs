@@ -9,6 +9,7 @@
 
 use crate::dem::health::HealthError;
 use crate::dem::simulation::Simulation;
+use crate::manifest::AtRest;
 use crate::store::Trace;
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
@@ -26,26 +27,21 @@ pub struct SettleCriterion {
 }
 
 impl SettleCriterion {
-    /// The lab scenes' 'bed at rest': the mean kinetic energy per particle below
-    /// [`REST_ENERGY_FRACTION`] · m g d for [`REST_HOLD_S`], with m (kg) and d (m)
-    /// the mass and diameter of a representative particle.
-    pub fn at_rest(mass_kg: f64, diameter_m: f64) -> Self {
+    /// The lab scenes' 'bed at rest' as the manifest's `at_rest` block states
+    /// it: the mean kinetic energy per particle below
+    /// `rest.kinetic_energy_fraction` · m g d for `rest.hold_s`, with m (kg) and
+    /// d (m) the mass and diameter of a representative particle.
+    pub fn at_rest(rest: &AtRest, mass_kg: f64, diameter_m: f64) -> Self {
         Self {
-            mean_kinetic_energy_j: REST_ENERGY_FRACTION
+            mean_kinetic_energy_j: rest.kinetic_energy_fraction
                 * mass_kg
                 * STANDARD_GRAVITY_M_S2
                 * diameter_m,
-            hold_s: REST_HOLD_S,
+            hold_s: rest.hold_s,
         }
     }
 }
 
-/// The bed is at rest when its mean kinetic energy per particle is below this
-/// fraction of m g d (the energy of lifting a representative particle by one
-/// diameter).
-pub const REST_ENERGY_FRACTION: f64 = 1e-6;
-/// How long the bed must stay below the rest threshold, s.
-pub const REST_HOLD_S: f64 = 0.05;
 pub use super::physics::STANDARD_GRAVITY_M_S2;
 
 /// One phase of a protocol.

@@ -53,8 +53,9 @@
 //! factory runs for ⌈particle_count / rate / window⌉ + 1 windows (enough for
 //! the last particle to fall due); `settle`: at most `settle_time_s`, ending
 //! earlier once the pile is at rest ([`SettleCriterion::at_rest`], shared with
-//! the drum: the mean kinetic energy per particle below 1e-6 of m g d50 for
-//! 0.05 s, m the mass of a d50 sphere). Pending particles keep being inserted
+//! the drum: the mean kinetic energy per particle below the manifest's
+//! `at_rest` threshold, by default 1e-6 of m g d50 for 0.05 s, m the mass of a
+//! d50 sphere). Pending particles keep being inserted
 //! during `settle`, and while they fall the pile is not at rest. With CDT
 //! rolling friction the resting pile keeps a small rotational chatter (the
 //! known CDT artefact), so in practice the example runs use their whole
@@ -723,7 +724,7 @@ pub fn run(
     let settle = Phase {
         name: "settle",
         max_duration_s: scene.settle_time_s,
-        settle: Some(SettleCriterion::at_rest(mass, d50)),
+        settle: Some(SettleCriterion::at_rest(&exp.at_rest, mass, d50)),
     };
     let settled =
         run_phase(&mut sim, &settle, dt_s, window, &mut sampler, &mut progress).map_err(fail)?;

@@ -25,11 +25,13 @@ pub struct Knob {
 }
 
 /// Names of the knobs [`Knob::preset`] knows, in report order.
-pub const KNOB_NAMES: [&str; 4] = [
+pub const KNOB_NAMES: [&str; 6] = [
     "rayleigh_fraction",
     "youngs_modulus_factor",
     "size_factor",
     "periodic_slices",
+    "stop_threshold",
+    "stop_hold",
 ];
 
 impl Knob {
@@ -40,6 +42,10 @@ impl Knob {
     /// - `size_factor`: particle radius × factor relative to the base.
     /// - `periodic_slices`: drums only; the slice thickness as a multiple of
     ///   the base slice (1 = the base; the finest is the base's own setting).
+    /// - `stop_threshold`: the at-rest kinetic-energy fraction × factor
+    ///   relative to the base (smaller = stricter = finer).
+    /// - `stop_hold`: the at-rest hold time × factor relative to the base
+    ///   (longer = finer).
     pub fn preset(name: &str) -> Option<Knob> {
         let (name, meaning, values): (&'static str, &'static str, Vec<f64>) = match name {
             "rayleigh_fraction" => (
@@ -60,6 +66,16 @@ impl Knob {
             "periodic_slices" => (
                 "periodic_slices",
                 "drum slice thickness / base slice thickness",
+                vec![2.0, 1.0, 0.5],
+            ),
+            "stop_threshold" => (
+                "stop_threshold",
+                "at-rest kinetic-energy fraction / base fraction",
+                vec![0.1, 1.0, 10.0],
+            ),
+            "stop_hold" => (
+                "stop_hold",
+                "at-rest hold time / base hold time",
                 vec![2.0, 1.0, 0.5],
             ),
             _ => return None,
@@ -205,6 +221,11 @@ fn apply(
             })?;
             doc["scene"]["periodic_slice_m"] = json!(slice * value);
         }
+        "stop_threshold" => {
+            let fraction = base.at_rest.kinetic_energy_fraction * value;
+            doc["at_rest"]["kinetic_energy_fraction"] = json!(fraction);
+        }
+        "stop_hold" => doc["at_rest"]["hold_s"] = json!(base.at_rest.hold_s * value),
         _ => {
             return Err(PlanError::NotApplicable {
                 knob: name,

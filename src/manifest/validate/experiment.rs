@@ -6,8 +6,8 @@ use std::collections::BTreeMap;
 use super::checker::{join, number, string, Checker, Interval};
 use super::scene::check_scene;
 use crate::manifest::experiment::{
-    CoarseGraining, ContactModel, Experiment, Material, NormalModel, PairParams, RollingModel,
-    SizeDistribution, TimeStep, WallStiffness,
+    AtRest, CoarseGraining, ContactModel, Experiment, Material, NormalModel, PairParams,
+    RollingModel, SizeDistribution, TimeStep, WallStiffness,
 };
 use crate::manifest::{Scene, PHYSICS_VERSION, SCHEMA_VERSION};
 
@@ -54,6 +54,14 @@ pub(crate) fn check_experiment(c: &mut Checker, e: &Experiment) {
     check_scene(c, "scene", &e.scene, &e.material);
     check_scene_walls_have_params(c, "scene", &e.scene, &e.contact.particle_wall);
     check_time_step(c, "time_step", &e.time_step);
+    check_at_rest(c, "at_rest", &e.at_rest);
+    if matches!(e.scene, Scene::Pair(_)) && !e.at_rest.is_default() {
+        c.fail(
+            "at_rest",
+            "(present)".into(),
+            "must be absent for a pair scene (it has no settling phase)",
+        );
+    }
     if let Some(cg) = &e.coarse_graining {
         check_coarse_graining(c, "coarse_graining", cg);
         if matches!(e.scene, Scene::Pair(_)) {
@@ -287,4 +295,14 @@ pub(crate) fn check_time_step(c: &mut Checker, path: &str, t: &TimeStep) {
         &join(path, "design_impact_speed_m_s"),
         t.design_impact_speed_m_s,
     );
+}
+
+/// Checks the stop criterion of settling phases.
+fn check_at_rest(c: &mut Checker, path: &str, r: &AtRest) {
+    c.within(
+        &join(path, "kinetic_energy_fraction"),
+        r.kinetic_energy_fraction,
+        Interval::open_closed(0.0, 1.0),
+    );
+    c.positive(&join(path, "hold_s"), r.hold_s);
 }
