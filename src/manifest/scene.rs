@@ -406,8 +406,8 @@ pub struct HopperScene {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fill_height_m: Option<f64>,
     /// Longest time the poured bed may take to come to rest before the lid
-    /// opens, s, > 0 (it opens earlier once the mean kinetic energy per
-    /// particle stays below 1e-4 of m g d for 0.05 s); absent: 1.
+    /// opens, s, > 0 (it opens earlier once the bed is at rest by the
+    /// experiment's `at_rest` criterion); absent: 1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub settle_max_s: Option<f64>,
     /// Interval between discharge counts (the flow-rate trace), removals of
