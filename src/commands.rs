@@ -646,12 +646,29 @@ pub fn sample_diagnose(
 /// `repose batch STUDY`: runs every sampled experiment not yet complete
 /// (`jobs` at a time, each single-threaded) and writes the angle table. The
 /// progress bar replaces the runs' own progress lines, which are silenced.
+/// Fails with [`CommandError::BatchIncomplete`] when any run failed (after
+/// every other run has finished and the table is written).
 pub fn batch(
     store_root: &Path,
     study_path: &Path,
     jobs: usize,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
+    let (failed, total) = run_batch_and_report(store_root, study_path, jobs, out)?;
+    if failed > 0 {
+        return Err(CommandError::BatchIncomplete { failed, total });
+    }
+    Ok(())
+}
+
+/// The batch stage with its report (counts, each failure, the table's path);
+/// returns (failed runs, samples).
+fn run_batch_and_report(
+    store_root: &Path,
+    study_path: &Path,
+    jobs: usize,
+    out: &mut dyn Write,
+) -> Result<(usize, usize), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
     let store = Store::open(store_root)?;
     let settings = BatchSettings {
@@ -680,13 +697,7 @@ pub fn batch(
         )?;
     }
     writeln!(out, "  angles: {}", outcome.table.display())?;
-    if !outcome.failures.is_empty() {
-        return Err(CommandError::BatchIncomplete {
-            failed: outcome.failures.len(),
-            total: outcome.total,
-        });
-    }
-    Ok(())
+    Ok((outcome.failures.len(), outcome.total))
 }
 
 /// Prints a training sweep (the Fig. 12 table) and where it was written.
@@ -839,7 +850,9 @@ pub const DEFAULT_STUDY: &str = include_str!("../experiments/he2019-quick/study.
 
 /// `repose calibrate [STUDY]`: sample → batch → train → search → verify with
 /// each stage's defaults; without a study, the embedded default is written to
-/// `<store>/default-study.json` and calibrated.
+/// `<store>/default-study.json` and calibrated. Failed batch runs (e.g. a pile
+/// whose angle is not measurable) are reported and left out of training
+/// rather than stopping the chain; a failed verification run fails the command.
 pub fn calibrate(
     store_root: &Path,
     study_path: Option<&Path>,
@@ -866,7 +879,14 @@ pub fn calibrate(
     writeln!(out, "\n== 1/5 sample")?;
     sample(store_root, &path, &SampleSettings::default(), out, &mut err)?;
     writeln!(out, "\n== 2/5 batch ({jobs} at a time)")?;
-    batch(store_root, &path, jobs, out)?;
+    let (failed, total) = run_batch_and_report(store_root, &path, jobs, out)?;
+    if failed > 0 {
+        writeln!(
+            out,
+            "note: {failed} of {total} runs failed (listed above); train leaves them out \
+             and the next calibrate or batch retries them"
+        )?;
+    }
     writeln!(out, "\n== 3/5 train")?;
     let options = TrainOptions {
         settings: TrainSettings::with_seed(study.design.seed),
