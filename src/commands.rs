@@ -508,8 +508,9 @@ pub fn tradeoff(
 }
 
 /// `repose learning-curve STUDY`: samples the study if it has no design yet,
-/// runs the batch (cached, resumable), then trains and searches on nested
-/// prefixes of the design (see [`crate::calibrate::curve`]); prints the table.
+/// runs the batch (cached, resumable; failed runs are left out), then trains
+/// and searches on nested prefixes of the design (see
+/// [`crate::calibrate::curve`]); prints the table.
 pub fn learning_curve(
     store_root: &Path,
     study_path: &Path,
@@ -527,7 +528,7 @@ pub fn learning_curve(
             &mut io::stderr(),
         )?;
     }
-    batch(store_root, study_path, jobs, out)?;
+    batch_leaving_out_failures(store_root, study_path, jobs, out)?;
     let store = Store::open(store_root)?;
     let outcome = curve::learning_curve(&dir, &study, &store, sizes)?;
     write!(out, "\n{}", outcome.markdown)?;
@@ -657,6 +658,27 @@ pub fn batch(
     let (failed, total) = run_batch_and_report(store_root, study_path, jobs, out)?;
     if failed > 0 {
         return Err(CommandError::BatchIncomplete { failed, total });
+    }
+    Ok(())
+}
+
+/// The batch stage for the commands that go on after it (`calibrate`,
+/// `learning-curve`): failed runs (e.g. a pile whose angle is not measurable)
+/// are reported, not an error; training leaves them out and the next batch
+/// retries them.
+fn batch_leaving_out_failures(
+    store_root: &Path,
+    study_path: &Path,
+    jobs: usize,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (failed, total) = run_batch_and_report(store_root, study_path, jobs, out)?;
+    if failed > 0 {
+        writeln!(
+            out,
+            "note: {failed} of {total} runs failed (listed above); training leaves them out \
+             and the next calibrate or batch retries them"
+        )?;
     }
     Ok(())
 }
@@ -879,14 +901,7 @@ pub fn calibrate(
     writeln!(out, "\n== 1/5 sample")?;
     sample(store_root, &path, &SampleSettings::default(), out, &mut err)?;
     writeln!(out, "\n== 2/5 batch ({jobs} at a time)")?;
-    let (failed, total) = run_batch_and_report(store_root, &path, jobs, out)?;
-    if failed > 0 {
-        writeln!(
-            out,
-            "note: {failed} of {total} runs failed (listed above); train leaves them out \
-             and the next calibrate or batch retries them"
-        )?;
-    }
+    batch_leaving_out_failures(store_root, &path, jobs, out)?;
     writeln!(out, "\n== 3/5 train")?;
     let options = TrainOptions {
         settings: TrainSettings::with_seed(study.design.seed),
