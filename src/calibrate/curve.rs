@@ -39,10 +39,10 @@ use serde_json::json;
 
 use super::batch::{read_angles, read_design, AngleRow};
 use super::search::{find, SearchSettings};
-use super::surrogate::{sweep, Dataset, Scale, TrainSettings};
+use super::surrogate::{sweep, Dataset, TrainSettings};
 use super::svg::{learning_curve_plot, CurvePoint};
 use super::table::{Cell, CsvWriter};
-use super::train::DEFAULT_TRAIN_FRACTION;
+use super::train::{input_scales, DEFAULT_TRAIN_FRACTION};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{ContentId, Study};
 use crate::store::{Store, TimingRecord};
@@ -223,15 +223,7 @@ fn one_size(
         range.filter(|&i| angles[i].angle_deg.is_some()).collect()
     };
     let data = Dataset {
-        inputs: study
-            .parameters
-            .iter()
-            .map(|(name, r)| Scale {
-                name: name.clone(),
-                min: r.min,
-                max: r.max,
-            })
-            .collect(),
+        inputs: input_scales(study),
         target: "angle_deg".to_string(),
         rows: angles.iter().map(|r| r.point.clone()).collect(),
         targets: angles

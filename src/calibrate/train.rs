@@ -103,6 +103,20 @@ impl TrainOptions {
     }
 }
 
+/// The network's input scales: one per calibrated parameter of `study`, in
+/// the study's order, mapping the parameter's range onto [−1, 1].
+pub(crate) fn input_scales(study: &Study) -> Vec<Scale> {
+    study
+        .parameters
+        .iter()
+        .map(|(name, r)| Scale {
+            name: name.clone(),
+            min: r.min,
+            max: r.max,
+        })
+        .collect()
+}
+
 /// Trains on the study's batch/angles.csv and writes into `train/`.
 pub fn train_study(
     dir: &StudyDir,
@@ -112,15 +126,7 @@ pub fn train_study(
     options.check()?;
     let (angles_file, rows) = read_angles(dir, study)?;
     let cut = options.split_at(rows.len());
-    let inputs = study
-        .parameters
-        .iter()
-        .map(|(name, r)| Scale {
-            name: name.clone(),
-            min: r.min,
-            max: r.max,
-        })
-        .collect();
+    let inputs = input_scales(study);
     let with_angle: Vec<usize> = (0..rows.len())
         .filter(|&i| rows[i].angle_deg.is_some())
         .collect();
