@@ -4,30 +4,10 @@
 
 mod common;
 
-use std::path::Path;
-use std::process::{Command, Output};
-
+use common::{repose, stderr, stdout};
 use serde_json::json;
 
 const STUDY: &str = "experiments/calibrate-smoke/study.json";
-
-fn repose(store: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_repose"))
-        .args(args)
-        .current_dir(common::root())
-        .env("REPOSE_STORE", store)
-        .env_remove("RUST_BACKTRACE")
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
 
 #[test]
 fn each_stage_refuses_to_run_before_its_input_stage() {

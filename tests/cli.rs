@@ -3,29 +3,8 @@
 
 mod common;
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-use common::{edit, pair_wall, root};
+use common::{edit, pair_wall, repose, stderr, stdout};
 use serde_json::json;
-
-fn repose(store: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_repose"))
-        .args(args)
-        .current_dir(root())
-        .env("REPOSE_STORE", store)
-        .env_remove("RUST_BACKTRACE")
-        .output()
-        .expect("the binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
 
 #[test]
 fn validate_reports_every_field_error_and_exits_2() {

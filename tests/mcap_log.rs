@@ -6,7 +6,6 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use foxglove::messages::{PointCloud, SceneUpdate};
 use foxglove::Decode;
@@ -29,7 +28,7 @@ use repose::scenes::run_experiment;
 use repose::store::Store;
 use sha2::{Digest, Sha256};
 
-use common::{pair_jkr, pair_wall, root};
+use common::{pair_jkr, pair_wall, repose};
 
 fn experiment(v: serde_json::Value) -> Experiment {
     parse_experiment(&v.to_string()).unwrap()
@@ -57,16 +56,6 @@ fn messages(bytes: &[u8]) -> Vec<(String, u64, Vec<u8>)> {
             (m.channel.topic.clone(), m.log_time, m.data.into_owned())
         })
         .collect()
-}
-
-fn repose(store: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_repose"))
-        .args(args)
-        .current_dir(root())
-        .env("REPOSE_STORE", store)
-        .env_remove("RUST_BACKTRACE")
-        .output()
-        .expect("the binary runs")
 }
 
 #[test]

@@ -4,6 +4,7 @@
 #![allow(dead_code)] // each test crate uses a different subset
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use serde_json::Value;
 
@@ -96,4 +97,26 @@ pub fn nodes(v: &Value) -> Vec<(String, Value)> {
     let mut out = Vec::new();
     walk(v, String::new(), &mut out);
     out
+}
+
+/// Runs the `repose` binary from the repository root with `args`, its run store
+/// at `store` (REPOSE_STORE) and no backtraces, and returns its output.
+pub fn repose(store: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_repose"))
+        .args(args)
+        .current_dir(root())
+        .env("REPOSE_STORE", store)
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .expect("the binary runs")
+}
+
+/// A command's standard error as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A command's standard output as text.
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
 }
