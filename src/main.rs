@@ -549,7 +549,30 @@ fn default_jobs(jobs: Option<usize>) -> usize {
     jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
+/// Refuses to run a build for AVX2 (`.cargo/config.toml` asks for x86-64-v3)
+/// on a processor without it, with a message instead of an illegal-instruction crash.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+fn processor_supports_build() -> bool {
+    let ok = std::arch::is_x86_feature_detected!("avx2");
+    if !ok {
+        eprintln!(
+            "error: this build of repose uses AVX2 (x86-64-v3, see .cargo/config.toml) and \
+             this processor lacks it; delete the rustflags table in .cargo/config.toml and \
+             rebuild (results are bit-identical, the engine is slower)"
+        );
+    }
+    ok
+}
+
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+fn processor_supports_build() -> bool {
+    true
+}
+
 fn main() -> ExitCode {
+    if !processor_supports_build() {
+        return ExitCode::from(1);
+    }
     match dispatch(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

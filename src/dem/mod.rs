@@ -11,6 +11,7 @@ pub mod contact;
 pub mod domain;
 pub mod effects;
 pub mod health;
+pub mod lanes;
 pub mod material;
 pub mod neighbor;
 pub mod particles;

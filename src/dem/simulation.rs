@@ -19,12 +19,13 @@ use crate::dem::contact::rolling_cdt::ConstantDirectionalTorque;
 use crate::dem::contact::rolling_epsd::ElasticPlasticSpring;
 use crate::dem::contact::rolling_none::NoRolling;
 use crate::dem::contact::{
-    evaluate, ContactGeometry, ContactHistory, NormalModel, PairCoefficients, PairParameters,
-    ParameterError, RelativeMotion, RollingModel,
+    evaluate, evaluate_lanes, ContactGeometry, ContactHistory, GeometryLanes, MotionLanes,
+    NormalModel, PairCoefficients, PairParameters, ParameterError, RelativeMotion, RollingModel,
 };
 use crate::dem::domain::Domain;
 use crate::dem::effects::{BodyForce, Boundary, Gravity, NoGravity, Open, Periodic};
 use crate::dem::health::{HealthCause, HealthError, HealthLimits, ENERGY_CHECK_INTERVAL};
+use crate::dem::lanes::{F64x4, Real, Vec3L};
 use crate::dem::material::{harmonic, ElasticMaterial};
 use crate::dem::neighbor::{apply_permutation, NeighborError, NeighborList};
 use crate::dem::particles::{ParticleInit, Particles};
@@ -199,6 +200,123 @@ struct PairForce {
     force_on_first: Vec3,
     /// Torque on the first and on the second particle, N·m.
     torque: [Vec3; 2],
+}
+
+/// Contacts evaluated side by side in the pair kernel (one AVX2 register of
+/// f64, two SSE2 registers).
+const PAIR_LANES: usize = 4;
+
+/// What the pair kernel reads, borrowed for one force evaluation.
+struct PairKernel<'a, B: Boundary> {
+    spheres: &'a [Sphere],
+    motion: &'a [Motion],
+    domain: Domain,
+    coef: PairCoefficients,
+    /// Extra contact range, m (JKR only).
+    reach: f64,
+    dt: f64,
+    _boundary: std::marker::PhantomData<B>,
+}
+
+impl<B: Boundary> PairKernel<'_, B> {
+    /// Evaluates a run of listed pairs whose first pair has index `first`,
+    /// writing each pair's forces to `out`; returns the force-carrying contacts
+    /// and the worst (overlap ratio, pair index).
+    fn run<N: NormalModel, R: RollingModel>(
+        &self,
+        first: usize,
+        pairs: &[[u32; 2]],
+        history: &mut [ContactHistory<N, R>],
+        out: &mut [PairForce],
+    ) -> (usize, (f64, usize)) {
+        let mut acc = (0, (0.0, usize::MAX));
+        let whole = pairs.len() / PAIR_LANES * PAIR_LANES;
+        for (k, ((p, h), o)) in pairs[..whole]
+            .chunks_exact(PAIR_LANES)
+            .zip(history.chunks_exact_mut(PAIR_LANES))
+            .zip(out.chunks_exact_mut(PAIR_LANES))
+            .enumerate()
+        {
+            let found = self.lanes::<N, R, F64x4>(first + k * PAIR_LANES, p, h, o);
+            acc = (acc.0 + found.0, worse(acc.1, found.1));
+        }
+        for (k, ((p, h), o)) in pairs[whole..]
+            .chunks(1)
+            .zip(history[whole..].chunks_mut(1))
+            .zip(out[whole..].chunks_mut(1))
+            .enumerate()
+        {
+            let found = self.lanes::<N, R, f64>(first + whole + k, p, h, o);
+            acc = (acc.0 + found.0, worse(acc.1, found.1));
+        }
+        acc
+    }
+
+    /// `T::LANES` listed pairs with indices `first..` at once (each slice
+    /// holds one entry per lane).
+    #[inline(always)]
+    fn lanes<N: NormalModel, R: RollingModel, T: Real>(
+        &self,
+        first: usize,
+        pairs: &[[u32; 2]],
+        history: &mut [ContactHistory<N, R>],
+        out: &mut [PairForce],
+    ) -> (usize, (f64, usize)) {
+        let at = |l: usize| pairs[l.min(T::LANES - 1)].map(|k| k as usize);
+        let si: [&Sphere; 4] = std::array::from_fn(|l| &self.spheres[at(l)[0]]);
+        let sj: [&Sphere; 4] = std::array::from_fn(|l| &self.spheres[at(l)[1]]);
+        let mi: [&Motion; 4] = std::array::from_fn(|l| &self.motion[at(l)[0]]);
+        let mj: [&Motion; 4] = std::array::from_fn(|l| &self.motion[at(l)[1]]);
+        let d = Vec3L::<T>::from_fn(|l| B::separation(&self.domain, si[l].x - sj[l].x));
+        let dist_sq = d.norm_squared();
+        let (ri, rj) = (T::from_fn(|l| si[l].r), T::from_fn(|l| sj[l].r));
+        let touch = ri + rj;
+        let limit = touch + T::splat(self.reach);
+        let in_range = T::not(dist_sq.ge(limit * limit));
+        let dist = dist_sq.sqrt();
+        let n = d.scale(T::splat(1.0) / dist);
+        let overlap = touch - dist;
+        let half = T::splat(0.5);
+        let arm_i = ri - half * overlap;
+        let arm_j = rj - half * overlap;
+        let (wi, wj) = (
+            Vec3L::<T>::from_fn(|l| mi[l].w),
+            Vec3L::<T>::from_fn(|l| mj[l].w),
+        );
+        let motion = MotionLanes {
+            velocity: Vec3L::from_fn(|l| mi[l].v)
+                - Vec3L::from_fn(|l| mj[l].v)
+                - (wi.scale(arm_i) + wj.scale(arm_j)).cross(&n),
+            angular_velocity: wi - wj,
+        };
+        // `harmonic` of two finite values, lane-wise: particles are never rigid.
+        let (m_i, m_j) = (T::from_fn(|l| mi[l].m), T::from_fn(|l| mj[l].m));
+        let geometry = GeometryLanes {
+            normal: n,
+            overlap_m: overlap,
+            r_star_m: ri * rj / (ri + rj),
+            m_star_kg: m_i * m_j / (m_i + m_j),
+        };
+        let c =
+            evaluate_lanes::<N, R, T>(&self.coef, &geometry, &motion, in_range, self.dt, history);
+        let lever = n.cross(&c.tangential_force);
+        let torque_i = c.rolling_torque - lever.scale(arm_i);
+        let torque_j = -c.rolling_torque - lever.scale(arm_j);
+        let mut found = (0, (0.0, usize::MAX));
+        for (l, o) in out.iter_mut().enumerate() {
+            *o = if T::flag(c.active, l) {
+                let ratio = overlap.lane(l).max(0.0) * mi[l].inv_r.max(mj[l].inv_r);
+                found = (found.0 + 1, worse(found.1, (ratio, first + l)));
+                PairForce {
+                    force_on_first: c.force.lane(l),
+                    torque: [torque_i.lane(l), torque_j.lane(l)],
+                }
+            } else {
+                PairForce::default()
+            };
+        }
+        found
+    }
 }
 
 /// The monomorphised kernel behind a [`Simulation`].
@@ -695,69 +813,30 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     }
 
     /// Returns the number of force-carrying contacts and (worst overlap ratio, pair index).
+    ///
+    /// Evaluates the listed pairs [`PAIR_LANES`] at a time
+    /// ([`evaluate_lanes`]; a short tail one at a time), each lane
+    /// bit-identical to evaluating its pair alone.
     fn pair_forces(&mut self, world: &World) -> (usize, (f64, usize)) {
-        let (spheres, motion) = (&self.spheres, &self.motion);
-        let domain = world.domain;
-        let coef = self.particle_particle;
-        let dt = self.dt;
+        let kernel = PairKernel::<B> {
+            spheres: &self.spheres,
+            motion: &self.motion,
+            domain: world.domain,
+            coef: self.particle_particle,
+            reach: self.pair_reach,
+            dt: self.dt,
+            _boundary: std::marker::PhantomData,
+        };
         let (pairs, history) = self.neighbors.pairs_and_history_mut();
         self.pair_forces.resize(pairs.len(), PairForce::default());
-        let reach = self.pair_reach;
         pairs
-            .par_iter()
-            .zip(history.par_iter_mut())
-            .zip(self.pair_forces.par_iter_mut())
+            .par_chunks(PAR_MIN_LEN)
+            .zip(history.par_chunks_mut(PAR_MIN_LEN))
+            .zip(self.pair_forces.par_chunks_mut(PAR_MIN_LEN))
             .enumerate()
-            .with_min_len(PAR_MIN_LEN)
-            .fold(
-                || (0, (0.0, usize::MAX)),
-                |acc, (k, ((&[i, j], h), out))| {
-                    let (si, sj) = (&spheres[i as usize], &spheres[j as usize]);
-                    let d = B::separation(&domain, si.x - sj.x);
-                    let dist_sq = d.norm_squared();
-                    let touch = si.r + sj.r;
-                    let limit = touch + reach;
-                    if dist_sq >= limit * limit {
-                        *h = ContactHistory::default();
-                        *out = PairForce::default();
-                        return acc;
-                    }
-                    let (mi, mj) = (&motion[i as usize], &motion[j as usize]);
-                    let dist = dist_sq.sqrt();
-                    let n = d * (1.0 / dist);
-                    let overlap = touch - dist;
-                    let arm_i = si.r - 0.5 * overlap;
-                    let arm_j = sj.r - 0.5 * overlap;
-                    let relative = RelativeMotion {
-                        velocity: mi.v - mj.v - (mi.w * arm_i + mj.w * arm_j).cross(&n),
-                        angular_velocity: mi.w - mj.w,
-                    };
-                    let geometry = ContactGeometry {
-                        normal: n,
-                        overlap_m: overlap,
-                        r_star_m: harmonic(si.r, sj.r),
-                        m_star_kg: harmonic(mi.m, mj.m),
-                    };
-                    match evaluate::<N, R>(&coef, &geometry, &relative, dt, h) {
-                        Some(c) => {
-                            let lever = n.cross(&c.tangential_force);
-                            *out = PairForce {
-                                force_on_first: c.force,
-                                torque: [
-                                    c.rolling_torque - lever * arm_i,
-                                    -c.rolling_torque - lever * arm_j,
-                                ],
-                            };
-                            let ratio = overlap.max(0.0) * mi.inv_r.max(mj.inv_r);
-                            (acc.0 + 1, worse(acc.1, (ratio, k)))
-                        }
-                        None => {
-                            *out = PairForce::default();
-                            acc
-                        }
-                    }
-                },
-            )
+            .map(|(chunk, ((pairs, history), out))| {
+                kernel.run::<N, R>(chunk * PAR_MIN_LEN, pairs, history, out)
+            })
             .reduce(
                 || (0, (0.0, usize::MAX)),
                 |a, b| (a.0 + b.0, worse(a.1, b.1)),

@@ -4,6 +4,7 @@
 //! impact restitutes with coefficient e.
 
 use super::PairCoefficients;
+use crate::dem::lanes::Real;
 use std::f64::consts::PI;
 
 /// 2√(5/6), the prefactor of the Tsuji-type damping used by EDEM and LIGGGHTS.
@@ -23,32 +24,33 @@ pub fn damping_ratio(e: f64) -> f64 {
     }
 }
 
-/// Normal damping force along the normal, N (positive repulsive): for an
-/// approaching contact (`v_n < 0`, m/s) it pushes the bodies apart.
+/// Normal damping force along the normal, N (positive repulsive), per lane:
+/// for an approaching contact (`v_n < 0`, m/s) it pushes the bodies apart.
 /// `2√(5/6) ψ √(S_n m*) v_n` with `S_n = 2E*a`, evaluated as
 /// `[2√(5/6) ψ √(2E*)] · √(a m*) · v_n` (the bracket is mixed once per pair
-/// type: [`PairCoefficients::normal_damping`]).
+/// type: [`PairCoefficients::normal_damping`]); `a` is the contact radius (m),
+/// `m*` the effective mass (kg).
 #[inline(always)]
-pub fn normal_damping_force(
+pub fn normal_damping_force<T: Real>(
     c: &PairCoefficients,
-    contact_radius_m: f64,
-    m_star_kg: f64,
-    v_n: f64,
-) -> f64 {
-    c.normal_damping * (contact_radius_m * m_star_kg).sqrt() * v_n
+    contact_radius_m: T,
+    m_star_kg: T,
+    v_n: T,
+) -> T {
+    T::splat(c.normal_damping) * (contact_radius_m * m_star_kg).sqrt() * v_n
 }
 
-/// Tangential damping coefficient η_t = −2√(5/6) ψ √(S_t m*), N·s/m (≥ 0),
-/// with `S_t = 8G*a`; the damping force is −η_t v_t. Evaluated as
+/// Tangential damping coefficient η_t = −2√(5/6) ψ √(S_t m*), N·s/m (≥ 0), per
+/// lane, with `S_t = 8G*a`; the damping force is −η_t v_t. Evaluated as
 /// `[−2√(5/6) ψ √(8G*)] · √(a m*)` ([`PairCoefficients::tangential_damping`]),
 /// so a contact shares one square root between normal and tangential damping.
 #[inline(always)]
-pub fn tangential_damping_coefficient(
+pub fn tangential_damping_coefficient<T: Real>(
     c: &PairCoefficients,
-    contact_radius_m: f64,
-    m_star_kg: f64,
-) -> f64 {
-    c.tangential_damping * (contact_radius_m * m_star_kg).sqrt()
+    contact_radius_m: T,
+    m_star_kg: T,
+) -> T {
+    T::splat(c.tangential_damping) * (contact_radius_m * m_star_kg).sqrt()
 }
 
 #[cfg(test)]

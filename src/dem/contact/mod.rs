@@ -22,6 +22,12 @@
 //! (e = 0.5) through the tensile tail of the damped force. It also keeps the
 //! cap continuous at contact onset, where the damped force jumps.
 //!
+//! Every slot is written once, generic over a lane type
+//! ([`crate::dem::lanes::Real`]): [`evaluate_lanes`] runs four contacts side
+//! by side for the pair kernel, and [`evaluate`] is its one-lane case (walls).
+//! Slots whose formula has branches the lanes cannot share (JKR's Newton
+//! solve) keep a scalar method, and the trait's default runs it lane by lane.
+//!
 //! Sign conventions for one contact between body *i* and its partner *j* (a
 //! particle or a wall): `normal` is the unit vector from *j* towards *i*, the
 //! overlap `δ` is positive when the bodies interpenetrate, and every returned
@@ -36,6 +42,7 @@ pub mod rolling_epsd;
 pub mod rolling_none;
 pub mod tangential_mindlin;
 
+use crate::dem::lanes::{Real, Vec3L};
 use crate::dem::material::{effective_shear_modulus, effective_youngs_modulus, ElasticMaterial};
 use crate::dem::vec3::Vec3;
 
@@ -233,6 +240,21 @@ pub struct NormalResponse {
     pub pull_off_force_n: f64,
 }
 
+/// A normal model's answer for several contacts at once (one per lane of
+/// `T`): [`NormalResponse`] per lane, with `active` false where the bodies do
+/// not interact (the other fields are then meaningless).
+#[derive(Clone, Copy, Debug)]
+pub struct NormalLanes<T: Real> {
+    /// Which lanes interact.
+    pub active: T::Mask,
+    /// Elastic (and adhesive) normal force, N; positive repulsive.
+    pub elastic_force_n: T,
+    /// Contact radius a, m.
+    pub contact_radius_m: T,
+    /// Pull-off force 3πΓR*, N (0 for Hertz).
+    pub pull_off_force_n: T,
+}
+
 /// The normal-force slot.
 pub trait NormalModel: Send + Sync + 'static {
     /// Per-contact state this model keeps between steps (zero-sized if none).
@@ -253,6 +275,30 @@ pub trait NormalModel: Send + Sync + 'static {
         overlap_m: f64,
         history: &mut Self::History,
     ) -> Option<NormalResponse>;
+    /// [`normal`](Self::normal) for `T::LANES` contacts at once (`history`
+    /// holds one entry per lane). The default asks [`normal`](Self::normal)
+    /// lane by lane; a model whose formula is branch-free overrides it so the
+    /// lanes run side by side.
+    #[inline(always)]
+    fn normal_lanes<T: Real>(
+        c: &PairCoefficients,
+        r_star_m: T,
+        overlap_m: T,
+        history: &mut [Self::History],
+    ) -> NormalLanes<T> {
+        let r: [Option<NormalResponse>; 4] = std::array::from_fn(|l| {
+            (l < T::LANES)
+                .then(|| Self::normal(c, r_star_m.lane(l), overlap_m.lane(l), &mut history[l]))
+                .flatten()
+        });
+        let field = |f: fn(&NormalResponse) -> f64| T::from_fn(|l| r[l].as_ref().map_or(0.0, f));
+        NormalLanes {
+            active: T::mask_from_fn(|l| r[l].is_some()),
+            elastic_force_n: field(|r| r.elastic_force_n),
+            contact_radius_m: field(|r| r.contact_radius_m),
+            pull_off_force_n: field(|r| r.pull_off_force_n),
+        }
+    }
 }
 
 /// The rolling-resistance slot.
@@ -276,6 +322,34 @@ pub trait RollingModel: Send + Sync + 'static {
         dt_s: f64,
         history: &mut Self::History,
     ) -> Vec3;
+    /// [`torque`](Self::torque) for `T::LANES` contacts at once (`history`
+    /// holds one entry per lane). The default asks [`torque`](Self::torque)
+    /// lane by lane; branch-free models override it.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn torque_lanes<T: Real>(
+        c: &PairCoefficients,
+        r_star_m: T,
+        contact_radius_m: T,
+        load_n: T,
+        normal: &Vec3L<T>,
+        rolling_velocity: &Vec3L<T>,
+        dt_s: f64,
+        history: &mut [Self::History],
+    ) -> Vec3L<T> {
+        Vec3L::from_fn(|l| {
+            Self::torque(
+                c,
+                r_star_m.lane(l),
+                contact_radius_m.lane(l),
+                load_n.lane(l),
+                &normal.lane(l),
+                &rolling_velocity.lane(l),
+                dt_s,
+                &mut history[l],
+            )
+        })
+    }
 }
 
 /// All history one contact keeps: the normal model's, the tangential spring
@@ -306,9 +380,126 @@ impl<N: NormalModel, R: RollingModel> Default for ContactHistory<N, R> {
     }
 }
 
+/// [`ContactGeometry`] of several contacts, one per lane of `T`.
+#[derive(Clone, Copy, Debug)]
+pub struct GeometryLanes<T: Real> {
+    /// Unit normals from the partner towards body *i*.
+    pub normal: Vec3L<T>,
+    /// Overlaps δ, m.
+    pub overlap_m: T,
+    /// Effective radii R*, m.
+    pub r_star_m: T,
+    /// Effective masses m*, kg.
+    pub m_star_kg: T,
+}
+
+/// [`RelativeMotion`] of several contacts, one per lane of `T`.
+#[derive(Clone, Copy, Debug)]
+pub struct MotionLanes<T: Real> {
+    /// Contact-point velocity of *i* minus the partner's, m/s.
+    pub velocity: Vec3L<T>,
+    /// ω_i − ω_j, rad/s.
+    pub angular_velocity: Vec3L<T>,
+}
+
+/// [`ContactResponse`] of several contacts, one per lane of `T`; lanes with
+/// `active` false do not interact (their other fields are meaningless).
+#[derive(Clone, Copy, Debug)]
+pub struct ResponseLanes<T: Real> {
+    /// Which lanes interact.
+    pub active: T::Mask,
+    /// Total contact force on *i*, N.
+    pub force: Vec3L<T>,
+    /// Its tangential part, N.
+    pub tangential_force: Vec3L<T>,
+    /// Rolling torque on *i*, N·m.
+    pub rolling_torque: Vec3L<T>,
+    /// Signed normal force along the normal, N (positive repulsive).
+    pub normal_force_n: T,
+}
+
+/// Evaluates the composed law `N + damping + Mindlin + R` for `T::LANES`
+/// contacts sharing one coefficient set, updating their histories (one entry
+/// per lane). Lanes with `in_range` false, or that the normal model finds
+/// apart, do not interact: their history is reset. Each lane's result is
+/// bit-identical to evaluating its contact alone (see [`crate::dem::lanes`]).
+#[inline(always)]
+pub fn evaluate_lanes<N: NormalModel, R: RollingModel, T: Real>(
+    c: &PairCoefficients,
+    geometry: &GeometryLanes<T>,
+    motion: &MotionLanes<T>,
+    in_range: T::Mask,
+    dt_s: f64,
+    history: &mut [ContactHistory<N, R>],
+) -> ResponseLanes<T> {
+    let lanes = T::LANES;
+    let r_star = geometry.r_star_m;
+    let mut normal_history: [N::History; 4] = std::array::from_fn(|l| {
+        if l < lanes {
+            history[l].normal
+        } else {
+            Default::default()
+        }
+    });
+    let nr = N::normal_lanes(c, r_star, geometry.overlap_m, &mut normal_history[..lanes]);
+    let active = T::and(in_range, nr.active);
+    let n = geometry.normal;
+    let a = nr.contact_radius_m;
+    let m_star = geometry.m_star_kg;
+    let v_n = motion.velocity.dot(&n);
+    let v_t = motion.velocity - n.scale(v_n);
+
+    let elastic = nr.elastic_force_n;
+    let mut f_n = elastic + damping::normal_damping_force(c, a, m_star, v_n);
+    if c.clip_tensile {
+        f_n = T::from_fn(|l| f_n.lane(l).max(elastic.lane(l).min(0.0)));
+    }
+    let load = (elastic + T::splat(2.0) * nr.pull_off_force_n).abs();
+
+    let mut xi = Vec3L::from_fn(|l| history[l].tangential);
+    let f_t = tangential_mindlin::force(c, a, m_star, load, &n, &v_t, dt_s, &mut xi);
+    let w = motion.angular_velocity;
+    let w_roll = w - n.scale(w.dot(&n));
+    let mut rolling_history: [R::History; 4] = std::array::from_fn(|l| {
+        if l < lanes {
+            history[l].rolling
+        } else {
+            Default::default()
+        }
+    });
+    let m_r = R::torque_lanes(
+        c,
+        r_star,
+        a,
+        load,
+        &n,
+        &w_roll,
+        dt_s,
+        &mut rolling_history[..lanes],
+    );
+    for (l, h) in history.iter_mut().enumerate().take(lanes) {
+        *h = if T::flag(active, l) {
+            ContactHistory {
+                normal: normal_history[l],
+                tangential: xi.lane(l),
+                rolling: rolling_history[l],
+            }
+        } else {
+            ContactHistory::default()
+        };
+    }
+    ResponseLanes {
+        active,
+        force: n.scale(f_n) + f_t,
+        tangential_force: f_t,
+        rolling_torque: m_r,
+        normal_force_n: f_n,
+    }
+}
+
 /// Evaluates the composed law `N + damping + Mindlin + R` for one contact,
 /// updating its history. Returns `None` (and resets the history) when the
-/// bodies do not interact.
+/// bodies do not interact. The one-lane case of [`evaluate_lanes`].
 #[inline(always)]
 pub fn evaluate<N: NormalModel, R: RollingModel>(
     c: &PairCoefficients,
@@ -317,34 +508,29 @@ pub fn evaluate<N: NormalModel, R: RollingModel>(
     dt_s: f64,
     history: &mut ContactHistory<N, R>,
 ) -> Option<ContactResponse> {
-    let r_star = geometry.r_star_m;
-    let Some(nr) = N::normal(c, r_star, geometry.overlap_m, &mut history.normal) else {
-        *history = ContactHistory::default();
-        return None;
+    let lanes = GeometryLanes::<f64> {
+        normal: Vec3L::splat(geometry.normal),
+        overlap_m: geometry.overlap_m,
+        r_star_m: geometry.r_star_m,
+        m_star_kg: geometry.m_star_kg,
     };
-    let n = geometry.normal;
-    let a = nr.contact_radius_m;
-    let m_star = geometry.m_star_kg;
-    let v_n = motion.velocity.dot(&n);
-    let v_t = motion.velocity - n * v_n;
-
-    let damping_n = damping::normal_damping_force(c, a, m_star, v_n);
-    let mut f_n = nr.elastic_force_n + damping_n;
-    if c.clip_tensile {
-        f_n = f_n.max(nr.elastic_force_n.min(0.0));
-    }
-    let load = (nr.elastic_force_n + 2.0 * nr.pull_off_force_n).abs();
-
-    let f_t =
-        tangential_mindlin::force(c, a, m_star, load, &n, &v_t, dt_s, &mut history.tangential);
-    let w = motion.angular_velocity;
-    let w_roll = w - n * w.dot(&n);
-    let m_r = R::torque(c, r_star, a, load, &n, &w_roll, dt_s, &mut history.rolling);
-    Some(ContactResponse {
-        force: n * f_n + f_t,
-        tangential_force: f_t,
-        rolling_torque: m_r,
-        normal_force_n: f_n,
+    let motion = MotionLanes {
+        velocity: Vec3L::splat(motion.velocity),
+        angular_velocity: Vec3L::splat(motion.angular_velocity),
+    };
+    let r = evaluate_lanes::<N, R, f64>(
+        c,
+        &lanes,
+        &motion,
+        true,
+        dt_s,
+        std::slice::from_mut(history),
+    );
+    r.active.then(|| ContactResponse {
+        force: r.force.lane(0),
+        tangential_force: r.tangential_force.lane(0),
+        rolling_torque: r.rolling_torque.lane(0),
+        normal_force_n: r.normal_force_n,
     })
 }
 
@@ -387,7 +573,14 @@ pub(crate) mod test_support {
 
 #[cfg(test)]
 mod tests {
+    use super::normal_hertz::Hertz;
+    use super::normal_jkr::Jkr;
+    use super::rolling_cdt::ConstantDirectionalTorque;
+    use super::rolling_epsd::ElasticPlasticSpring;
+    use super::rolling_none::NoRolling;
     use super::*;
+    use crate::dem::lanes::F64x4;
+    use rand::{Rng, SeedableRng};
 
     #[test]
     fn parameters_are_checked_with_their_names() {
@@ -413,5 +606,130 @@ mod tests {
         let rigid = ElasticMaterial::RIGID;
         assert!(PairCoefficients::new(&rigid, &rigid, &p, false).is_err());
         assert!(PairCoefficients::new(&m, &rigid, &p, false).is_ok());
+    }
+
+    /// A random contact: overlaps from apart to deep, sticking and sliding
+    /// tangential speeds, spins, and histories from empty to beyond the cap.
+    fn random_contact<N: NormalModel, R: RollingModel>(
+        rng: &mut impl Rng,
+    ) -> (ContactGeometry, RelativeMotion, ContactHistory<N, R>) {
+        let unit =
+            |rng: &mut dyn FnMut() -> f64| Vec3::new(rng(), rng(), rng()) * 2.0 - Vec3::repeat(1.0);
+        let mut draw = || rng.random::<f64>();
+        let normal = unit(&mut draw).normalize();
+        let velocity = unit(&mut draw);
+        let angular_velocity = unit(&mut draw) * 300.0;
+        let xi = unit(&mut draw) * 1e-6;
+        let spin = unit(&mut draw);
+        let seeded_normal = unit(&mut draw).normalize();
+        let r_star = 5e-4 * (1.0 + rng.random::<f64>());
+        let mut history = ContactHistory::<N, R>::default();
+        if rng.random::<f64>() < 0.7 {
+            // A contact that has been touching: seed every history slot by
+            // evaluating once at a healthy overlap.
+            let seeded = ContactGeometry {
+                normal: seeded_normal,
+                overlap_m: 1e-6,
+                r_star_m: r_star,
+                m_star_kg: 1e-6,
+            };
+            let motion = RelativeMotion {
+                velocity: spin * 0.1,
+                angular_velocity: spin * 50.0,
+            };
+            history.tangential = xi;
+            evaluate(
+                &coefficients_for_lanes(),
+                &seeded,
+                &motion,
+                1e-5,
+                &mut history,
+            );
+        }
+        let geometry = ContactGeometry {
+            normal,
+            overlap_m: 4e-6 * (rng.random::<f64>() - 0.2),
+            r_star_m: r_star,
+            m_star_kg: 1e-6 * (1.0 + rng.random::<f64>()),
+        };
+        let motion = RelativeMotion {
+            velocity: velocity * rng.random::<f64>(),
+            angular_velocity: if rng.random::<f64>() < 0.2 {
+                Vec3::zeros()
+            } else {
+                angular_velocity
+            },
+        };
+        (geometry, motion, history)
+    }
+
+    fn coefficients_for_lanes() -> PairCoefficients {
+        test_support::coefficients(0.3, 0.4, 0.2, 0.05)
+    }
+
+    /// Four lanes give bit for bit what four scalar evaluations give, for
+    /// every normal × rolling kernel (the pair kernel's SIMD path against the
+    /// walls' scalar path; see crate::dem::lanes).
+    fn four_lanes_equal_four_scalars<N: NormalModel, R: RollingModel>() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(20261121);
+        let c = coefficients_for_lanes();
+        let bits = |v: Vec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        let mut active_lanes = 0;
+        for _ in 0..2_000 {
+            let contacts: [_; 4] = std::array::from_fn(|_| random_contact::<N, R>(&mut rng));
+            let in_range = [true, true, true, rng.random::<f64>() < 0.8];
+            let geometry = GeometryLanes::<F64x4> {
+                normal: Vec3L::from_fn(|l| contacts[l].0.normal),
+                overlap_m: F64x4::from_fn(|l| contacts[l].0.overlap_m),
+                r_star_m: F64x4::from_fn(|l| contacts[l].0.r_star_m),
+                m_star_kg: F64x4::from_fn(|l| contacts[l].0.m_star_kg),
+            };
+            let motion = MotionLanes {
+                velocity: Vec3L::from_fn(|l| contacts[l].1.velocity),
+                angular_velocity: Vec3L::from_fn(|l| contacts[l].1.angular_velocity),
+            };
+            let mut lane_history: [ContactHistory<N, R>; 4] =
+                std::array::from_fn(|l| contacts[l].2);
+            let mask = F64x4::mask_from_fn(|l| in_range[l]);
+            let r = evaluate_lanes(&c, &geometry, &motion, mask, 1e-5, &mut lane_history);
+            for l in 0..4 {
+                let (g, m, mut h) = contacts[l];
+                let scalar = if in_range[l] {
+                    evaluate(&c, &g, &m, 1e-5, &mut h)
+                } else {
+                    h = ContactHistory::default();
+                    None
+                };
+                assert_eq!(F64x4::flag(r.active, l), scalar.is_some(), "lane {l}");
+                let lh = &lane_history[l];
+                assert_eq!(bits(lh.tangential), bits(h.tangential), "history, lane {l}");
+                // Debug prints each f64 so that it round-trips: equal text, equal bits.
+                assert_eq!(format!("{:?}", lh.normal), format!("{:?}", h.normal));
+                assert_eq!(format!("{:?}", lh.rolling), format!("{:?}", h.rolling));
+                if let Some(s) = scalar {
+                    active_lanes += 1;
+                    assert_eq!(bits(r.force.lane(l)), bits(s.force), "force, lane {l}");
+                    assert_eq!(bits(r.tangential_force.lane(l)), bits(s.tangential_force));
+                    assert_eq!(bits(r.rolling_torque.lane(l)), bits(s.rolling_torque));
+                    assert_eq!(
+                        r.normal_force_n.lane(l).to_bits(),
+                        s.normal_force_n.to_bits()
+                    );
+                }
+            }
+        }
+        assert!(
+            active_lanes > 4_000,
+            "too few touching lanes: {active_lanes}"
+        );
+    }
+
+    #[test]
+    fn lanes_are_bit_identical_to_scalar_evaluation() {
+        four_lanes_equal_four_scalars::<Hertz, NoRolling>();
+        four_lanes_equal_four_scalars::<Hertz, ConstantDirectionalTorque>();
+        four_lanes_equal_four_scalars::<Hertz, ElasticPlasticSpring>();
+        four_lanes_equal_four_scalars::<Jkr, ConstantDirectionalTorque>();
+        four_lanes_equal_four_scalars::<Jkr, ElasticPlasticSpring>();
     }
 }

@@ -1,7 +1,8 @@
 //! Hertz normal force: `F = (4/3) E* √R* δ^{3/2}` for overlap δ > 0
 //! (yan2015 Eq. 4), written as `(4/3) E* a³ / R*` with contact radius a = √(R*δ).
 
-use super::{NormalModel, NormalResponse, PairCoefficients};
+use super::{NormalLanes, NormalModel, NormalResponse, PairCoefficients};
+use crate::dem::lanes::Real;
 
 /// The Hertz normal model: acts only while the bodies overlap, keeps no history.
 #[derive(Clone, Copy, Debug, Default)]
@@ -24,16 +25,30 @@ impl NormalModel for Hertz {
         overlap_m: f64,
         _: &mut (),
     ) -> Option<NormalResponse> {
-        if overlap_m <= 0.0 {
-            return None;
-        }
-        let a = (r_star_m * overlap_m).sqrt();
-        Some(NormalResponse {
-            // (4/3) E* a³/R* = (4/3) E* a δ: no division.
-            elastic_force_n: (4.0 / 3.0) * c.e_star * a * overlap_m,
-            contact_radius_m: a,
+        let r = Self::normal_lanes::<f64>(c, r_star_m, overlap_m, &mut [()]);
+        r.active.then_some(NormalResponse {
+            elastic_force_n: r.elastic_force_n,
+            contact_radius_m: r.contact_radius_m,
             pull_off_force_n: 0.0,
         })
+    }
+
+    #[inline(always)]
+    fn normal_lanes<T: Real>(
+        c: &PairCoefficients,
+        r_star_m: T,
+        overlap_m: T,
+        _: &mut [()],
+    ) -> NormalLanes<T> {
+        let a = (r_star_m * overlap_m).sqrt();
+        NormalLanes {
+            // A NaN overlap counts as touching, so the health check sees it.
+            active: T::not(overlap_m.le(T::splat(0.0))),
+            // (4/3) E* a³/R* = (4/3) E* a δ: no division.
+            elastic_force_n: T::splat((4.0 / 3.0) * c.e_star) * a * overlap_m,
+            contact_radius_m: a,
+            pull_off_force_n: T::splat(0.0),
+        }
     }
 }
 

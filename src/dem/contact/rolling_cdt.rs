@@ -5,6 +5,7 @@
 //! (the known CDT chatter); it does not drive motion.
 
 use super::{PairCoefficients, RollingModel};
+use crate::dem::lanes::{Real, Vec3L};
 use crate::dem::vec3::Vec3;
 
 /// The CDT rolling model.
@@ -19,19 +20,32 @@ impl RollingModel for ConstantDirectionalTorque {
     fn torque(
         c: &PairCoefficients,
         r_star: f64,
-        _: f64,
+        a: f64,
         load: f64,
-        _: &Vec3,
+        n: &Vec3,
         w_roll: &Vec3,
-        _: f64,
+        dt: f64,
         _: &mut (),
     ) -> Vec3 {
+        let (n, w) = (Vec3L::<f64>::splat(*n), Vec3L::splat(*w_roll));
+        Self::torque_lanes(c, r_star, a, load, &n, &w, dt, &mut [()]).lane(0)
+    }
+
+    #[inline(always)]
+    fn torque_lanes<T: Real>(
+        c: &PairCoefficients,
+        r_star: T,
+        _: T,
+        load: T,
+        _: &Vec3L<T>,
+        w_roll: &Vec3L<T>,
+        _: f64,
+        _: &mut [()],
+    ) -> Vec3L<T> {
         let w = w_roll.norm();
-        if w > 0.0 {
-            w_roll * (-c.rolling_friction * r_star * load / w)
-        } else {
-            Vec3::zeros()
-        }
+        w_roll
+            .scale(T::splat(-c.rolling_friction) * r_star * load / w)
+            .select(w.gt(T::splat(0.0)), &Vec3L::zeros())
     }
 }
 

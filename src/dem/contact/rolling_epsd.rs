@@ -7,6 +7,7 @@
 
 use super::tangential_mindlin::rotate_into_plane;
 use super::{PairCoefficients, RollingModel};
+use crate::dem::lanes::{Real, Vec3L};
 use crate::dem::vec3::Vec3;
 
 /// The EPSD rolling model; its history is the elastic rolling torque, N·m.
@@ -28,15 +29,34 @@ impl RollingModel for ElasticPlasticSpring {
         dt: f64,
         m: &mut Vec3,
     ) -> Vec3 {
-        rotate_into_plane(m, n);
-        let k_r = 8.0 * c.g_star * a * r_star * r_star;
-        *m -= w_roll * (k_r * dt);
-        let cap = c.rolling_friction * r_star * load;
+        let (n, w) = (Vec3L::<f64>::splat(*n), Vec3L::splat(*w_roll));
+        Self::torque_lanes(c, r_star, a, load, &n, &w, dt, std::slice::from_mut(m)).lane(0)
+    }
+
+    #[inline(always)]
+    fn torque_lanes<T: Real>(
+        c: &PairCoefficients,
+        r_star: T,
+        a: T,
+        load: T,
+        n: &Vec3L<T>,
+        w_roll: &Vec3L<T>,
+        dt: f64,
+        history: &mut [Vec3],
+    ) -> Vec3L<T> {
+        let mut m = Vec3L::from_fn(|l| history[l]);
+        rotate_into_plane(&mut m, n);
+        let k_r = T::splat(8.0 * c.g_star) * a * r_star * r_star;
+        m = m - w_roll.scale(k_r * T::splat(dt));
+        let cap = T::splat(c.rolling_friction) * r_star * load;
         let len_sq = m.norm_squared();
-        if len_sq > cap * cap {
-            *m *= cap / len_sq.sqrt();
+        m = m
+            .scale(cap / len_sq.sqrt())
+            .select(len_sq.gt(cap * cap), &m);
+        for (l, h) in history.iter_mut().enumerate() {
+            *h = m.lane(l);
         }
-        *m
+        m
     }
 }
 
