@@ -27,7 +27,7 @@ use crate::dem::effects::{BodyForce, Boundary, Gravity, NoGravity, Open, Periodi
 use crate::dem::health::{HealthCause, HealthError, HealthLimits, ENERGY_CHECK_INTERVAL};
 use crate::dem::lanes::{F64x4, Real, Vec3L};
 use crate::dem::material::{harmonic, ElasticMaterial};
-use crate::dem::neighbor::{apply_permutation, NeighborError, NeighborList};
+use crate::dem::neighbor::{apply_permutation, NeighborError, NeighborList, PairRef};
 use crate::dem::particles::{ParticleInit, Particles};
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::{Motion as WallMotion, PlacedWall, Wall, WallError};
@@ -192,6 +192,28 @@ struct Motion {
     w: Vec3,
     m: f64,
     inv_r: f64,
+}
+
+/// Per-particle factors that depend only on mass and radius, computed when
+/// particles are added or removed instead of every step (each is the same
+/// expression the kick would evaluate, so results do not change): the
+/// half-kick factors ½dt/m (s/kg) and ½dt/I (s/(kg·m²), I = 0.4 m r²) and the
+/// inverse radius 1/r (1/m).
+#[derive(Clone, Copy, Debug, Default)]
+struct Kick {
+    v: f64,
+    w: f64,
+    inv_r: f64,
+}
+
+impl Kick {
+    fn new(dt: f64, m: f64, r: f64) -> Self {
+        Self {
+            v: 0.5 * dt / m,
+            w: 0.5 * dt / (0.4 * m * r * r),
+            inv_r: 1.0 / r,
+        }
+    }
 }
 
 /// The force a pair exerts, stored per pair and gathered per particle.
@@ -400,7 +422,8 @@ impl Simulation {
 
     /// Prescribes particle kinematics between steps (e.g. a held or pulled
     /// particle). Do not add or remove particles here; use [`Simulation::insert`]
-    /// and [`Simulation::retain`].
+    /// and [`Simulation::retain`]. Radii and masses must not change here either:
+    /// the kernel keeps factors derived from them ([`Kick`]).
     pub fn particles_mut(&mut self) -> &mut Particles {
         &mut self.world.particles
     }
@@ -513,6 +536,8 @@ struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> {
     /// copies of what the force stages read, refreshed by every drift.
     spheres: Vec<Sphere>,
     motion: Vec<Motion>,
+    /// Per particle, same index order: see [`Kick`].
+    kick: Vec<Kick>,
     stats: StepStats,
     limits: HealthLimits,
     /// Energy check enabled (non-adhesive kernel — the JKR kernel runs only
@@ -593,6 +618,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             placed: Vec::new(),
             spheres: Vec::new(),
             motion: Vec::new(),
+            kick: Vec::new(),
             stats: StepStats::default(),
             limits: setup.health,
             energy_reference: None,
@@ -648,12 +674,13 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .zip(p.force.par_iter().zip(p.torque.par_iter()))
             .zip(p.mass.par_iter().zip(p.radius.par_iter()))
             .zip(self.spheres.par_iter_mut().zip(self.motion.par_iter_mut()))
+            .zip(self.kick.par_iter())
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
             .map(
-                |(i, (((((x, v), w), (f, t)), (&m, &r)), (sphere, motion)))| {
-                    let dv = f * (0.5 * dt / m);
-                    let dw = t * (0.5 * dt / (0.4 * m * r * r));
+                |(i, ((((((x, v), w), (f, t)), (&m, &r)), (sphere, motion)), kick))| {
+                    let dv = f * kick.v;
+                    let dw = t * kick.w;
                     *v += dv;
                     *w += dw;
                     *x = B::wrap(&domain, *x + *v * dt);
@@ -662,7 +689,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                         v: *v + dv,
                         w: *w + dw,
                         m,
-                        inv_r: 1.0 / r,
+                        inv_r: kick.inv_r,
                     };
                     // A NaN position also asks for a rebuild (which then reports it).
                     let moved = match reference.get(i) {
@@ -707,6 +734,13 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             m: p.mass[i],
             inv_r: 1.0 / p.radius[i],
         }));
+        self.kick.clear();
+        self.kick.extend(
+            p.mass
+                .iter()
+                .zip(&p.radius)
+                .map(|(&m, &r)| Kick::new(self.dt, m, r)),
+        );
     }
 
     fn health(&self, world: &World, index: usize, cause: HealthCause) -> HealthError {
@@ -755,6 +789,9 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         if self.spheres.len() == order.len() && self.motion.len() == order.len() {
             apply_permutation(&order, &mut self.spheres);
             apply_permutation(&order, &mut self.motion);
+        }
+        if self.kick.len() == order.len() {
+            apply_permutation(&order, &mut self.kick);
         }
         let slots = self.wall_slots;
         let old = std::mem::take(&mut self.wall_history);
@@ -866,58 +903,53 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .zip(p.angular_velocity.par_iter_mut())
             .zip(self.wall_history.par_chunks_mut(slots))
             .zip(self.spheres.par_iter().zip(self.motion.par_iter()))
+            .zip(self.kick.par_iter())
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
-            .map(|(i, (((((f, t), v), w), hist), (sphere, motion)))| {
-                let (x, r, m) = (&sphere.x, sphere.r, motion.m);
-                let (ve, we) = (&motion.v, &motion.w);
-                let mut force = g * m;
-                let mut torque = Vec3::zeros();
-                // Branch-free: x + (−1)·f is bit-identical to x − f.
-                for e in neighbors.incident(i) {
-                    let pf = &buffer[e.pair()];
-                    force += pf.force_on_first * e.sign();
-                    torque += pf.torque[usize::from(!e.is_first())];
-                }
-                let mut contacts = 0;
-                let mut worst = (0.0, usize::MAX);
-                for (k, wall) in placed.iter().enumerate() {
-                    let Some(wc) = wall.contact(*x, r, wall_reach[k]) else {
-                        hist[k] = ContactHistory::default();
-                        continue;
-                    };
-                    let n = wc.normal;
-                    let arm = r - 0.5 * wc.overlap_m;
-                    let motion = RelativeMotion {
-                        velocity: ve - (we * arm).cross(&n) - wc.velocity,
-                        angular_velocity: *we,
-                    };
-                    let geometry = ContactGeometry {
-                        normal: n,
-                        overlap_m: wc.overlap_m,
-                        r_star_m: r,
-                        m_star_kg: m,
-                    };
-                    if let Some(c) =
-                        evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k])
-                    {
-                        force += c.force;
-                        torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
-                        contacts += 1;
-                        worst = worse(worst, (wc.overlap_m.max(0.0) / r, i * slots + k));
+            .map(
+                |(i, ((((((f, t), v), w), hist), (sphere, motion)), kick))| {
+                    let (x, r, m) = (&sphere.x, sphere.r, motion.m);
+                    let (ve, we) = (&motion.v, &motion.w);
+                    let (mut force, mut torque) =
+                        sum_pair_forces(neighbors.incident(i), buffer, g * m);
+                    let mut contacts = 0;
+                    let mut worst = (0.0, usize::MAX);
+                    for (k, wall) in placed.iter().enumerate() {
+                        let Some(wc) = wall.contact(*x, r, wall_reach[k]) else {
+                            hist[k] = ContactHistory::default();
+                            continue;
+                        };
+                        let n = wc.normal;
+                        let arm = r - 0.5 * wc.overlap_m;
+                        let motion = RelativeMotion {
+                            velocity: ve - (we * arm).cross(&n) - wc.velocity,
+                            angular_velocity: *we,
+                        };
+                        let geometry = ContactGeometry {
+                            normal: n,
+                            overlap_m: wc.overlap_m,
+                            r_star_m: r,
+                            m_star_kg: m,
+                        };
+                        if let Some(c) =
+                            evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k])
+                        {
+                            force += c.force;
+                            torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
+                            contacts += 1;
+                            worst = worse(worst, (wc.overlap_m.max(0.0) / r, i * slots + k));
+                        }
                     }
-                }
-                *f = force;
-                *t = torque;
-                *v += force * (0.5 * dt / m);
-                *w += torque * (0.5 * dt / (0.4 * m * r * r));
-                let finite = x
-                    .iter()
-                    .chain(v.iter())
-                    .chain(w.iter())
-                    .all(|c| c.is_finite());
-                (contacts, worst, (!finite).then_some(i))
-            })
+                    *f = force;
+                    *t = torque;
+                    *v += force * kick.v;
+                    *w += torque * kick.w;
+                    // 0·c is 0 for a finite c and NaN otherwise: one test, no branches.
+                    let probe = x * 0.0 + *v * 0.0 + *w * 0.0;
+                    let finite = probe.x + probe.y + probe.z == 0.0;
+                    (contacts, worst, (!finite).then_some(i))
+                },
+            )
             .reduce(
                 || (0, (0.0, usize::MAX), None),
                 |a, b| (a.0 + b.0, worse(a.1, b.1), min_option(a.2, b.2)),
@@ -1005,6 +1037,27 @@ fn hertz_energy(e_star: f64, r_star: f64, overlap: f64) -> f64 {
     } else {
         8.0 / 15.0 * e_star * r_star.sqrt() * overlap.powf(2.5)
     }
+}
+
+/// `start` plus the force and the torque of each listed pair on one particle,
+/// in the order of its gather list (N, N·m).
+#[inline(always)]
+fn sum_pair_forces(incident: &[PairRef], buffer: &[PairForce], start: Vec3) -> (Vec3, Vec3) {
+    let (mut fx, mut fy, mut fz) = (start.x, start.y, start.z);
+    let (mut tx, mut ty, mut tz) = (0.0, 0.0, 0.0);
+    for e in incident {
+        let pf = &buffer[e.pair()];
+        // Branch-free: x + (−1)·f is bit-identical to x − f.
+        let sign = e.sign();
+        let t = &pf.torque[usize::from(!e.is_first())];
+        fx += pf.force_on_first.x * sign;
+        fy += pf.force_on_first.y * sign;
+        fz += pf.force_on_first.z * sign;
+        tx += t.x;
+        ty += t.y;
+        tz += t.z;
+    }
+    (Vec3::new(fx, fy, fz), Vec3::new(tx, ty, tz))
 }
 
 /// The larger ratio; on ties the lower index (so reductions are order-independent).
