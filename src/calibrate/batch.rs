@@ -167,20 +167,7 @@ where
         .iter()
         .map(|row| load_experiment(dir, row))
         .collect::<Result<Vec<_>, _>>()?;
-    let pending: Vec<usize> = (0..design.len())
-        .filter(|&i| store.status(&design[i].id) != RunStatus::Complete)
-        .collect();
-    let cached = design.len() - pending.len();
-    let mut progress = BatchProgress::new(settings.progress, design.len(), cached);
-    let failures = run_pending(
-        &pending,
-        &experiments,
-        store,
-        settings.jobs,
-        &runner,
-        &mut progress,
-    )?;
-    progress.finish();
+    let Ran { cached, failures } = run_incomplete(&experiments, store, settings, &runner)?;
     let failures: Vec<Failure> = failures
         .into_iter()
         .map(|(i, message)| Failure {
@@ -193,15 +180,54 @@ where
     Ok(BatchOutcome {
         total: design.len(),
         cached,
-        computed: pending.len() - failures.len(),
+        computed: design.len() - cached - failures.len(),
         failures,
         table,
     })
 }
 
+/// What [`run_incomplete`] did.
+pub(crate) struct Ran {
+    /// Experiments the store already held complete (not run again).
+    pub cached: usize,
+    /// The runs that failed: (position in the experiments, message), sorted.
+    pub failures: Vec<(usize, String)>,
+}
+
+/// Runs every one of `experiments` the store does not hold complete, on
+/// `settings.jobs` workers with the progress bar (when `settings.progress`)
+/// counting the cached ones as done. Batch and verify both run their
+/// experiments this way; each then reads the results from the store.
+pub(crate) fn run_incomplete<E, F>(
+    experiments: &[Experiment],
+    store: &Store,
+    settings: &BatchSettings,
+    runner: &F,
+) -> Result<Ran, CalibrateError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let pending: Vec<usize> = (0..experiments.len())
+        .filter(|&i| store.status(&experiments[i].id()) != RunStatus::Complete)
+        .collect();
+    let cached = experiments.len() - pending.len();
+    let mut progress = BatchProgress::new(settings.progress, experiments.len(), cached);
+    let failures = run_pending(
+        &pending,
+        experiments,
+        store,
+        settings.jobs,
+        runner,
+        &mut progress,
+    )?;
+    progress.finish();
+    Ok(Ran { cached, failures })
+}
+
 /// Runs the pending experiments on `jobs` workers; returns the failures as
-/// (position in the design, message), sorted.
-pub(crate) fn run_pending<E, F>(
+/// (position in the experiments, message), sorted.
+fn run_pending<E, F>(
     pending: &[usize],
     experiments: &[Experiment],
     store: &Store,

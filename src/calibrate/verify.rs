@@ -16,12 +16,11 @@ use std::path::PathBuf;
 
 use serde_json::json;
 
-use super::batch::{run_pending, BatchSettings};
-use super::progress::BatchProgress;
+use super::batch::{run_incomplete, BatchSettings, Ran};
 use super::table::{Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{ContentId, Experiment, Study};
-use crate::store::{RunDir, RunResult, RunStatus, Store};
+use crate::store::{RunDir, RunResult, Store};
 
 /// One row of the Table 3 equivalent.
 #[derive(Debug, Clone, PartialEq)]
@@ -119,23 +118,7 @@ where
         }
     }
     let experiments: Vec<Experiment> = planned.iter().map(|p| p.2.clone()).collect();
-    let pending: Vec<usize> = (0..experiments.len())
-        .filter(|&i| store.status(&experiments[i].id()) != RunStatus::Complete)
-        .collect();
-    let mut progress = BatchProgress::new(
-        settings.progress,
-        experiments.len(),
-        experiments.len() - pending.len(),
-    );
-    let failures = run_pending(
-        &pending,
-        &experiments,
-        store,
-        settings.jobs,
-        &runner,
-        &mut progress,
-    )?;
-    progress.finish();
+    let Ran { failures, .. } = run_incomplete(&experiments, store, settings, &runner)?;
 
     let mut lineage = dir
         .lineage(Stage::Verify, json!({ "candidates": candidates }))

@@ -92,7 +92,9 @@
 
 use super::physics;
 use super::physics::STANDARD_GRAVITY_M_S2;
-use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::protocol::{
+    finish_result, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
+};
 use super::SceneError;
 use crate::dem::domain::Domain;
 use crate::dem::health::{HealthError, HealthLimits};
@@ -465,12 +467,8 @@ pub fn run(
     let (steps, end) = (w.step, w.time_s);
     let traces = std::mem::take(&mut sampler.traces);
     drop(sampler);
-    if let Some(log) = log_file {
-        log.finish().map_err(BaffleError::from)?;
-    }
 
-    let mut result = RunResult::new(exp, kernel);
-    result.traces = traces.into_map();
+    let mut result = finish_result(exp, kernel, traces, log_file).map_err(BaffleError::from)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

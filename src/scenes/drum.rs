@@ -21,7 +21,9 @@
 //! over the second half of the rotation (the first half is spin-up and is
 //! not averaged); the static angle is measured at the end of standing.
 
-use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::protocol::{
+    finish_result, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
+};
 use super::{physics, SceneError};
 use crate::dem::domain::Domain;
 use crate::dem::health::{HealthError, HealthLimits};
@@ -211,12 +213,8 @@ pub fn run(
     let steps = w.step;
     let traces = std::mem::take(&mut sampler.traces);
     drop(sampler);
-    if let Some(log) = log_file {
-        log.finish()?;
-    }
 
-    let mut result = RunResult::new(exp, kernel);
-    result.traces = traces.into_map();
+    let mut result = finish_result(exp, kernel, traces, log_file)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

@@ -85,7 +85,9 @@ pub mod fill;
 pub mod geometry;
 
 use self::geometry::FunnelGeometry;
-use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::protocol::{
+    finish_result, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
+};
 use super::{physics, SceneError};
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::particles::Particles;
@@ -474,8 +476,8 @@ pub fn simulate(
         .filter(|x| geom.on_platform(x))
         .count();
     let traces = std::mem::take(&mut sampler.traces);
-    let mut result = RunResult::new(exp, sim.kernel_name());
-    result.traces = traces.into_map();
+    // `run` finishes the log, after measuring the pile.
+    let mut result = finish_result(exp, sim.kernel_name(), traces, None)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

@@ -97,7 +97,7 @@ pub use angles::R2_FLOOR;
 use self::geometry::{Geometry, LID_WALL};
 use self::sampler::DischargeSampler;
 use super::physics::{self, STANDARD_GRAVITY_M_S2 as G_M_S2};
-use super::protocol::{run_phase, Phase, Progress, SettleCriterion};
+use super::protocol::{finish_result, run_phase, Phase, Progress, SettleCriterion};
 use super::SceneError;
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::particles::Particles;
@@ -282,14 +282,11 @@ fn run_hopper(
     let removed = sampler.removed();
     let last_discharge = sampler.last_discharge_s();
     let samples = sampler.discharge().to_vec();
-    let traces = sampler.into_traces().into_map();
-    if let Some(log) = log_file {
-        log.finish()?;
-    }
+    let traces = sampler.into_traces();
 
-    let mut m = BTreeMap::new();
+    let mut result = finish_result(exp, kernel, traces, log_file)?;
     let mut put = |k: &str, v: f64| {
-        m.insert(k.to_string(), v);
+        result.measurements.insert(k.to_string(), v);
     };
     put("particles_inserted", inserted as f64);
     put("spilled_during_fill", spilled as f64);
@@ -311,7 +308,7 @@ fn run_hopper(
     put("on_plate", census.below as f64);
     put("removed_off_plate", (removed - spilled) as f64);
     put("discharged", (census.below + removed - spilled) as f64);
-    for (k, v) in flow_measurements(&samples, &traces, t_open, last_discharge)
+    for (k, v) in flow_measurements(&samples, &result.traces, t_open, last_discharge)
         .map_err(HopperError::Discharge)?
     {
         put(&k, v);
@@ -325,12 +322,8 @@ fn run_hopper(
         ),
     );
     put("angle_fit_r2_floor", R2_FLOOR);
-    angles::record(&mut m, "upper_angle", &alpha);
-    angles::record(&mut m, "bottom_angle", &theta);
-
-    let mut result = RunResult::new(exp, kernel);
-    result.measurements = m;
-    result.traces = traces;
+    angles::record(&mut result.measurements, "upper_angle", &alpha);
+    angles::record(&mut result.measurements, "bottom_angle", &theta);
     result.headline_angle_deg = Some(theta.mean_deg);
     Ok(result)
 }

@@ -9,8 +9,9 @@
 
 use crate::dem::health::HealthError;
 use crate::dem::simulation::Simulation;
-use crate::manifest::AtRest;
-use crate::store::Trace;
+use crate::log::{LogError, RunLog};
+use crate::manifest::{AtRest, Experiment};
+use crate::store::{RunResult, Trace};
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -184,6 +185,29 @@ impl Traces {
     pub fn into_map(self) -> BTreeMap<String, Trace> {
         self.series
     }
+}
+
+/// The end every scene shares once its simulation has succeeded: closes the
+/// run's MCAP log, if it has one (the file appears only now, complete), and
+/// starts the result with the experiment, the kernel that ran and the sampled
+/// traces; the scene then adds its measurements and its headline angle.
+///
+/// Why a helper: every scene ended with these same lines, copied; one place
+/// keeps the log and the result's common fields done the same way in all of
+/// them. A scene that finishes its log itself, later (funnel_pile, after
+/// measuring the pile), passes `None`.
+pub fn finish_result(
+    exp: &Experiment,
+    kernel: String,
+    traces: Traces,
+    log: Option<RunLog>,
+) -> Result<RunResult, LogError> {
+    if let Some(log) = log {
+        log.finish()?;
+    }
+    let mut result = RunResult::new(exp, kernel);
+    result.traces = traces.into_map();
+    Ok(result)
 }
 
 /// Progress on stderr for long runs: phase, simulated time, wall time,

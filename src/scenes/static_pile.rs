@@ -108,8 +108,8 @@
 //! discharged count at the same instants.
 
 use super::protocol::{
-    mean_kinetic_energy_j, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
-    STANDARD_GRAVITY_M_S2,
+    finish_result, mean_kinetic_energy_j, run_phase, Phase, Progress, Sampler, SettleCriterion,
+    Traces, STANDARD_GRAVITY_M_S2,
 };
 use super::{physics, SceneError};
 use crate::dem::domain::{Domain, DomainError};
@@ -753,12 +753,8 @@ pub fn run(
     let traces = std::mem::take(&mut sampler.traces);
     let removed = sampler.removed;
     drop(sampler);
-    if let Some(log) = log_file {
-        log.finish()?;
-    }
 
-    let mut result = RunResult::new(exp, kernel);
-    result.traces = traces.into_map();
+    let mut result = finish_result(exp, kernel, traces, log_file)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

@@ -157,21 +157,14 @@ pub fn record(out: &mut BTreeMap<String, f64>, name: &str, a: &OrthoAngles) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::geometry::yan2015_geometry;
     use super::*;
 
     /// Particles spread uniformly over a cone of base radius 50 mm: R₉₇/0.9
     /// is the base radius to within the quantile's sampling error.
     #[test]
     fn heap_radius_of_a_uniform_cone() {
-        let g = Geometry {
-            hopper_radius: 0.025,
-            hopper_height: 0.07,
-            orifice_radius: 0.0075,
-            bottom_z: 0.07,
-            plate_radius: 0.1,
-            d_mean: 0.002,
-            d_min: 0.002,
-        };
+        let g = yan2015_geometry();
         let (rb, h) = (0.05, 0.03);
         let mut p = Vec::new();
         let step = 0.001;

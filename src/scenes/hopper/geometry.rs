@@ -186,25 +186,28 @@ pub enum Location {
     Gone,
 }
 
+/// yan2015's hopper (D = 50 mm, H = 70 mm, 15 mm orifice 70 mm above a
+/// 200 mm plate) with 2 mm spheres: the fixture the hopper's unit tests share.
+#[cfg(test)]
+pub(super) fn yan2015_geometry() -> Geometry {
+    Geometry {
+        hopper_radius: 0.025,
+        hopper_height: 0.07,
+        orifice_radius: 0.0075,
+        bottom_z: 0.07,
+        plate_radius: 0.1,
+        d_mean: 0.002,
+        d_min: 0.002,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn geometry() -> Geometry {
-        Geometry {
-            hopper_radius: 0.025,
-            hopper_height: 0.07,
-            orifice_radius: 0.0075,
-            bottom_z: 0.07,
-            plate_radius: 0.1,
-            d_mean: 0.002,
-            d_min: 0.002,
-        }
-    }
-
     #[test]
     fn locations() {
-        let g = geometry();
+        let g = yan2015_geometry();
         let r = 0.001;
         assert_eq!(g.locate(Vec3::new(0.0, 0.0, 0.0695), r), Location::Hopper);
         assert_eq!(g.locate(Vec3::new(0.0, 0.0, 0.0685), r), Location::Below);
@@ -219,7 +222,7 @@ mod tests {
     /// with it never reaches it on the way (see `lid_speed_m_s`).
     #[test]
     fn the_lid_outruns_free_fall_to_below_the_plate() {
-        let g = geometry();
+        let g = yan2015_geometry();
         let m = g.lid_opening(1.0);
         let Motion::Translate {
             velocity_m_s,
