@@ -6,6 +6,7 @@
 //! the box only bounds where particles may be (see [`Domain::contains`], used by
 //! the health check); walls, not the domain, keep particles in.
 
+use crate::dem::lanes::{Real, Vec3L};
 use crate::dem::vec3::Vec3;
 use std::fmt;
 
@@ -176,6 +177,37 @@ impl Domain {
         d
     }
 
+    /// [`min_image`](Self::min_image) of several separations at once (one per
+    /// lane), bit for bit. Separations of wrapped positions are under one
+    /// period, where the rounding `min_image` does is ±1 and needs no rounding
+    /// instruction; should some lane be farther off, every lane takes the
+    /// scalar route.
+    #[inline(always)]
+    pub fn min_image_lanes<T: Real>(&self, d: Vec3L<T>) -> Vec3L<T> {
+        let mut axes = [d.x, d.y, d.z];
+        for (a, da) in axes.iter_mut().enumerate() {
+            if !self.periodic[a] {
+                continue;
+            }
+            let s = *da * T::splat(self.inv_len[a]);
+            if T::any(s.abs().ge(T::splat(1.5))) {
+                return Vec3L::from_fn(|l| self.min_image(d.lane(l)));
+            }
+            let (len, half) = (T::splat(self.len[a]), T::splat(0.5 * self.len[a]));
+            // round(s) for 0.5 < |s| < 1.5.
+            let round = T::select(s.gt(T::splat(0.0)), T::splat(1.0), T::splat(-1.0));
+            let shifted = *da - len * round;
+            let folded = T::select(
+                shifted.gt(half),
+                shifted - len,
+                T::select((-half).gt(shifted), shifted + len, shifted),
+            );
+            *da = T::select(s.abs().gt(T::splat(0.5)), folded, *da);
+        }
+        let [x, y, z] = axes;
+        Vec3L { x, y, z }
+    }
+
     /// Position `p` (m) put back into the box on periodic axes: the result lies in
     /// `[lo, hi)` there; other axes are unchanged.
     ///
@@ -265,6 +297,28 @@ mod tests {
         // Finite bounds whose difference overflows.
         let e = Domain::new(v(-f64::MAX, 0.0, 0.0), v(f64::MAX, 1.0, 1.0), [false; 3]).unwrap_err();
         assert!(matches!(e, DomainError::EmptyExtent { axis: 0, .. }));
+    }
+
+    #[test]
+    fn min_image_lanes_equal_min_image_bit_for_bit() {
+        use crate::dem::lanes::{F64x4, Real, Vec3L};
+        let d = Domain::new(v(-1.0, 0.0, 0.0), v(1.3, 3.0, 1.0), [true, true, false]).unwrap();
+        let bits = |u: Vec3| [u.x.to_bits(), u.y.to_bits(), u.z.to_bits()];
+        // Steps through every regime: inside half a period, near ±L/2 and ±1.5 L
+        // (rounding ties), beyond (the scalar route), and a NaN.
+        let mut values: Vec<f64> = (-700..700).map(|k| k as f64 * 0.00731).collect();
+        values.extend([1.15, -1.15, 3.45, -3.45, 1.5, -4.5, f64::NAN, 0.0, -0.0]);
+        for w in values.windows(4) {
+            let lanes = Vec3L::<F64x4>::from_fn(|l| v(w[l], w[3 - l] * 0.5, w[l]));
+            let got = d.min_image_lanes(lanes);
+            for l in 0..F64x4::LANES {
+                assert_eq!(
+                    bits(got.lane(l)),
+                    bits(d.min_image(lanes.lane(l))),
+                    "{w:?} lane {l}"
+                );
+            }
+        }
     }
 
     #[test]

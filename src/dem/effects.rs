@@ -7,6 +7,7 @@
 //! boundary live here.
 
 use crate::dem::domain::Domain;
+use crate::dem::lanes::{Real, Vec3L};
 use crate::dem::vec3::Vec3;
 
 /// A uniform body force per unit mass.
@@ -47,6 +48,8 @@ pub trait Boundary: Copy + Send + Sync + 'static {
     const NAME: &'static str;
     /// Separation vector x_i − x_j given its raw value `d`, m.
     fn separation(domain: &Domain, d: Vec3) -> Vec3;
+    /// [`separation`](Self::separation) of several pairs, one per lane, m.
+    fn separation_lanes<T: Real>(domain: &Domain, d: Vec3L<T>) -> Vec3L<T>;
     /// Maps a position back into the domain after a move, m.
     fn wrap(domain: &Domain, p: Vec3) -> Vec3;
 }
@@ -59,6 +62,10 @@ impl Boundary for Open {
     const NAME: &'static str = "open";
     #[inline(always)]
     fn separation(_: &Domain, d: Vec3) -> Vec3 {
+        d
+    }
+    #[inline(always)]
+    fn separation_lanes<T: Real>(_: &Domain, d: Vec3L<T>) -> Vec3L<T> {
         d
     }
     #[inline(always)]
@@ -76,6 +83,10 @@ impl Boundary for Periodic {
     #[inline(always)]
     fn separation(domain: &Domain, d: Vec3) -> Vec3 {
         domain.min_image(d)
+    }
+    #[inline(always)]
+    fn separation_lanes<T: Real>(domain: &Domain, d: Vec3L<T>) -> Vec3L<T> {
+        domain.min_image_lanes(d)
     }
     #[inline(always)]
     fn wrap(domain: &Domain, p: Vec3) -> Vec3 {

@@ -57,6 +57,8 @@ pub trait Real:
     fn and(a: Self::Mask, b: Self::Mask) -> Self::Mask;
     /// Lane-wise not.
     fn not(a: Self::Mask) -> Self::Mask;
+    /// Whether any lane is set.
+    fn any(m: Self::Mask) -> bool;
     /// Lane `l` of a mask.
     fn flag(m: Self::Mask, l: usize) -> bool;
     /// A mask with `p(l)` in lane `l`.
@@ -119,6 +121,10 @@ impl Real for f64 {
         !a
     }
     #[inline(always)]
+    fn any(m: bool) -> bool {
+        m
+    }
+    #[inline(always)]
     fn flag(m: bool, _: usize) -> bool {
         m
     }
@@ -179,6 +185,10 @@ impl Real for F64x4 {
     #[inline(always)]
     fn not(a: Self) -> Self {
         !a
+    }
+    #[inline(always)]
+    fn any(m: Self) -> bool {
+        F64x4::any(m)
     }
     #[inline(always)]
     fn flag(m: Self, l: usize) -> bool {

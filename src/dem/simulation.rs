@@ -289,7 +289,10 @@ impl<B: Boundary> PairKernel<'_, B> {
         let sj: [&Sphere; 4] = std::array::from_fn(|l| &self.spheres[at(l)[1]]);
         let mi: [&Motion; 4] = std::array::from_fn(|l| &self.motion[at(l)[0]]);
         let mj: [&Motion; 4] = std::array::from_fn(|l| &self.motion[at(l)[1]]);
-        let d = Vec3L::<T>::from_fn(|l| B::separation(&self.domain, si[l].x - sj[l].x));
+        let d = B::separation_lanes(
+            &self.domain,
+            Vec3L::<T>::from_fn(|l| si[l].x) - Vec3L::from_fn(|l| sj[l].x),
+        );
         let dist_sq = d.norm_squared();
         let (ri, rj) = (T::from_fn(|l| si[l].r), T::from_fn(|l| sj[l].r));
         let touch = ri + rj;
