@@ -556,7 +556,7 @@ struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> {
 const SORT_EVERY_REBUILDS: u32 = 8;
 /// Pairs or particles per parallel task (fixed, so work splitting never
 /// depends on the thread count).
-const PAR_MIN_LEN: usize = 1024;
+const PAR_MIN_LEN: usize = 256;
 
 impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G, B> {
     fn new(world: &mut World, setup: &SimulationSetup, body: G) -> Result<Self, SetupError> {
