@@ -242,8 +242,9 @@ struct PairKernel<'a, B: Boundary> {
 
 impl<B: Boundary> PairKernel<'_, B> {
     /// Evaluates a run of listed pairs whose first pair has index `first`,
-    /// writing each pair's forces to `out`; returns the force-carrying contacts
-    /// and the worst (overlap ratio, pair index).
+    /// writing each pair's forces to `out`, four at a time and a short tail one
+    /// at a time; returns the force-carrying contacts and the worst (overlap
+    /// ratio, pair index).
     fn run<N: NormalModel, R: RollingModel>(
         &self,
         first: usize,
@@ -251,24 +252,30 @@ impl<B: Boundary> PairKernel<'_, B> {
         history: &mut [ContactHistory<N, R>],
         out: &mut [PairForce],
     ) -> (usize, (f64, usize)) {
-        let mut acc = (0, (0.0, usize::MAX));
         let whole = pairs.len() / PAIR_LANES * PAIR_LANES;
-        for (k, ((p, h), o)) in pairs[..whole]
-            .chunks_exact(PAIR_LANES)
-            .zip(history.chunks_exact_mut(PAIR_LANES))
-            .zip(out.chunks_exact_mut(PAIR_LANES))
+        let (history, history_tail) = history.split_at_mut(whole);
+        let (out, out_tail) = out.split_at_mut(whole);
+        let a = self.run_lanes::<N, R, F64x4>(first, &pairs[..whole], history, out);
+        let b = self.run_lanes::<N, R, f64>(first + whole, &pairs[whole..], history_tail, out_tail);
+        (a.0 + b.0, worse(a.1, b.1))
+    }
+
+    /// [`run`](Self::run) for a number of pairs that `T::LANES` divides.
+    fn run_lanes<N: NormalModel, R: RollingModel, T: Real>(
+        &self,
+        first: usize,
+        pairs: &[[u32; 2]],
+        history: &mut [ContactHistory<N, R>],
+        out: &mut [PairForce],
+    ) -> (usize, (f64, usize)) {
+        let mut acc = (0, (0.0, usize::MAX));
+        for (k, ((p, h), o)) in pairs
+            .chunks_exact(T::LANES)
+            .zip(history.chunks_exact_mut(T::LANES))
+            .zip(out.chunks_exact_mut(T::LANES))
             .enumerate()
         {
-            let found = self.lanes::<N, R, F64x4>(first + k * PAIR_LANES, p, h, o);
-            acc = (acc.0 + found.0, worse(acc.1, found.1));
-        }
-        for (k, ((p, h), o)) in pairs[whole..]
-            .chunks(1)
-            .zip(history[whole..].chunks_mut(1))
-            .zip(out[whole..].chunks_mut(1))
-            .enumerate()
-        {
-            let found = self.lanes::<N, R, f64>(first + whole + k, p, h, o);
+            let found = self.lanes::<N, R, T>(first + k * T::LANES, p, h, o);
             acc = (acc.0 + found.0, worse(acc.1, found.1));
         }
         acc
