@@ -433,7 +433,7 @@ impl Simulation {
     /// Prescribes particle kinematics between steps (e.g. a held or pulled
     /// particle). Do not add or remove particles here; use [`Simulation::insert`]
     /// and [`Simulation::retain`]. Radii and masses must not change here either:
-    /// the kernel keeps factors derived from them ([`Kick`]).
+    /// the kernel keeps factors derived from them (the half-kick factors and 1/r).
     pub fn particles_mut(&mut self) -> &mut Particles {
         &mut self.world.particles
     }
