@@ -18,6 +18,11 @@ use wide::{CmpEq, CmpGe, CmpGt, CmpLe};
 /// Four f64 lanes (one AVX register, or two SSE2 registers).
 pub type F64x4 = wide::f64x4;
 
+/// The most lanes any [`Real`] has: the size of the fixed scratch arrays
+/// that gather per-lane records (histories, particle records) for a batch.
+pub const MAX_LANES: usize = 4;
+const _: () = assert!(<F64x4 as Real>::LANES <= MAX_LANES);
+
 /// A number type holding [`Real::LANES`] f64 lanes, with lane-wise IEEE
 /// arithmetic and comparisons that are false for NaN (as `f64`'s are).
 pub trait Real:
@@ -233,7 +238,8 @@ impl<T: Real> Vec3L<T> {
     /// Gathers one vector per lane.
     #[inline(always)]
     pub fn from_fn(mut f: impl FnMut(usize) -> Vec3) -> Self {
-        let v: [Vec3; 4] = std::array::from_fn(|l| if l < T::LANES { f(l) } else { Vec3::zeros() });
+        let v: [Vec3; MAX_LANES] =
+            std::array::from_fn(|l| if l < T::LANES { f(l) } else { Vec3::zeros() });
         Self {
             x: T::from_fn(|l| v[l].x),
             y: T::from_fn(|l| v[l].y),

@@ -25,7 +25,7 @@ use crate::dem::contact::{
 use crate::dem::domain::Domain;
 use crate::dem::effects::{BodyForce, Boundary, Gravity, NoGravity, Open, Periodic};
 use crate::dem::health::{HealthCause, HealthError, HealthLimits, ENERGY_CHECK_INTERVAL};
-use crate::dem::lanes::{F64x4, Real, Vec3L};
+use crate::dem::lanes::{F64x4, Real, Vec3L, MAX_LANES};
 use crate::dem::material::{harmonic, ElasticMaterial};
 use crate::dem::neighbor::{apply_permutation, NeighborError, NeighborList, PairRef};
 use crate::dem::particles::{ParticleInit, Particles};
@@ -292,10 +292,10 @@ impl<B: Boundary> PairKernel<'_, B> {
         out: &mut [PairForce],
     ) -> (usize, (f64, usize)) {
         let at = |l: usize| pairs[l.min(T::LANES - 1)].map(|k| k as usize);
-        let si: [&Sphere; 4] = std::array::from_fn(|l| &self.spheres[at(l)[0]]);
-        let sj: [&Sphere; 4] = std::array::from_fn(|l| &self.spheres[at(l)[1]]);
-        let mi: [&Motion; 4] = std::array::from_fn(|l| &self.motion[at(l)[0]]);
-        let mj: [&Motion; 4] = std::array::from_fn(|l| &self.motion[at(l)[1]]);
+        let si: [&Sphere; MAX_LANES] = std::array::from_fn(|l| &self.spheres[at(l)[0]]);
+        let sj: [&Sphere; MAX_LANES] = std::array::from_fn(|l| &self.spheres[at(l)[1]]);
+        let mi: [&Motion; MAX_LANES] = std::array::from_fn(|l| &self.motion[at(l)[0]]);
+        let mj: [&Motion; MAX_LANES] = std::array::from_fn(|l| &self.motion[at(l)[1]]);
         let d = B::separation_lanes(
             &self.domain,
             Vec3L::<T>::from_fn(|l| si[l].x) - Vec3L::from_fn(|l| sj[l].x),

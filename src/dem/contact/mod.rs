@@ -42,7 +42,7 @@ pub mod rolling_epsd;
 pub mod rolling_none;
 pub mod tangential_mindlin;
 
-use crate::dem::lanes::{Real, Vec3L};
+use crate::dem::lanes::{Real, Vec3L, MAX_LANES};
 use crate::dem::material::{effective_shear_modulus, effective_youngs_modulus, ElasticMaterial};
 use crate::dem::vec3::Vec3;
 
@@ -286,7 +286,7 @@ pub trait NormalModel: Send + Sync + 'static {
         overlap_m: T,
         history: &mut [Self::History],
     ) -> NormalLanes<T> {
-        let r: [Option<NormalResponse>; 4] = std::array::from_fn(|l| {
+        let r: [Option<NormalResponse>; MAX_LANES] = std::array::from_fn(|l| {
             (l < T::LANES)
                 .then(|| Self::normal(c, r_star_m.lane(l), overlap_m.lane(l), &mut history[l]))
                 .flatten()
@@ -434,7 +434,7 @@ pub fn evaluate_lanes<N: NormalModel, R: RollingModel, T: Real>(
 ) -> ResponseLanes<T> {
     let lanes = T::LANES;
     let r_star = geometry.r_star_m;
-    let mut normal_history: [N::History; 4] = std::array::from_fn(|l| {
+    let mut normal_history: [N::History; MAX_LANES] = std::array::from_fn(|l| {
         if l < lanes {
             history[l].normal
         } else {
@@ -460,7 +460,7 @@ pub fn evaluate_lanes<N: NormalModel, R: RollingModel, T: Real>(
     let f_t = tangential_mindlin::force(c, a, m_star, load, &n, &v_t, dt_s, &mut xi);
     let w = motion.angular_velocity;
     let w_roll = w - n.scale(w.dot(&n));
-    let mut rolling_history: [R::History; 4] = std::array::from_fn(|l| {
+    let mut rolling_history: [R::History; MAX_LANES] = std::array::from_fn(|l| {
         if l < lanes {
             history[l].rolling
         } else {
