@@ -1,0 +1,192 @@
+//! The pair kernel: packed per-particle records and the evaluation of listed
+//! pairs four contacts at a time.
+
+use super::worse;
+use crate::dem::contact::{
+    evaluate_lanes, ContactHistory, GeometryLanes, MotionLanes, NormalModel, PairCoefficients,
+    RollingModel,
+};
+use crate::dem::domain::Domain;
+use crate::dem::effects::Boundary;
+use crate::dem::lanes::{F64x4, Real, Vec3L, MAX_LANES};
+use crate::dem::vec3::Vec3;
+
+/// What the pair kernel reads first of a particle, packed in one 32-byte
+/// record: centre (m) and radius (m). Enough to reject a listed pair that does
+/// not touch.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+pub(super) struct Sphere {
+    pub(super) x: Vec3,
+    pub(super) r: f64,
+}
+
+/// What the contact laws read of a touching particle, packed in one 64-byte
+/// record: the full-step velocity estimates v½ + ½dt·F/m (m/s) and
+/// ω½ + ½dt·T/I (rad/s) (see [`Stepper::kick_and_drift`]), the mass (kg) and
+/// the inverse radius (1/m, for overlap ratios).
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+pub(super) struct Motion {
+    pub(super) v: Vec3,
+    pub(super) w: Vec3,
+    pub(super) m: f64,
+    pub(super) inv_r: f64,
+}
+
+/// Per-particle factors that depend only on mass and radius, computed when
+/// particles are added or removed instead of every step (each is the same
+/// expression the kick would evaluate, so results do not change): the
+/// half-kick factors ½dt/m (s/kg) and ½dt/I (s/(kg·m²), I = 0.4 m r²) and the
+/// inverse radius 1/r (1/m).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Kick {
+    pub(super) v: f64,
+    pub(super) w: f64,
+    pub(super) inv_r: f64,
+}
+
+impl Kick {
+    pub(super) fn new(dt: f64, m: f64, r: f64) -> Self {
+        Self {
+            v: 0.5 * dt / m,
+            w: 0.5 * dt / (0.4 * m * r * r),
+            inv_r: 1.0 / r,
+        }
+    }
+}
+
+/// The force a pair exerts, stored per pair and gathered per particle.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct PairForce {
+    pub(super) force_on_first: Vec3,
+    /// Torque on the first and on the second particle, N·m.
+    pub(super) torque: [Vec3; 2],
+}
+
+/// Contacts evaluated side by side in the pair kernel (one AVX2 register of
+/// f64, two SSE2 registers).
+pub(super) const PAIR_LANES: usize = 4;
+
+/// What the pair kernel reads, borrowed for one force evaluation.
+pub(super) struct PairKernel<'a, B: Boundary> {
+    pub(super) spheres: &'a [Sphere],
+    pub(super) motion: &'a [Motion],
+    pub(super) domain: Domain,
+    pub(super) coef: PairCoefficients,
+    /// Extra contact range, m (JKR only).
+    pub(super) reach: f64,
+    pub(super) dt: f64,
+    pub(super) _boundary: std::marker::PhantomData<B>,
+}
+
+impl<B: Boundary> PairKernel<'_, B> {
+    /// Evaluates a run of listed pairs whose first pair has index `first`,
+    /// writing each pair's forces to `out`, four at a time and a short tail one
+    /// at a time; returns the force-carrying contacts and the worst (overlap
+    /// ratio, pair index).
+    pub(super) fn run<N: NormalModel, R: RollingModel>(
+        &self,
+        first: usize,
+        pairs: &[[u32; 2]],
+        history: &mut [ContactHistory<N, R>],
+        out: &mut [PairForce],
+    ) -> (usize, (f64, usize)) {
+        let whole = pairs.len() / PAIR_LANES * PAIR_LANES;
+        let (history, history_tail) = history.split_at_mut(whole);
+        let (out, out_tail) = out.split_at_mut(whole);
+        let a = self.run_lanes::<N, R, F64x4>(first, &pairs[..whole], history, out);
+        let b = self.run_lanes::<N, R, f64>(first + whole, &pairs[whole..], history_tail, out_tail);
+        (a.0 + b.0, worse(a.1, b.1))
+    }
+
+    /// [`run`](Self::run) for a number of pairs that `T::LANES` divides.
+    fn run_lanes<N: NormalModel, R: RollingModel, T: Real>(
+        &self,
+        first: usize,
+        pairs: &[[u32; 2]],
+        history: &mut [ContactHistory<N, R>],
+        out: &mut [PairForce],
+    ) -> (usize, (f64, usize)) {
+        let mut acc = (0, (0.0, usize::MAX));
+        for (k, ((p, h), o)) in pairs
+            .chunks_exact(T::LANES)
+            .zip(history.chunks_exact_mut(T::LANES))
+            .zip(out.chunks_exact_mut(T::LANES))
+            .enumerate()
+        {
+            let found = self.lanes::<N, R, T>(first + k * T::LANES, p, h, o);
+            acc = (acc.0 + found.0, worse(acc.1, found.1));
+        }
+        acc
+    }
+
+    /// `T::LANES` listed pairs with indices `first..` at once (each slice
+    /// holds one entry per lane).
+    #[inline(always)]
+    fn lanes<N: NormalModel, R: RollingModel, T: Real>(
+        &self,
+        first: usize,
+        pairs: &[[u32; 2]],
+        history: &mut [ContactHistory<N, R>],
+        out: &mut [PairForce],
+    ) -> (usize, (f64, usize)) {
+        let at = |l: usize| pairs[l.min(T::LANES - 1)].map(|k| k as usize);
+        let si: [&Sphere; MAX_LANES] = std::array::from_fn(|l| &self.spheres[at(l)[0]]);
+        let sj: [&Sphere; MAX_LANES] = std::array::from_fn(|l| &self.spheres[at(l)[1]]);
+        let mi: [&Motion; MAX_LANES] = std::array::from_fn(|l| &self.motion[at(l)[0]]);
+        let mj: [&Motion; MAX_LANES] = std::array::from_fn(|l| &self.motion[at(l)[1]]);
+        let d = B::separation_lanes(
+            &self.domain,
+            Vec3L::<T>::from_fn(|l| si[l].x) - Vec3L::from_fn(|l| sj[l].x),
+        );
+        let dist_sq = d.norm_squared();
+        let (ri, rj) = (T::from_fn(|l| si[l].r), T::from_fn(|l| sj[l].r));
+        let touch = ri + rj;
+        let limit = touch + T::splat(self.reach);
+        let in_range = T::not(dist_sq.ge(limit * limit));
+        let dist = dist_sq.sqrt();
+        let n = d.scale(T::splat(1.0) / dist);
+        let overlap = touch - dist;
+        let half = T::splat(0.5);
+        let arm_i = ri - half * overlap;
+        let arm_j = rj - half * overlap;
+        let (wi, wj) = (
+            Vec3L::<T>::from_fn(|l| mi[l].w),
+            Vec3L::<T>::from_fn(|l| mj[l].w),
+        );
+        let motion = MotionLanes {
+            velocity: Vec3L::from_fn(|l| mi[l].v)
+                - Vec3L::from_fn(|l| mj[l].v)
+                - (wi.scale(arm_i) + wj.scale(arm_j)).cross(&n),
+            angular_velocity: wi - wj,
+        };
+        // `harmonic` of two finite values, lane-wise: particles are never rigid.
+        let (m_i, m_j) = (T::from_fn(|l| mi[l].m), T::from_fn(|l| mj[l].m));
+        let geometry = GeometryLanes {
+            normal: n,
+            overlap_m: overlap,
+            r_star_m: ri * rj / (ri + rj),
+            m_star_kg: m_i * m_j / (m_i + m_j),
+        };
+        let c =
+            evaluate_lanes::<N, R, T>(&self.coef, &geometry, &motion, in_range, self.dt, history);
+        let lever = n.cross(&c.tangential_force);
+        let torque_i = c.rolling_torque - lever.scale(arm_i);
+        let torque_j = -c.rolling_torque - lever.scale(arm_j);
+        let mut found = (0, (0.0, usize::MAX));
+        for (l, o) in out.iter_mut().enumerate() {
+            *o = if T::flag(c.active, l) {
+                let ratio = overlap.lane(l).max(0.0) * mi[l].inv_r.max(mj[l].inv_r);
+                found = (found.0 + 1, worse(found.1, (ratio, first + l)));
+                PairForce {
+                    force_on_first: c.force.lane(l),
+                    torque: [torque_i.lane(l), torque_j.lane(l)],
+                }
+            } else {
+                PairForce::default()
+            };
+        }
+        found
+    }
+}
