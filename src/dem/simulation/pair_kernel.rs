@@ -23,7 +23,7 @@ pub(super) struct Sphere {
 
 /// What the contact laws read of a touching particle, packed in one 64-byte
 /// record: the full-step velocity estimates v½ + ½dt·F/m (m/s) and
-/// ω½ + ½dt·T/I (rad/s) (see [`Stepper::kick_and_drift`]), the mass (kg) and
+/// ω½ + ½dt·T/I (rad/s) (see the stepper's `Drift`), the mass (kg) and
 /// the inverse radius (1/m, for overlap ratios).
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
@@ -37,13 +37,11 @@ pub(super) struct Motion {
 /// Per-particle factors that depend only on mass and radius, computed when
 /// particles are added or removed instead of every step (each is the same
 /// expression the kick would evaluate, so results do not change): the
-/// half-kick factors ½dt/m (s/kg) and ½dt/I (s/(kg·m²), I = 0.4 m r²) and the
-/// inverse radius 1/r (1/m).
+/// half-kick factors ½dt/m (s/kg) and ½dt/I (s/(kg·m²), I = 0.4 m r²).
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Kick {
     pub(super) v: f64,
     pub(super) w: f64,
-    pub(super) inv_r: f64,
 }
 
 impl Kick {
@@ -51,7 +49,6 @@ impl Kick {
         Self {
             v: 0.5 * dt / m,
             w: 0.5 * dt / (0.4 * m * r * r),
-            inv_r: 1.0 / r,
         }
     }
 }

@@ -7,6 +7,7 @@ use crate::dem::contact::{
     evaluate, ContactGeometry, ContactHistory, NormalModel, PairCoefficients, RelativeMotion,
     RollingModel,
 };
+use crate::dem::domain::Domain;
 use crate::dem::effects::{BodyForce, Boundary};
 use crate::dem::health::{HealthCause, HealthError, HealthLimits, ENERGY_CHECK_INTERVAL};
 use crate::dem::material::harmonic;
@@ -135,79 +136,80 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .sort_and_rebuild(world)
             .map_err(SetupError::Neighbor)?;
         stepper.pack(world);
-        stepper.forces(world).map_err(SetupError::Health)?;
+        stepper.forces(world, false).map_err(SetupError::Health)?;
         Ok(stepper)
     }
 
-    /// One velocity-Verlet step: half kick and drift, forces at the new
-    /// positions (damping sees the half-step velocities, as in LAMMPS), half kick.
-    fn step(&mut self, world: &mut World) -> Result<(), HealthError> {
-        let moved = self.kick_and_drift(world)?;
-        world.time_s += self.dt;
-        world.step += 1;
-        if moved || self.neighbors.is_stale(world.particles.len()) {
-            self.rebuild(world)?;
-        }
-        self.forces(world)?;
-        if self.energy_check && world.step.is_multiple_of(ENERGY_CHECK_INTERVAL) {
-            self.check_energy(world)?;
+    /// Advances `steps` velocity-Verlet steps. Each step: half kick and drift,
+    /// neighbour update, forces at the new positions (damping sees estimated
+    /// full-step velocities, see [`Drift`]), half kick. The next step's half
+    /// kick and drift run inside this step's force pass (one pass over the
+    /// particles instead of two), except after the last step (the caller sees
+    /// whole steps) and after a step whose energy is checked (the check needs
+    /// the undrifted state); the operations and their order are the same
+    /// either way.
+    fn advance_steps(&mut self, world: &mut World, steps: u64) -> Result<(), HealthError> {
+        let mut drifted: Option<bool> = None;
+        for s in 0..steps {
+            let moved = match drifted {
+                Some(moved) => moved,
+                None => self.kick_and_drift(world)?,
+            };
+            world.time_s += self.dt;
+            world.step += 1;
+            if moved || self.neighbors.is_stale(world.particles.len()) {
+                self.rebuild(world)?;
+            }
+            let check = self.energy_check && world.step.is_multiple_of(ENERGY_CHECK_INTERVAL);
+            let drift = s + 1 < steps && !check;
+            let moved = self.forces(world, drift)?;
+            if check {
+                self.check_energy(world)?;
+            }
+            drifted = drift.then_some(moved);
         }
         Ok(())
     }
 
-    /// First half kick and drift. Also estimates the full-step velocities the
-    /// contact laws use, `v½ + ½dt·F_old/m`: damping evaluated with the
-    /// half-step velocity alone lags by dt/2 and makes the restitution error
-    /// first order in dt (4 % at e = 0.1 with 50 steps per contact); the
-    /// estimate makes it second order. Fills the packed [`Sphere`] and
-    /// [`Motion`] records, and returns whether some particle moved more than
-    /// half the skin since the last neighbour build (the neighbour list's own
-    /// test, fused into this pass).
+    /// First half kick and drift on its own (when the last force pass did
+    /// not drift), from the stored forces and torques; returns whether some
+    /// particle moved far enough to need a neighbour rebuild.
     fn kick_and_drift(&mut self, world: &mut World) -> Result<bool, HealthError> {
-        let dt = self.dt;
-        let domain = world.domain;
+        let drift = Drift::<B> {
+            domain: world.domain,
+            dt: self.dt,
+            reference: self.neighbors.reference_positions(),
+            limit_sq: self.neighbors.rebuild_distance_sq(),
+            _boundary: std::marker::PhantomData,
+        };
         let p = &mut world.particles;
-        self.spheres.resize(p.len(), Sphere::default());
-        self.motion.resize(p.len(), Motion::default());
-        let reference = self.neighbors.reference_positions();
-        let limit_sq = self.neighbors.rebuild_distance_sq();
         let (left, moved) = p
             .position
             .par_iter_mut()
             .zip(p.velocity.par_iter_mut())
             .zip(p.angular_velocity.par_iter_mut())
             .zip(p.force.par_iter().zip(p.torque.par_iter()))
-            .zip(p.mass.par_iter().zip(p.radius.par_iter()))
             .zip(self.spheres.par_iter_mut().zip(self.motion.par_iter_mut()))
             .zip(self.kick.par_iter())
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
-            .map(
-                |(i, ((((((x, v), w), (f, t)), (&m, &r)), (sphere, motion)), kick))| {
-                    let dv = f * kick.v;
-                    let dw = t * kick.w;
-                    *v += dv;
-                    *w += dw;
-                    *x = B::wrap(&domain, *x + *v * dt);
-                    *sphere = Sphere { x: *x, r };
-                    *motion = Motion {
-                        v: *v + dv,
-                        w: *w + dw,
-                        m,
-                        inv_r: kick.inv_r,
-                    };
-                    // A NaN position also asks for a rebuild (which then reports it).
-                    let moved = match reference.get(i) {
-                        Some(x0) => {
-                            let d2 = B::separation(&domain, *x - x0).norm_squared();
-                            d2 > limit_sq || d2.is_nan()
-                        }
-                        None => true,
-                    };
-                    ((!domain.contains(*x)).then_some(i), moved)
-                },
-            )
+            .map(|(i, (((((x, v), w), (f, t)), (sphere, motion)), kick))| {
+                let state = ParticleMut {
+                    x,
+                    v,
+                    w,
+                    sphere,
+                    motion,
+                };
+                drift.apply(i, f * kick.v, t * kick.w, state)
+            })
             .reduce(|| (None, false), |a, b| (min_option(a.0, b.0), a.1 || b.1));
+        self.left_domain(world, left)?;
+        Ok(moved)
+    }
+
+    /// The error for the lowest-indexed particle that left the domain, if any.
+    fn left_domain(&self, world: &World, left: Option<usize>) -> Result<(), HealthError> {
         match left {
             Some(i) => Err(self.health(
                 world,
@@ -216,7 +218,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                     position: world.particles.position[i],
                 },
             )),
-            None => Ok(moved),
+            None => Ok(()),
         }
     }
 
@@ -313,17 +315,20 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     }
 
     /// Pair forces into the per-pair buffer, then per particle: gather, walls,
-    /// body force, second half kick, finiteness check.
-    fn forces(&mut self, world: &mut World) -> Result<(), HealthError> {
+    /// body force, second half kick, finiteness check, and with `drift` the
+    /// next step's first half kick and drift. Returns whether that drift moved
+    /// some particle far enough to need a neighbour rebuild.
+    fn forces(&mut self, world: &mut World, drift: bool) -> Result<bool, HealthError> {
         let (contacts, worst_pair) = self.pair_forces(world);
-        let (wall_contacts, worst_wall, non_finite) = self.gather(world);
+        let found = self.gather(world, drift);
+        let worst_wall = found.worst_wall;
         self.stats = StepStats {
             contacts,
-            wall_contacts,
+            wall_contacts: found.wall_contacts,
             max_overlap_ratio: worst_pair.0.max(worst_wall.0),
             rebuilds: self.neighbors.rebuild_count(),
         };
-        if let Some(i) = non_finite {
+        if let Some(i) = found.non_finite {
             return Err(self.health(world, i, HealthCause::NonFinite));
         }
         if self.stats.max_overlap_ratio > self.limits.max_overlap_ratio {
@@ -351,7 +356,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                 },
             ));
         }
-        Ok(())
+        self.left_domain(world, found.left)?;
+        Ok(found.moved)
     }
 
     /// Returns the number of force-carrying contacts and (worst overlap ratio, pair index).
@@ -385,9 +391,11 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             )
     }
 
-    /// Returns wall contacts, (worst wall overlap ratio, particle*slots+wall),
-    /// and the lowest index of a particle with non-finite state.
-    fn gather(&mut self, world: &mut World) -> (usize, (f64, usize), Option<usize>) {
+    /// Per particle: gather, walls, body force, second half kick and
+    /// finiteness check; with `drift` also the next step's first half kick and
+    /// drift (forces and torques are then not stored: the next force pass
+    /// replaces them), else the forces and torques are stored for it.
+    fn gather(&mut self, world: &mut World, drift: bool) -> GatherFound {
         let t = world.time_s;
         self.placed.clear();
         self.placed
@@ -400,27 +408,34 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         let wall_reach = &self.wall_reach;
         let buffer = &self.pair_forces;
         let neighbors = &self.neighbors;
+        let drift = drift.then_some(Drift::<B> {
+            domain: world.domain,
+            dt,
+            reference: neighbors.reference_positions(),
+            limit_sq: neighbors.rebuild_distance_sq(),
+            _boundary: std::marker::PhantomData,
+        });
         let p = &mut world.particles;
         p.force
             .par_iter_mut()
             .zip(p.torque.par_iter_mut())
             .zip(p.velocity.par_iter_mut())
             .zip(p.angular_velocity.par_iter_mut())
+            .zip(p.position.par_iter_mut())
             .zip(self.wall_history.par_chunks_mut(slots))
-            .zip(self.spheres.par_iter().zip(self.motion.par_iter()))
+            .zip(self.spheres.par_iter_mut().zip(self.motion.par_iter_mut()))
             .zip(self.kick.par_iter())
             .enumerate()
             .with_min_len(PAR_MIN_LEN)
             .map(
-                |(i, ((((((f, t), v), w), hist), (sphere, motion)), kick))| {
-                    let (x, r, m) = (&sphere.x, sphere.r, motion.m);
-                    let (ve, we) = (&motion.v, &motion.w);
+                |(i, (((((((f, t), v), w), x), hist), (sphere, motion)), kick))| {
+                    let (xc, r, m) = (sphere.x, sphere.r, motion.m);
+                    let (ve, we) = (motion.v, motion.w);
                     let (mut force, mut torque) =
                         sum_pair_forces(neighbors.incident(i), buffer, g * m);
-                    let mut contacts = 0;
-                    let mut worst = (0.0, usize::MAX);
+                    let mut found = GatherFound::default();
                     for (k, wall) in placed.iter().enumerate() {
-                        let Some(wc) = wall.contact(*x, r, wall_reach[k]) else {
+                        let Some(wc) = wall.contact(xc, r, wall_reach[k]) else {
                             hist[k] = ContactHistory::default();
                             continue;
                         };
@@ -428,7 +443,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                         let arm = r - 0.5 * wc.overlap_m;
                         let motion = RelativeMotion {
                             velocity: ve - (we * arm).cross(&n) - wc.velocity,
-                            angular_velocity: *we,
+                            angular_velocity: we,
                         };
                         let geometry = ContactGeometry {
                             normal: n,
@@ -441,24 +456,40 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                         {
                             force += c.force;
                             torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
-                            contacts += 1;
-                            worst = worse(worst, (wc.overlap_m.max(0.0) / r, i * slots + k));
+                            found.wall_contacts += 1;
+                            found.worst_wall =
+                                worse(found.worst_wall, (wc.overlap_m.max(0.0) / r, i * slots + k));
                         }
                     }
-                    *f = force;
-                    *t = torque;
-                    *v += force * kick.v;
-                    *w += torque * kick.w;
+                    let dv = force * kick.v;
+                    let dw = torque * kick.w;
+                    *v += dv;
+                    *w += dw;
                     // 0·c is 0 for a finite c and NaN otherwise: one test, no branches.
-                    let probe = x * 0.0 + *v * 0.0 + *w * 0.0;
-                    let finite = probe.x + probe.y + probe.z == 0.0;
-                    (contacts, worst, (!finite).then_some(i))
+                    let probe = xc * 0.0 + *v * 0.0 + *w * 0.0;
+                    if probe.x + probe.y + probe.z != 0.0 {
+                        found.non_finite = Some(i);
+                    }
+                    match &drift {
+                        Some(drift) => {
+                            let state = ParticleMut {
+                                x,
+                                v,
+                                w,
+                                sphere,
+                                motion,
+                            };
+                            (found.left, found.moved) = drift.apply(i, dv, dw, state);
+                        }
+                        None => {
+                            *f = force;
+                            *t = torque;
+                        }
+                    }
+                    found
                 },
             )
-            .reduce(
-                || (0, (0.0, usize::MAX), None),
-                |a, b| (a.0 + b.0, worse(a.1, b.1), min_option(a.2, b.2)),
-            )
+            .reduce(GatherFound::default, GatherFound::merge)
     }
 
     /// Kinetic + gravitational (measured from the domain corner lowest along
@@ -565,12 +596,100 @@ fn sum_pair_forces(incident: &[PairRef], buffer: &[PairForce], start: Vec3) -> (
     (Vec3::new(fx, fy, fz), Vec3::new(tx, ty, tz))
 }
 
+/// The first half kick and the drift.
+///
+/// Also estimates the full-step velocities the contact laws use,
+/// `v½ + ½dt·F_old/m`: damping evaluated with the half-step velocity alone
+/// lags by dt/2 and makes the restitution error first order in dt (4 % at
+/// e = 0.1 with 50 steps per contact); the estimate makes it second order.
+struct Drift<'a, B: Boundary> {
+    domain: Domain,
+    /// Time step, s.
+    dt: f64,
+    /// Positions of the last neighbour build, m.
+    reference: &'a [Vec3],
+    /// Squared displacement that asks for a rebuild, m².
+    limit_sq: f64,
+    _boundary: std::marker::PhantomData<B>,
+}
+
+/// One particle's state that a drift updates.
+struct ParticleMut<'a> {
+    x: &'a mut Vec3,
+    v: &'a mut Vec3,
+    w: &'a mut Vec3,
+    sphere: &'a mut Sphere,
+    motion: &'a mut Motion,
+}
+
+impl<B: Boundary> Drift<'_, B> {
+    /// Kicks particle `i` by `dv` (m/s) and `dw` (rad/s), moves it and
+    /// refreshes its packed records (centre and velocity estimates; radius
+    /// and mass never change there). Returns (`Some(i)` if it left the
+    /// domain, whether it moved more than half the skin since the last
+    /// neighbour build — the neighbour list's own test, fused into this pass).
+    #[inline(always)]
+    fn apply(&self, i: usize, dv: Vec3, dw: Vec3, p: ParticleMut<'_>) -> (Option<usize>, bool) {
+        *p.v += dv;
+        *p.w += dw;
+        *p.x = B::wrap(&self.domain, *p.x + *p.v * self.dt);
+        p.sphere.x = *p.x;
+        p.motion.v = *p.v + dv;
+        p.motion.w = *p.w + dw;
+        // A NaN position also asks for a rebuild (which then reports it).
+        let moved = match self.reference.get(i) {
+            Some(x0) => {
+                let d2 = B::separation(&self.domain, *p.x - x0).norm_squared();
+                d2 > self.limit_sq || d2.is_nan()
+            }
+            None => true,
+        };
+        ((!self.domain.contains(*p.x)).then_some(i), moved)
+    }
+}
+
+/// What a gather found (all reductions exact and order-independent).
+#[derive(Clone, Copy, Debug)]
+struct GatherFound {
+    /// Force-carrying wall contacts.
+    wall_contacts: usize,
+    /// Worst (overlap ratio, particle * slots + wall).
+    worst_wall: (f64, usize),
+    /// Lowest index of a particle with non-finite state.
+    non_finite: Option<usize>,
+    /// Lowest index of a particle that drifted out of the domain.
+    left: Option<usize>,
+    /// Some particle drifted far enough to need a neighbour rebuild.
+    moved: bool,
+}
+
+impl Default for GatherFound {
+    fn default() -> Self {
+        Self {
+            wall_contacts: 0,
+            worst_wall: (0.0, usize::MAX),
+            non_finite: None,
+            left: None,
+            moved: false,
+        }
+    }
+}
+
+impl GatherFound {
+    fn merge(self, o: Self) -> Self {
+        Self {
+            wall_contacts: self.wall_contacts + o.wall_contacts,
+            worst_wall: worse(self.worst_wall, o.worst_wall),
+            non_finite: min_option(self.non_finite, o.non_finite),
+            left: min_option(self.left, o.left),
+            moved: self.moved || o.moved,
+        }
+    }
+}
+
 impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Stepper<N, R, G, B> {
     fn advance(&mut self, world: &mut World, steps: u64) -> Result<(), HealthError> {
-        for _ in 0..steps {
-            self.step(world)?;
-        }
-        Ok(())
+        self.advance_steps(world, steps)
     }
 
     fn name(&self) -> String {
@@ -602,6 +721,6 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Step
         self.sort_and_rebuild(world)
             .map_err(|e| self.neighbor_failure(world, e))?;
         self.pack(world);
-        self.forces(world)
+        self.forces(world, false).map(|_| ())
     }
 }
