@@ -5,7 +5,8 @@
 //!
 //! Pipeline of one step ([`simulation`]): kick and drift, neighbour update
 //! ([`neighbor`]), pair forces ([`contact`]), gather with walls ([`walls`]),
-//! body force and second kick, health checks ([`health`]).
+//! body force and second kick, health checks ([`health`]); inside a run of
+//! steps the gather also performs the next kick and drift.
 
 pub mod contact;
 pub mod domain;

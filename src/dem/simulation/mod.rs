@@ -6,7 +6,11 @@
 //! force and the boundary (2 × 3 × 2 × 2 kernels); nothing in the loops asks
 //! which effects are on. A step runs named stages in order (rapier's
 //! pipeline): kick and drift, neighbours, pair forces, gather (walls, body
-//! force, kick), health.
+//! force, kick), health. Within one `advance`, the gather also runs the next
+//! step's kick and drift, saving a pass over the particles; the operations and
+//! their order are unchanged. (Going further and interleaving the pair
+//! evaluation with the gather, in blocks, measured 25–35 % slower on one
+//! thread: separate streaming passes suit the hardware prefetchers better.)
 //!
 //! Determinism: pair forces go to a per-pair buffer (no accumulation races),
 //! and each particle sums its pairs in the neighbour list's fixed order;
