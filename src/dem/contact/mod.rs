@@ -45,6 +45,7 @@ pub mod tangential_mindlin;
 use crate::dem::lanes::{Real, Vec3L, MAX_LANES};
 use crate::dem::material::{effective_shear_modulus, effective_youngs_modulus, ElasticMaterial};
 use crate::dem::vec3::Vec3;
+use std::f64::consts::PI;
 
 /// The user-facing contact parameters of one pair type (particle–particle or
 /// particle–one wall material), before mixing.
@@ -89,6 +90,11 @@ pub struct PairCoefficients {
     pub rolling_friction: f64,
     /// JKR surface energy per surface Γ, J/m².
     pub surface_energy_j_m2: f64,
+    /// JKR's `√(4πΓ/E*)`, m^½: δ = a²/R* − this × √a (kept here so the JKR
+    /// law does not recompute it per contact and step).
+    pub jkr_adhesion: f64,
+    /// JKR's `4√(πΓE*)`, N/m^{3/2}: the adhesive force is this × a^{3/2}.
+    pub jkr_tension: f64,
     /// `2√(5/6) ψ √(2E*)`: the normal damping force is this × √(a m*) × v_n
     /// (see [`damping::normal_damping_force`]).
     pub normal_damping: f64,
@@ -169,6 +175,8 @@ impl PairCoefficients {
             static_friction: p.static_friction,
             rolling_friction: p.rolling_friction,
             surface_energy_j_m2: p.surface_energy_j_m2,
+            jkr_adhesion: (4.0 * PI * p.surface_energy_j_m2 / e_star).sqrt(),
+            jkr_tension: 4.0 * (PI * p.surface_energy_j_m2 * e_star).sqrt(),
             clip_tensile,
         })
     }

@@ -32,7 +32,7 @@ fn critical_radius(c: f64, r_star: f64) -> f64 {
 /// Separation overlap δ_c (m, ≤ 0) at which a JKR contact of effective radius
 /// `r_star_m` breaks under displacement control.
 pub fn separation_overlap_m(coef: &PairCoefficients, r_star_m: f64) -> f64 {
-    let c = adhesion_constant(coef);
+    let c = coef.jkr_adhesion;
     let ac = critical_radius(c, r_star_m);
     -3.0 * ac * ac / r_star_m
 }
@@ -40,11 +40,6 @@ pub fn separation_overlap_m(coef: &PairCoefficients, r_star_m: f64) -> f64 {
 /// Pull-off force 3πΓR*, N: the largest tensile force a JKR contact sustains.
 pub fn pull_off_force_n(coef: &PairCoefficients, r_star_m: f64) -> f64 {
     3.0 * PI * coef.surface_energy_j_m2 * r_star_m
-}
-
-#[inline(always)]
-fn adhesion_constant(coef: &PairCoefficients) -> f64 {
-    (4.0 * PI * coef.surface_energy_j_m2 / coef.e_star).sqrt()
 }
 
 /// Contact radius a (m) for overlap δ ≥ δ_c, starting Newton from `guess`.
@@ -90,17 +85,22 @@ impl NormalModel for Jkr {
         overlap: f64,
         radius: &mut f64,
     ) -> Option<NormalResponse> {
-        let c = adhesion_constant(coef);
-        let ac = critical_radius(c, r_star);
         let touched = *radius > 0.0;
-        if (!touched && overlap <= 0.0) || (touched && overlap <= -3.0 * ac * ac / r_star) {
+        // A listed pair that has not touched yet costs no power function.
+        if !touched && overlap <= 0.0 {
+            *radius = 0.0;
+            return None;
+        }
+        let c = coef.jkr_adhesion;
+        let ac = critical_radius(c, r_star);
+        if touched && overlap <= -3.0 * ac * ac / r_star {
             *radius = 0.0;
             return None;
         }
         let a = contact_radius(c, r_star, overlap, ac, *radius);
         *radius = a;
-        let elastic = 4.0 * coef.e_star * a * a * a / (3.0 * r_star)
-            - 4.0 * (PI * coef.surface_energy_j_m2 * coef.e_star).sqrt() * a * a.sqrt();
+        let elastic =
+            4.0 * coef.e_star * a * a * a / (3.0 * r_star) - coef.jkr_tension * a * a.sqrt();
         Some(NormalResponse {
             elastic_force_n: elastic,
             contact_radius_m: a,
@@ -119,7 +119,7 @@ mod tests {
     fn contact_radius_solves_the_jkr_relation() {
         let coef = coefficients(0.5, 0.5, 0.0, 0.05);
         let r = 5e-4;
-        let c = adhesion_constant(&coef);
+        let c = coef.jkr_adhesion;
         let dc = separation_overlap_m(&coef, r);
         for k in 0..50 {
             let delta = dc + (k as f64 + 0.5) * (1e-5 - dc) / 50.0;
