@@ -13,15 +13,25 @@
 //! a(δ) is the largest root of the convex function `f(a) = a²/R* − c√a − δ` on
 //! `a ≥ a_c`; Newton's method started right of the root converges monotonically
 //! (f is convex and increasing there). The history keeps a, which warm-starts
-//! the next step.
+//! the next step, and a_c, which costs a power function and is computed once
+//! per contact, at its first touch.
 
 use super::{NormalModel, NormalResponse, PairCoefficients};
 use std::f64::consts::PI;
 
-/// The JKR normal model; its history is the contact radius a (m), 0 before the
-/// first touch.
+/// The JKR normal model; its history is a [`JkrContact`].
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Jkr;
+
+/// What a JKR contact keeps between steps.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JkrContact {
+    /// Contact radius a, m; 0 before the first touch and after the contact broke.
+    pub radius_m: f64,
+    /// Critical contact radius a_c, m, set at the first touch: it depends
+    /// only on the pair type and R*, which a contact never changes.
+    pub critical_radius_m: f64,
+}
 
 /// Critical contact radius a_c (m) where δ(a) is minimal, for c = √(4πΓ/E*).
 #[inline(always)]
@@ -70,7 +80,7 @@ fn contact_radius(c: f64, r_star: f64, overlap: f64, ac: f64, guess: f64) -> f64
 }
 
 impl NormalModel for Jkr {
-    type History = f64;
+    type History = JkrContact;
     const NAME: &'static str = "jkr";
     const ADHESIVE: bool = true;
 
@@ -83,22 +93,24 @@ impl NormalModel for Jkr {
         coef: &PairCoefficients,
         r_star: f64,
         overlap: f64,
-        radius: &mut f64,
+        history: &mut JkrContact,
     ) -> Option<NormalResponse> {
-        let touched = *radius > 0.0;
-        // A listed pair that has not touched yet costs no power function.
-        if !touched && overlap <= 0.0 {
-            *radius = 0.0;
-            return None;
-        }
         let c = coef.jkr_adhesion;
-        let ac = critical_radius(c, r_star);
-        if touched && overlap <= -3.0 * ac * ac / r_star {
-            *radius = 0.0;
+        if history.radius_m <= 0.0 {
+            // Not touching yet: no force, and no power function until it does.
+            if overlap <= 0.0 {
+                *history = JkrContact::default();
+                return None;
+            }
+            history.critical_radius_m = critical_radius(c, r_star);
+        }
+        let ac = history.critical_radius_m;
+        if overlap <= -3.0 * ac * ac / r_star {
+            *history = JkrContact::default();
             return None;
         }
-        let a = contact_radius(c, r_star, overlap, ac, *radius);
-        *radius = a;
+        let a = contact_radius(c, r_star, overlap, ac, history.radius_m);
+        history.radius_m = a;
         let elastic =
             4.0 * coef.e_star * a * a * a / (3.0 * r_star) - coef.jkr_tension * a * a.sqrt();
         Some(NormalResponse {
@@ -123,12 +135,16 @@ mod tests {
         let dc = separation_overlap_m(&coef, r);
         for k in 0..50 {
             let delta = dc + (k as f64 + 0.5) * (1e-5 - dc) / 50.0;
-            let mut h = 1e-9; // touched
+            let mut h = JkrContact {
+                radius_m: 1e-9, // touched, no usable warm start
+                critical_radius_m: critical_radius(c, r),
+            };
             Jkr::normal(&coef, r, delta, &mut h).unwrap();
-            let back = h * h / r - (c * c * h).sqrt();
+            let a = h.radius_m;
+            let back = a * a / r - (c * c * a).sqrt();
             assert!(
                 (back - delta).abs() < 1e-12 * r,
-                "δ = {delta}: a = {h}, δ(a) = {back}"
+                "δ = {delta}: a = {a}, δ(a) = {back}"
             );
         }
     }
@@ -136,7 +152,7 @@ mod tests {
     #[test]
     fn zero_surface_energy_reduces_to_hertz() {
         let coef = coefficients(0.5, 0.5, 0.0, 0.0);
-        let mut h = 0.0;
+        let mut h = JkrContact::default();
         let j = Jkr::normal(&coef, 5e-4, 2e-6, &mut h).unwrap();
         let hz = Hertz::normal(&coef, 5e-4, 2e-6, &mut ()).unwrap();
         assert!((j.elastic_force_n / hz.elastic_force_n - 1.0).abs() < 1e-12);
@@ -149,7 +165,7 @@ mod tests {
         let coef = coefficients(0.5, 0.5, 0.0, 0.05);
         let r = 5e-4;
         let dc = separation_overlap_m(&coef, r);
-        let mut h = 0.0;
+        let mut h = JkrContact::default();
         assert!(Jkr::normal(&coef, r, 0.5 * dc, &mut h).is_none());
         assert!(Jkr::normal(&coef, r, 1e-7, &mut h).is_some());
         // Now touched: still attracting in the neck.
@@ -158,7 +174,7 @@ mod tests {
             .elastic_force_n;
         assert!(f < 0.0);
         assert!(Jkr::normal(&coef, r, 1.0001 * dc, &mut h).is_none());
-        assert_eq!(h, 0.0);
+        assert_eq!(h, JkrContact::default());
     }
 
     #[test]
@@ -168,7 +184,7 @@ mod tests {
         let coef = coefficients(0.5, 0.5, 0.0, 0.05);
         let r = 5e-4;
         let dc = separation_overlap_m(&coef, r);
-        let mut h = 1e-9;
+        let mut h = JkrContact::default(); // touches at the first δ > 0
         let mut min_f = f64::MAX;
         for k in 0..20000 {
             let delta = 1e-6 - (k as f64) * (1e-6 - dc) / 20000.0;
