@@ -140,48 +140,11 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         Ok(stepper)
     }
 
-    /// Advances `steps` velocity-Verlet steps. Each step: half kick and drift,
-    /// neighbour update, forces at the new positions (damping sees estimated
-    /// full-step velocities, see [`Drift`]), half kick. The next step's half
-    /// kick and drift run inside this step's force pass (one pass over the
-    /// particles instead of two), except after the last step (the caller sees
-    /// whole steps) and after a step whose energy is checked (the check needs
-    /// the undrifted state); the operations and their order are the same
-    /// either way.
-    fn advance_steps(&mut self, world: &mut World, steps: u64) -> Result<(), HealthError> {
-        let mut drifted: Option<bool> = None;
-        for s in 0..steps {
-            let moved = match drifted {
-                Some(moved) => moved,
-                None => self.kick_and_drift(world)?,
-            };
-            world.time_s += self.dt;
-            world.step += 1;
-            if moved || self.neighbors.is_stale(world.particles.len()) {
-                self.rebuild(world)?;
-            }
-            let check = self.energy_check && world.step.is_multiple_of(ENERGY_CHECK_INTERVAL);
-            let drift = s + 1 < steps && !check;
-            let moved = self.forces(world, drift)?;
-            if check {
-                self.check_energy(world)?;
-            }
-            drifted = drift.then_some(moved);
-        }
-        Ok(())
-    }
-
     /// First half kick and drift on its own (when the last force pass did
     /// not drift), from the stored forces and torques; returns whether some
     /// particle moved far enough to need a neighbour rebuild.
     fn kick_and_drift(&mut self, world: &mut World) -> Result<bool, HealthError> {
-        let drift = Drift::<B> {
-            domain: world.domain,
-            dt: self.dt,
-            reference: self.neighbors.reference_positions(),
-            limit_sq: self.neighbors.rebuild_distance_sq(),
-            _boundary: std::marker::PhantomData,
-        };
+        let drift = Drift::<B>::new(world.domain, self.dt, &self.neighbors);
         let p = &mut world.particles;
         let (left, moved) = p
             .position
@@ -408,13 +371,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         let wall_reach = &self.wall_reach;
         let buffer = &self.pair_forces;
         let neighbors = &self.neighbors;
-        let drift = drift.then_some(Drift::<B> {
-            domain: world.domain,
-            dt,
-            reference: neighbors.reference_positions(),
-            limit_sq: neighbors.rebuild_distance_sq(),
-            _boundary: std::marker::PhantomData,
-        });
+        let drift = drift.then(|| Drift::<B>::new(world.domain, dt, neighbors));
         let p = &mut world.particles;
         p.force
             .par_iter_mut()
@@ -622,7 +579,23 @@ struct ParticleMut<'a> {
     motion: &'a mut Motion,
 }
 
-impl<B: Boundary> Drift<'_, B> {
+impl<'a, B: Boundary> Drift<'a, B> {
+    /// The drift of a step of `dt` (s) in `domain`, testing displacements
+    /// against the last build of `neighbors`.
+    fn new<H: Copy + Default + Send + Sync>(
+        domain: Domain,
+        dt: f64,
+        neighbors: &'a NeighborList<H>,
+    ) -> Self {
+        Self {
+            domain,
+            dt,
+            reference: neighbors.reference_positions(),
+            limit_sq: neighbors.rebuild_distance_sq(),
+            _boundary: std::marker::PhantomData,
+        }
+    }
+
     /// Kicks particle `i` by `dv` (m/s) and `dw` (rad/s), moves it and
     /// refreshes its packed records (centre and velocity estimates; radius
     /// and mass never change there). Returns (`Some(i)` if it left the
@@ -688,8 +661,35 @@ impl GatherFound {
 }
 
 impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Stepper<N, R, G, B> {
+    /// Advances `steps` velocity-Verlet steps. Each step: half kick and drift,
+    /// neighbour update, forces at the new positions (damping sees estimated
+    /// full-step velocities, see [`Drift`]), half kick. The next step's half
+    /// kick and drift run inside this step's force pass (one pass over the
+    /// particles instead of two), except after the last step (the caller sees
+    /// whole steps) and after a step whose energy is checked (the check needs
+    /// the undrifted state); the operations and their order are the same
+    /// either way.
     fn advance(&mut self, world: &mut World, steps: u64) -> Result<(), HealthError> {
-        self.advance_steps(world, steps)
+        let mut drifted: Option<bool> = None;
+        for s in 0..steps {
+            let moved = match drifted {
+                Some(moved) => moved,
+                None => self.kick_and_drift(world)?,
+            };
+            world.time_s += self.dt;
+            world.step += 1;
+            if moved || self.neighbors.is_stale(world.particles.len()) {
+                self.rebuild(world)?;
+            }
+            let check = self.energy_check && world.step.is_multiple_of(ENERGY_CHECK_INTERVAL);
+            let drift = s + 1 < steps && !check;
+            let moved = self.forces(world, drift)?;
+            if check {
+                self.check_energy(world)?;
+            }
+            drifted = drift.then_some(moved);
+        }
+        Ok(())
     }
 
     fn name(&self) -> String {
