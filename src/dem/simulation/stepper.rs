@@ -605,19 +605,22 @@ impl<'a, B: Boundary> Drift<'a, B> {
     fn apply(&self, i: usize, dv: Vec3, dw: Vec3, p: ParticleMut<'_>) -> (Option<usize>, bool) {
         *p.v += dv;
         *p.w += dw;
-        *p.x = B::wrap(&self.domain, *p.x + *p.v * self.dt);
-        p.sphere.x = *p.x;
+        // Both copies are stored from the register: re-reading `*p.x` right
+        // after its three scalar stores stalls on store forwarding.
+        let x = B::wrap(&self.domain, *p.x + *p.v * self.dt);
+        *p.x = x;
+        p.sphere.x = x;
         p.motion.v = *p.v + dv;
         p.motion.w = *p.w + dw;
         // A NaN position also asks for a rebuild (which then reports it).
         let moved = match self.reference.get(i) {
             Some(x0) => {
-                let d2 = B::separation(&self.domain, *p.x - x0).norm_squared();
+                let d2 = B::separation(&self.domain, x - x0).norm_squared();
                 d2 > self.limit_sq || d2.is_nan()
             }
             None => true,
         };
-        ((!self.domain.contains(*p.x)).then_some(i), moved)
+        ((!self.domain.contains(x)).then_some(i), moved)
     }
 }
 
