@@ -48,13 +48,26 @@ fn smoke_manifest_forms_a_measurable_pile() {
     let a = angle(&r);
     assert!(a > 22.0 && a < 70.0, "implausible pile angle {a}");
     assert_eq!(r.headline_angle_deg, Some(a));
+    // Every view is either fitted, with both flanks reported, or left out
+    // entirely; at least MIN_VIEWS are fitted, and the headline is the mean of
+    // the fitted views' flanks.
+    let mut fitted = Vec::new();
     for az in funnel::VIEW_AZIMUTHS_DEG {
+        let Some(view) = m.get(&format!("angle_az{az:03}_deg")) else {
+            assert!(!m.contains_key(&format!("angle_az{az:03}_points_left")));
+            continue;
+        };
+        fitted.push(*view);
         for side in ["left", "right"] {
             let pts = m[&format!("angle_az{az:03}_points_{side}")];
             let r2 = m[&format!("angle_az{az:03}_r2_{side}")];
             assert!(pts >= 3.0 && (0.0..=1.0).contains(&r2), "{az} {side}");
         }
     }
+    assert!(fitted.len() >= funnel::MIN_VIEWS, "{m:?}");
+    assert_eq!(m["angle_views"], fitted.len() as f64);
+    let mean = fitted.iter().sum::<f64>() / fitted.len() as f64;
+    assert!((mean - a).abs() < 1e-12, "{mean} vs {a}");
     assert_eq!(
         m["angle_r2_below_floor"],
         f64::from(u8::from(m["angle_min_r2"] < funnel::R2_FLOOR))

@@ -78,8 +78,12 @@
 //! ([`VIEW_AZIMUTHS_DEG`]), reports every flank's angle, R² and point count,
 //! and gives the mean of the eight flanks as the angle of repose. A fit with
 //! R² below [`R2_FLOOR`] is flagged (`angle_r2_below_floor` = 1), not
-//! hidden. A pile too low or too narrow to fit fails the run with a "not
-//! measurable" error; [`simulate`] still gives such a run's counts.
+//! hidden. A view whose profile cannot be fitted (one flank with fewer than
+//! three surface points, as when the tilted tube left the apex near the
+//! platform's rim on that side) is left out, and the angle is the mean over
+//! the flanks of the other views (`angle_views` says how many); a pile with
+//! fewer than [`MIN_VIEWS`] fitted views, too low or too narrow, fails the run
+//! with a "not measurable" error; [`simulate`] still gives such a run's counts.
 
 pub mod fill;
 pub mod geometry;
@@ -148,40 +152,60 @@ pub enum FunnelError {
 /// direction): four views 45° apart.
 pub const VIEW_AZIMUTHS_DEG: [u32; 4] = [0, 45, 90, 135];
 
+/// Fewest side views whose profile must fit for the pile to be measurable. A
+/// single short flank in one view of a small, rough pile says little about the
+/// pile; most views failing says it has no flanks to measure.
+pub const MIN_VIEWS: usize = 3;
+
 /// The pile seen from the sides of [`VIEW_AZIMUTHS_DEG`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PileAngles {
-    /// One profile fit per view, in the order of [`VIEW_AZIMUTHS_DEG`].
-    pub views: [PileAngle; 4],
+    /// One profile fit per view, in the order of [`VIEW_AZIMUTHS_DEG`]; `None`
+    /// for a view that could not be fitted (at most `4 − MIN_VIEWS` of them).
+    pub views: [Option<PileAngle>; 4],
 }
 
 impl PileAngles {
-    /// Mean of every flank angle, degrees: the angle of repose.
+    /// The fitted views.
+    fn fitted(&self) -> impl Iterator<Item = &PileAngle> {
+        self.views.iter().flatten()
+    }
+
+    /// Number of fitted views.
+    pub fn fitted_views(&self) -> usize {
+        self.fitted().count()
+    }
+
+    /// Mean over the fitted views of `value`.
+    fn view_mean(&self, value: impl Fn(&PileAngle) -> f64) -> f64 {
+        self.fitted().map(value).sum::<f64>() / self.fitted_views() as f64
+    }
+
+    /// Mean of every fitted flank angle, degrees: the angle of repose.
     pub fn mean_deg(&self) -> f64 {
-        self.views.iter().map(|v| v.mean_deg).sum::<f64>() / self.views.len() as f64
+        self.view_mean(|v| v.mean_deg)
     }
 
-    /// Mean of the left flanks, degrees.
+    /// Mean of the fitted left flanks, degrees.
     pub fn left_deg(&self) -> f64 {
-        self.views.iter().map(|v| v.left_deg).sum::<f64>() / self.views.len() as f64
+        self.view_mean(|v| v.left_deg)
     }
 
-    /// Mean of the right flanks, degrees.
+    /// Mean of the fitted right flanks, degrees.
     pub fn right_deg(&self) -> f64 {
-        self.views.iter().map(|v| v.right_deg).sum::<f64>() / self.views.len() as f64
+        self.view_mean(|v| v.right_deg)
     }
 
     /// Smallest R² of the flank fits.
     pub fn min_r2(&self) -> f64 {
-        self.views
-            .iter()
+        self.fitted()
             .flat_map(|v| [v.r2_left, v.r2_right])
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Pile height above the platform, m.
+    /// Pile height above the platform, m (the same in every view).
     pub fn height_m(&self) -> f64 {
-        self.views[0].height_m
+        self.fitted().next().map_or(0.0, |v| v.height_m)
     }
 }
 
@@ -218,9 +242,13 @@ pub fn pile_angles(p: &Particles, geom: &FunnelGeometry) -> Result<PileAngles, M
         };
         pile_angle(&positions, &radii, &spec)
     };
-    let [a, b, c, d] = VIEW_AZIMUTHS_DEG;
+    let fits = VIEW_AZIMUTHS_DEG.map(view);
+    if fits.iter().filter(|f| f.is_ok()).count() < MIN_VIEWS {
+        let first_error = fits.into_iter().find_map(Result::err);
+        return Err(first_error.expect("fewer than MIN_VIEWS fits: some view failed"));
+    }
     Ok(PileAngles {
-        views: [view(a)?, view(b)?, view(c)?, view(d)?],
+        views: fits.map(Result::ok),
     })
 }
 
@@ -338,6 +366,7 @@ fn put_angles(result: &mut RunResult, a: &PileAngles) {
         result.measurements.insert(k, v);
     };
     for (az, p) in VIEW_AZIMUTHS_DEG.iter().zip(&a.views) {
+        let Some(p) = p else { continue };
         let view = format!("angle_az{az:03}");
         put(format!("{view}_left_deg"), p.left_deg);
         put(format!("{view}_right_deg"), p.right_deg);
@@ -348,6 +377,7 @@ fn put_angles(result: &mut RunResult, a: &PileAngles) {
         put(format!("{view}_points_right"), p.points_right as f64);
     }
     put("angle_deg".into(), a.mean_deg());
+    put("angle_views".into(), a.fitted_views() as f64);
     put("angle_min_r2".into(), a.min_r2());
     put("angle_r2_floor".into(), R2_FLOOR);
     put(
@@ -504,4 +534,73 @@ pub fn simulate(
         world: w.clone(),
         geometry: geom,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::particles::ParticleInit;
+    use crate::manifest::parse_experiment;
+    use crate::manifest::scene::Scene;
+
+    /// Sphere radius of the smoke manifest, m.
+    const R: f64 = 0.003;
+
+    /// The smoke manifest's geometry (platform radius 47 mm).
+    fn geometry() -> FunnelGeometry {
+        let text = include_str!("../../experiments/funnel_pile/smoke.json");
+        let exp = parse_experiment(text).unwrap();
+        let Scene::FunnelPile(scene) = &exp.scene else {
+            unreachable!()
+        };
+        FunnelGeometry::new(scene, 2.0 * R)
+    }
+
+    /// Columns of resting spheres on a square grid of one diameter over the
+    /// platform, each as high as `height(x, y)` (m) allows.
+    fn pile(geom: &FunnelGeometry, height: impl Fn(f64, f64) -> f64) -> Particles {
+        let mut p = Particles::default();
+        let n = (geom.platform_radius_m / (2.0 * R)) as i32;
+        for i in -n..=n {
+            for j in -n..=n {
+                let (x, y) = (f64::from(i) * 2.0 * R, f64::from(j) * 2.0 * R);
+                let mut z = R;
+                while x.hypot(y) <= geom.platform_radius_m && z + R <= height(x, y) {
+                    let position = Vec3::new(x, y, z);
+                    p.push(
+                        &ParticleInit {
+                            position,
+                            velocity: Vec3::zeros(),
+                            angular_velocity: Vec3::zeros(),
+                            radius_m: R,
+                        },
+                        60.0,
+                    );
+                    z += 2.0 * R;
+                }
+            }
+        }
+        p
+    }
+
+    #[test]
+    fn a_centred_cone_is_measured_in_every_view() {
+        // A 35° cone 36 mm high: each view's silhouette is its generator.
+        let geom = geometry();
+        let slope = 35f64.to_radians().tan();
+        let p = pile(&geom, |x, y| 0.036 - slope * x.hypot(y));
+        let a = pile_angles(&p, &geom).unwrap();
+        assert_eq!(a.fitted_views(), 4);
+        // Columns of whole spheres make a staircase; its fitted slope stays
+        // within a few degrees of the cone's.
+        assert!((a.mean_deg() - 35.0).abs() < 5.0, "{}", a.mean_deg());
+    }
+
+    #[test]
+    fn a_flat_layer_is_not_measurable() {
+        // Two layers: lower than the 3 diameters a pile needs, in every view.
+        let geom = geometry();
+        let p = pile(&geom, |_, _| 4.0 * R);
+        assert!(pile_angles(&p, &geom).is_err());
+    }
 }
