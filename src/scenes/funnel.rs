@@ -202,11 +202,6 @@ impl PileAngles {
             .flat_map(|v| [v.r2_left, v.r2_right])
             .fold(f64::INFINITY, f64::min)
     }
-
-    /// Pile height above the platform, m (the same in every view).
-    pub fn height_m(&self) -> f64 {
-        self.fitted().next().map_or(0.0, |v| v.height_m)
-    }
 }
 
 /// The pile: centres and radii of the particles on the platform moving slower
