@@ -74,8 +74,8 @@ fn smoke_pile_is_healthy_and_plausible() {
     // Every flank fit comes with an R² and its points: a line needs 3.
     for az in VIEW_AZIMUTHS_DEG {
         for side in ["left", "right"] {
-            let r2 = m(r, &format!("profile_az{az:03.0}_r2_{side}"));
-            let points = m(r, &format!("profile_az{az:03.0}_points_{side}"));
+            let r2 = m(r, &format!("profile_az{az:03}_r2_{side}"));
+            let points = m(r, &format!("profile_az{az:03}_points_{side}"));
             assert!((0.0..=1.0).contains(&r2), "{az} {side}: R² {r2}");
             assert!(points >= 3.0, "{az} {side}: {points} points");
         }
@@ -225,7 +225,7 @@ fn both_angle_measures_agree_on_a_disk_limited_pile() {
     };
     let views: Vec<f64> = VIEW_AZIMUTHS_DEG
         .iter()
-        .map(|az| m(r, &format!("profile_az{az:03.0}_mean_deg")))
+        .map(|az| m(r, &format!("profile_az{az:03}_mean_deg")))
         .collect();
     let mean = views.iter().sum::<f64>() / VIEWS as f64;
     let var = views.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (VIEWS - 1) as f64;

@@ -11,6 +11,11 @@
 //! between 10% and 90% of the pile height (he2019, after Alizadeh et al.) are fitted
 //! by least squares; each flank's angle is atan(|slope|) and the repose angle is their
 //! mean.
+//!
+//! A simulation can look from every side: [`side_views`] fits the profile in four
+//! views 45° apart and averages the fitted flanks. A scene says how many views must
+//! fit (`min_views`): a view can fail alone on a small rough pile (one flank with
+//! fewer than three surface points) while the others still measure it.
 
 use super::fit::LineFit;
 use super::profile::{fit_flanks, top_per_bin};
@@ -115,6 +120,97 @@ pub fn pile_angle(
     );
     let (left, right) = fit_flanks(&centred, band, (0.0, f64::INFINITY))?;
     Ok(from_fits(left, right, height_m))
+}
+
+/// Number of side views [`side_views`] looks from.
+pub const VIEWS: usize = 4;
+
+/// Azimuths of the side views, degrees from +x (the profile coordinate's
+/// direction; 0 is the xz view, 90 the yz view): four views 45° apart. Each
+/// view's silhouette is made of different boundary particles, so averaging
+/// views lowers the scatter of one view.
+pub const VIEW_AZIMUTHS_DEG: [u32; VIEWS] = [0, 45, 90, 135];
+
+/// A pile seen from the sides of [`VIEW_AZIMUTHS_DEG`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SideViews {
+    /// One profile fit per view, in the order of [`VIEW_AZIMUTHS_DEG`]; `None`
+    /// for a view that could not be fitted (at most `VIEWS − min_views` of
+    /// them, `min_views` as passed to [`side_views`]).
+    pub views: [Option<PileAngle>; VIEWS],
+}
+
+impl SideViews {
+    /// The fitted views.
+    fn fitted(&self) -> impl Iterator<Item = &PileAngle> {
+        self.views.iter().flatten()
+    }
+
+    /// Number of fitted views.
+    pub fn fitted_views(&self) -> usize {
+        self.fitted().count()
+    }
+
+    /// Mean over the fitted views of `value`.
+    fn view_mean(&self, value: impl Fn(&PileAngle) -> f64) -> f64 {
+        self.fitted().map(value).sum::<f64>() / self.fitted_views() as f64
+    }
+
+    /// Mean of every fitted flank angle, degrees: the angle of repose.
+    pub fn mean_deg(&self) -> f64 {
+        self.view_mean(|v| v.mean_deg)
+    }
+
+    /// Mean of the fitted left flanks, degrees.
+    pub fn left_deg(&self) -> f64 {
+        self.view_mean(|v| v.left_deg)
+    }
+
+    /// Mean of the fitted right flanks, degrees.
+    pub fn right_deg(&self) -> f64 {
+        self.view_mean(|v| v.right_deg)
+    }
+
+    /// Smallest R² of the fitted flanks.
+    pub fn min_r2(&self) -> f64 {
+        self.fitted()
+            .flat_map(|v| [v.r2_left, v.r2_right])
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// The pile's profile fitted in each view of [`VIEW_AZIMUTHS_DEG`] with the
+/// settings of `base` (its `azimuth_rad` is replaced by each view's). A view
+/// that cannot be fitted (a flank with too few surface points) is left out;
+/// with fewer than `min_views` fitted views (1 to [`VIEWS`]) the pile is not
+/// measurable and the first view's error is returned.
+pub fn side_views(
+    positions: &[Vec3],
+    radii: &[f64],
+    base: &PileSpec,
+    min_views: usize,
+) -> Result<SideViews, MeasureError> {
+    if !(1..=VIEWS).contains(&min_views) {
+        return Err(MeasureError::BadParameter {
+            name: "min_views",
+            value: min_views as f64,
+            allowed: "1 to 4 side views",
+        });
+    }
+    let fits = VIEW_AZIMUTHS_DEG.map(|az| {
+        let spec = PileSpec {
+            azimuth_rad: f64::from(az).to_radians(),
+            ..*base
+        };
+        pile_angle(positions, radii, &spec)
+    });
+    if fits.iter().filter(|f| f.is_ok()).count() < min_views {
+        let first_error = fits.into_iter().find_map(Result::err);
+        return Err(first_error.expect("fewer than min_views >= 1 fits: some view failed"));
+    }
+    Ok(SideViews {
+        views: fits.map(Result::ok),
+    })
 }
 
 fn from_fits(left: LineFit, right: LineFit, height_m: f64) -> PileAngle {
@@ -253,6 +349,46 @@ mod tests {
             };
             let b = pile_angle(&p, &r, &with_axis).unwrap();
             assert!((b.mean_deg - angle).abs() < 0.5, "{angle}: {b:?}");
+        }
+    }
+
+    #[test]
+    fn a_cone_is_fitted_in_every_side_view() {
+        let (p, r) = cone(D, 50.0 * D, 35.0, 0.0);
+        let v = side_views(&p, &r, &spec(), VIEWS).unwrap();
+        assert_eq!(v.fitted_views(), VIEWS);
+        // Each view sees the cone's generator (tolerance as in
+        // `cones_of_known_angle`).
+        for a in v.views.iter().flatten() {
+            assert!((a.mean_deg - 35.0).abs() < 0.5, "{a:?}");
+        }
+        assert!((v.mean_deg() - 35.0).abs() < 0.5, "{v:?}");
+    }
+
+    #[test]
+    fn an_unfittable_view_is_left_out_down_to_min_views() {
+        // A ridge 80 diameters long along y: seen along x (the yz view,
+        // azimuth 90°) it is a flat-topped block with vertical ends and no
+        // flank points, while the other three views see sloped flanks.
+        let (p, r) = ridge(D, 20.0 * D, 35.0, 35.0, 40.0 * D);
+        let v = side_views(&p, &r, &spec(), 3).unwrap();
+        assert_eq!(v.fitted_views(), 3, "{v:?}");
+        assert!(v.views[2].is_none(), "{v:?}");
+        let alone: Vec<f64> = [0, 1, 3]
+            .map(|k| {
+                let one = PileSpec {
+                    azimuth_rad: f64::from(VIEW_AZIMUTHS_DEG[k]).to_radians(),
+                    ..spec()
+                };
+                pile_angle(&p, &r, &one).unwrap().mean_deg
+            })
+            .to_vec();
+        assert_eq!(v.mean_deg(), alone.iter().sum::<f64>() / 3.0);
+        // Asking for all four views makes the same ridge not measurable.
+        assert!(side_views(&p, &r, &spec(), VIEWS).is_err());
+        for bad in [0, VIEWS + 1] {
+            let err = side_views(&p, &r, &spec(), bad).unwrap_err();
+            assert!(err.to_string().contains("min_views"), "{err}");
         }
     }
 

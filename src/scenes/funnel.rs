@@ -100,7 +100,8 @@ use crate::dem::vec3::Vec3;
 use crate::log::{AngleSample, LogError, LogOptions, RunLog, Trace};
 use crate::manifest::scene::FunnelPileScene;
 use crate::manifest::Experiment;
-use crate::measure::pile::{pile_angle, PileAngle, PileSpec};
+pub use crate::measure::pile::VIEW_AZIMUTHS_DEG;
+use crate::measure::pile::{side_views, PileSpec, SideViews};
 use crate::measure::MeasureError;
 use crate::packing::PackingError;
 use crate::store::RunResult;
@@ -148,61 +149,10 @@ pub enum FunnelError {
     Log(#[from] LogError),
 }
 
-/// Azimuths of the side views, degrees from +x (the profile coordinate's
-/// direction): four views 45° apart.
-pub const VIEW_AZIMUTHS_DEG: [u32; 4] = [0, 45, 90, 135];
-
 /// Fewest side views whose profile must fit for the pile to be measurable. A
 /// single short flank in one view of a small, rough pile says little about the
 /// pile; most views failing says it has no flanks to measure.
 pub const MIN_VIEWS: usize = 3;
-
-/// The pile seen from the sides of [`VIEW_AZIMUTHS_DEG`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PileAngles {
-    /// One profile fit per view, in the order of [`VIEW_AZIMUTHS_DEG`]; `None`
-    /// for a view that could not be fitted (at most `4 − MIN_VIEWS` of them).
-    pub views: [Option<PileAngle>; 4],
-}
-
-impl PileAngles {
-    /// The fitted views.
-    fn fitted(&self) -> impl Iterator<Item = &PileAngle> {
-        self.views.iter().flatten()
-    }
-
-    /// Number of fitted views.
-    pub fn fitted_views(&self) -> usize {
-        self.fitted().count()
-    }
-
-    /// Mean over the fitted views of `value`.
-    fn view_mean(&self, value: impl Fn(&PileAngle) -> f64) -> f64 {
-        self.fitted().map(value).sum::<f64>() / self.fitted_views() as f64
-    }
-
-    /// Mean of every fitted flank angle, degrees: the angle of repose.
-    pub fn mean_deg(&self) -> f64 {
-        self.view_mean(|v| v.mean_deg)
-    }
-
-    /// Mean of the fitted left flanks, degrees.
-    pub fn left_deg(&self) -> f64 {
-        self.view_mean(|v| v.left_deg)
-    }
-
-    /// Mean of the fitted right flanks, degrees.
-    pub fn right_deg(&self) -> f64 {
-        self.view_mean(|v| v.right_deg)
-    }
-
-    /// Smallest R² of the flank fits.
-    pub fn min_r2(&self) -> f64 {
-        self.fitted()
-            .flat_map(|v| [v.r2_left, v.r2_right])
-            .fold(f64::INFINITY, f64::min)
-    }
-}
 
 /// The pile: centres and radii of the particles on the platform moving slower
 /// than [`PILE_SPEED_LIMIT_M_S`].
@@ -227,24 +177,14 @@ pub fn pile_height_m(p: &Particles, geom: &FunnelGeometry) -> f64 {
 }
 
 /// The pile's angles (see the module docs) in the particles' current state.
-pub fn pile_angles(p: &Particles, geom: &FunnelGeometry) -> Result<PileAngles, MeasureError> {
+pub fn pile_angles(p: &Particles, geom: &FunnelGeometry) -> Result<SideViews, MeasureError> {
     let (positions, radii) = pile_particles(p, geom);
-    let base = PileSpec::new(0.0, geom.d_mean_m);
-    let view = |az: u32| {
-        let spec = PileSpec {
-            azimuth_rad: f64::from(az).to_radians(),
-            ..base
-        };
-        pile_angle(&positions, &radii, &spec)
-    };
-    let fits = VIEW_AZIMUTHS_DEG.map(view);
-    if fits.iter().filter(|f| f.is_ok()).count() < MIN_VIEWS {
-        let first_error = fits.into_iter().find_map(Result::err);
-        return Err(first_error.expect("fewer than MIN_VIEWS fits: some view failed"));
-    }
-    Ok(PileAngles {
-        views: fits.map(Result::ok),
-    })
+    side_views(
+        &positions,
+        &radii,
+        &PileSpec::new(0.0, geom.d_mean_m),
+        MIN_VIEWS,
+    )
 }
 
 /// Removes fallen particles and records traces, angles and log frames.
@@ -356,7 +296,7 @@ fn speed_scale(exp: &Experiment, scene: &FunnelPileScene) -> Result<f64, SceneEr
 
 /// Every angle with its fit diagnostics; the headline is the mean over all
 /// flanks.
-fn put_angles(result: &mut RunResult, a: &PileAngles) {
+fn put_angles(result: &mut RunResult, a: &SideViews) {
     let mut put = |k: String, v: f64| {
         result.measurements.insert(k, v);
     };

@@ -72,7 +72,10 @@
 //! the four side views of [`VIEW_AZIMUTHS_DEG`], each with its left and right
 //! flank, R² and points (`profile_az000_*` is the xz view, `profile_az090_*`
 //! the yz view); `profile_left_deg`, `profile_right_deg` are the means over
-//! the views and `profile_angle_deg` the mean of all eight flanks. A flank fit
+//! the views and `profile_angle_deg` the mean of all eight flanks. Every view
+//! must fit (`min_views` = 4 in [`crate::measure::pile::side_views`]; the
+//! funnel scene accepts 3): the disk pile is large and centred, and no run has
+//! failed one view alone, so the profile stays the full four-view mean. A flank fit
 //! with R² below [`R2_FLOOR`] sets `profile_r2_below_floor` to 1.
 //!
 //! The height angle `height_angle_deg` = atan(2H/D) uses H, the highest
@@ -121,7 +124,8 @@ use crate::dem::walls::{Wall, WallError};
 use crate::log::{AngleSample, LogError, LogOptions, RunLog, Trace};
 use crate::manifest::scene::StaticPileScene;
 use crate::manifest::Experiment;
-use crate::measure::pile::{height_diameter_angle, pile_angle, HeightAngle, PileAngle, PileSpec};
+use crate::measure::pile::{height_diameter_angle, side_views, HeightAngle, PileSpec, SideViews};
+pub use crate::measure::pile::{VIEWS, VIEW_AZIMUTHS_DEG};
 use crate::measure::MeasureError;
 use crate::packing::factory::{RateFactory, RateFactorySpec};
 use crate::packing::region::Region;
@@ -142,12 +146,6 @@ pub const INSERTION_ATTEMPTS: usize = 100;
 /// A flank fit with a smaller R² is flagged (`profile_r2_below_floor`): below
 /// it the surface is too lumpy for a line (synthetic rough cones give > 0.98).
 pub const R2_FLOOR: f64 = 0.9;
-/// Number of side views the profile angle averages.
-pub const VIEWS: usize = 4;
-/// Azimuths of the side views' horizontal axes, degrees from +x (0: the xz
-/// view, 90: the yz view). Each view's silhouette is made of different
-/// boundary particles, so averaging views halves the scatter of one view.
-pub const VIEW_AZIMUTHS_DEG: [f64; VIEWS] = [0.0, 45.0, 90.0, 135.0];
 /// Equal azimuthal sectors of the rim checked for pile coverage.
 pub const RIM_SECTORS: usize = 16;
 /// Factor on the free-fall speed from the top of the rig that bounds any
@@ -450,16 +448,9 @@ fn empty_world(
 /// The pile's measurements (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PileMeasurement {
-    /// Profile angle in each view of [`VIEW_AZIMUTHS_DEG`], in that order.
-    pub views: [PileAngle; VIEWS],
-    /// Mean of the left flank angles over the views, degrees.
-    pub left_deg: f64,
-    /// Mean of the right flank angles over the views, degrees.
-    pub right_deg: f64,
-    /// Mean of every flank angle, degrees.
-    pub profile_angle_deg: f64,
-    /// Smallest R² of the flank fits.
-    pub r2_min: f64,
+    /// Profile angle in each view of [`VIEW_AZIMUTHS_DEG`]; all four are fitted
+    /// (a pile measures only when every view does).
+    pub profile: SideViews,
     /// cai2024's atan(2H/D).
     pub height: HeightAngle,
     /// Share of the rim's sectors reached by the pile, in [0, 1].
@@ -483,20 +474,12 @@ pub fn measure_pile(
         .filter(|(p, _)| p.z >= 0.0 && p.z < geometry.outlet_z_m)
         .map(|(p, r)| (*p, *r))
         .unzip();
-    let view = |azimuth_rad: f64| {
-        let spec = PileSpec {
-            axis_xy_m: Some([0.0, 0.0]),
-            azimuth_rad,
-            min_height_diameters: MIN_HEIGHT_DIAMETERS,
-            ..PileSpec::new(0.0, bin_width_m)
-        };
-        pile_angle(&pos, &rad, &spec)
+    let base = PileSpec {
+        axis_xy_m: Some([0.0, 0.0]),
+        min_height_diameters: MIN_HEIGHT_DIAMETERS,
+        ..PileSpec::new(0.0, bin_width_m)
     };
-    let [a, b, c, d] = VIEW_AZIMUTHS_DEG.map(|az| view(az.to_radians()));
-    let views = [a?, b?, c?, d?];
-    let n = VIEWS as f64;
-    let left_deg = views.iter().map(|v| v.left_deg).sum::<f64>() / n;
-    let right_deg = views.iter().map(|v| v.right_deg).sum::<f64>() / n;
+    let profile = side_views(&pos, &rad, &base, VIEWS)?;
     let height = height_diameter_angle(
         &pos,
         &rad,
@@ -506,14 +489,7 @@ pub fn measure_pile(
     )?;
     let (rim_coverage_fraction, rim_height_m) = rim(geometry, &pos, &rad, bin_width_m);
     Ok(PileMeasurement {
-        profile_angle_deg: 0.5 * (left_deg + right_deg),
-        left_deg,
-        right_deg,
-        r2_min: views
-            .iter()
-            .flat_map(|v| [v.r2_left, v.r2_right])
-            .fold(f64::INFINITY, f64::min),
-        views,
+        profile,
         height,
         rim_coverage_fraction,
         rim_height_m,
@@ -639,7 +615,7 @@ impl PileSampler<'_> {
         let pile = measure_pile(&self.geometry, &pos, &rad, self.d50_m).ok();
         if let Some(m) = pile {
             self.traces
-                .push("profile_angle", "deg", t, m.profile_angle_deg);
+                .push("profile_angle", "deg", t, m.profile.mean_deg());
             self.traces
                 .push("height_angle", "deg", t, m.height.angle_deg);
         }
@@ -650,10 +626,10 @@ impl PileSampler<'_> {
                 log.angle(
                     t,
                     &AngleSample {
-                        left_deg: m.left_deg,
-                        right_deg: m.right_deg,
-                        mean_deg: m.profile_angle_deg,
-                        fit_r2: m.r2_min,
+                        left_deg: m.profile.left_deg(),
+                        right_deg: m.profile.right_deg(),
+                        mean_deg: m.profile.mean_deg(),
+                        fit_r2: m.profile.min_r2(),
                     },
                 )?;
             }
@@ -773,11 +749,13 @@ pub fn run(
     put("end_s", end_s);
     put("settled", f64::from(u8::from(settled.settled)));
     put("final_kinetic_energy_ratio", rest_ratio);
-    put("profile_angle_deg", pile.profile_angle_deg);
-    put("profile_left_deg", pile.left_deg);
-    put("profile_right_deg", pile.right_deg);
-    for (az, a) in VIEW_AZIMUTHS_DEG.iter().zip(&pile.views) {
-        let view = format!("az{az:03.0}");
+    let profile = &pile.profile;
+    put("profile_angle_deg", profile.mean_deg());
+    put("profile_left_deg", profile.left_deg());
+    put("profile_right_deg", profile.right_deg());
+    for (az, a) in VIEW_AZIMUTHS_DEG.iter().zip(&profile.views) {
+        let Some(a) = a else { continue };
+        let view = format!("az{az:03}");
         put(&format!("profile_{view}_left_deg"), a.left_deg);
         put(&format!("profile_{view}_right_deg"), a.right_deg);
         put(&format!("profile_{view}_mean_deg"), a.mean_deg);
@@ -789,10 +767,10 @@ pub fn run(
             a.points_right as f64,
         );
     }
-    put("profile_r2_min", pile.r2_min);
+    put("profile_r2_min", profile.min_r2());
     put(
         "profile_r2_below_floor",
-        f64::from(u8::from(pile.r2_min < R2_FLOOR)),
+        f64::from(u8::from(profile.min_r2() < R2_FLOOR)),
     );
     put("height_angle_deg", pile.height.angle_deg);
     put("pile_height_m", pile.height.height_m);
