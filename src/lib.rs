@@ -15,12 +15,15 @@
 //! - [`packing`]: size distributions, non-overlapping insertion, rate factories,
 //!   coarse-graining rules.
 //! - [`dem`]: the soft-sphere DEM engine; knows nothing of studies, manifests or files.
+//! - `huge_pages` (Linux): the binary's global allocator, huge pages for big arrays.
 
 pub mod audit;
 pub mod bench;
 pub mod calibrate;
 pub mod commands;
 pub mod dem;
+#[cfg(target_os = "linux")]
+pub mod huge_pages;
 pub mod log;
 pub mod manifest;
 pub mod measure;

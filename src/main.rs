@@ -21,6 +21,11 @@ use repose::dem::simulation::{NormalChoice, RollingChoice};
 use repose::store::{DEFAULT_STORE, STORE_ENV};
 use repose::tradeoff::plan::{Knob, KNOB_NAMES};
 
+/// Huge pages for the engine's large arrays (see `repose::huge_pages`).
+#[cfg(target_os = "linux")]
+#[global_allocator]
+static ALLOCATOR: repose::huge_pages::HugePageAlloc = repose::huge_pages::HugePageAlloc;
+
 /// Reproducible calibration of DEM particle parameters against angle-of-repose tests.
 #[derive(Parser)]
 #[command(name = "repose", version, about)]
