@@ -11,8 +11,18 @@
 //! their order are unchanged. (Going further and interleaving the pair
 //! evaluation with the gather, in blocks, measured 25–35 % slower on one
 //! thread: separate streaming passes suit the hardware prefetchers better.
-//! Software-prefetching the gather's second-side pair records 4–32 particles
-//! ahead measured no gain at N = 50,000 either.)
+//! Redone on 2026-11-25 with double-buffered packed records and one tile per
+//! thread — blocks of 128 particles, particles with a pair from an earlier
+//! tile gathered in a second pass, so the pair buffer is read back from L1/L2
+//! instead of main memory — it was still 5 % slower on one thread at both
+//! N = 5,120 and 50,000, and 17–21 % slower on two (static tiles plus the
+//! second pass). Software-prefetching the gather's second-side pair records
+//! 4–32 particles ahead, or the pair kernel's second-particle records 24
+//! particles beyond the row's frontier, measured no gain at N = 50,000
+//! either: four side-by-side runs, ±3 %. Evaluating eight contacts at a
+//! time, as two interleaved four-lane groups so that their square-root and
+//! division chains overlap, was 15 % slower at N = 5,120: the doubled live
+//! state no longer fits the 16 AVX registers.)
 //!
 //! Determinism: pair forces go to a per-pair buffer (no accumulation races),
 //! and each particle sums its pairs in the neighbour list's fixed order;
