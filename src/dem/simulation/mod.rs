@@ -8,27 +8,29 @@
 //! pipeline): kick and drift, neighbours, pair forces, gather (walls, body
 //! force, kick), health. Within one `advance`, the gather also runs the next
 //! step's kick and drift, saving a pass over the particles; the operations and
-//! their order are unchanged. (Going further and interleaving the pair
-//! evaluation with the gather, in blocks, measured 25–35 % slower on one
-//! thread: separate streaming passes suit the hardware prefetchers better.
-//! Redone on 2026-11-25 with double-buffered packed records and one tile per
-//! thread — blocks of 128 particles, particles with a pair from an earlier
-//! tile gathered in a second pass, so the pair buffer is read back from L1/L2
-//! instead of main memory — it was still 5 % slower on one thread at both
-//! N = 5,120 and 50,000, and 17–21 % slower on two (static tiles plus the
-//! second pass). Software-prefetching the gather's second-side pair records
-//! 4–32 particles ahead, or the pair kernel's second-particle records 24
-//! particles beyond the row's frontier, measured no gain at N = 50,000
-//! either: four side-by-side runs, ±3 %. Evaluating eight contacts at a
-//! time, as two interleaved four-lane groups so that their square-root and
-//! division chains overlap, was 15 % slower at N = 5,120: the doubled live
-//! state no longer fits the 16 AVX registers. Writing each pair's
-//! second-particle share (48 B) straight into a second buffer ordered by
-//! second particle, so that the gather reads only sequential streams, was
-//! 8 % slower at 5,120 and 6 % slower at 50,000 (two side-by-side runs):
-//! the scattered writes cost more than the scattered reads they replace,
-//! although a profile at 50,000 shows the gather's first load of each pair
-//! record taking 26 % of its samples, against 6 % at 5,120.)
+//! their order are unchanged.
+//!
+//! Tried and not kept (dense-bed benchmark, `repose bench`, this 2-vCPU
+//! builder):
+//! - Interleaving the pair evaluation with the gather in blocks: 25–35 %
+//!   slower on one thread. Redone on 2026-11-25 with double-buffered packed
+//!   records and one tile per thread (blocks of 128 particles; particles with
+//!   a pair from an earlier tile gathered in a second pass), so the pair
+//!   buffer is read back from L1/L2 instead of main memory: still 5 % slower
+//!   on one thread at N = 5,120 and 50,000, 17–21 % slower on two.
+//! - Software prefetch at N = 50,000: of the gather's second-side pair
+//!   records 4–32 particles ahead, no gain in alternating runs; of the pair
+//!   kernel's second-particle records 24 particles beyond the row's
+//!   frontier, ±3 % over four side-by-side runs.
+//! - Eight contacts at a time as two interleaved four-lane groups, so that
+//!   their square-root and division chains overlap: 15 % slower at 5,120 (the
+//!   doubled live state no longer fits the 16 AVX registers).
+//! - Each pair's second-particle share (48 B) written straight into a buffer
+//!   ordered by second particle, so the gather reads only sequential streams:
+//!   8 % slower at 5,120 and 6 % slower at 50,000 — the scattered writes cost
+//!   more than the scattered reads they replace, although a profile at 50,000
+//!   shows the gather's first load of each pair record taking 26 % of its
+//!   samples (6 % at 5,120).
 //!
 //! Determinism: pair forces go to a per-pair buffer (no accumulation races),
 //! and each particle sums its pairs in the neighbour list's fixed order;
