@@ -106,19 +106,20 @@
 //! | 5,120   | 8.41, 9.22 (7.4–9.4)| 14.76, 17.11  | 4.63, 4.38             | 1.8–2.1     |
 //! | 20,480  | 6.38 (5.1–6.4); 7.76 beside a LIGGGHTS run | 11.10 | 4.24–4.34 | 1.5–1.8 |
 //! | 50,000  | 6.78, 6.80          | 13.94, 13.34  | 3.36, 3.46 (3.33–3.67) | 1.97        |
-//! | 100,820 | 5.86                | 10.99         | —                      | —           |
+//! | 100,820 | 5.86; 6.34 (1)      | 10.99         | 3.08 (2.83–3.20)       | 2.06        |
 //!
 //! At 50,000 the second thread gives 2.0× (13.3–13.9 against 6.8) and the
 //! per-core ratio to LIGGGHTS is 1.97 in the quietest window measured so
-//! far. Cost per particle-step on one thread (best quiet medians): 104 ns at
-//! 5,120, 129 ns at 20,480, 147 ns at 50,000, 171 ns at 100,820 — about
-//! 10 % more per doubling of N, still rising at 100,000, so the cost is not
-//! yet linear in N; LIGGGHTS rises by 1.3× from 5,120 to 50,000 (216 to
-//! 290 ns), repose by 1.4×. The neighbour search is O(N) and under 1 % of
-//! the time and every stage slows alike (the profile's split does not change
-//! with N), which points at the memory hierarchy rather than the algorithm;
-//! the experiments that did not remove it are listed in the simulation
-//! module's docs.
+//! far; at 100,820 it is 2.06 ((1): 6.34 in a run right after the LIGGGHTS
+//! one, 16:35–16:50). Cost per particle-step on one thread (best quiet
+//! medians): 104 ns at 5,120, 129 ns at 20,480, 147 ns at 50,000, 158–171 ns
+//! at 100,820 — about 10 % more per doubling of N, still rising at 100,000,
+//! so the cost is not yet linear in N. LIGGGHTS rises too: 216 ns at 5,120,
+//! 290 ns at 50,000, 325 ns at 100,820. The neighbour search is O(N) and
+//! under 1 % of the time, and every stage slows alike (the profile's split
+//! does not change with N), which points at the memory hierarchy rather than
+//! the algorithm; the experiments that did not remove it are listed in the
+//! simulation module's docs.
 
 use std::io::Write;
 use std::time::Instant;
