@@ -94,27 +94,31 @@
 //! (+4–9 % at 5,120, −8 % at 50,000); one contiguous task per thread and
 //! stage instead of 256-element tasks (no gain, worse under noise).
 //!
-//! # Measured 2026-11-25 (quiet host, one process at a time)
+//! # Measured 2026-11-25 (one process at a time)
 //!
 //! Same build and decks; LIGGGHTS and repose alternating in the same window
-//! (50,000: L R L R between 14:59 and 15:05; 20,480 and 5,120 around
-//! 15:25–15:35, a noisier window). Mps/s, median of 3 segments (each run's
-//! segments in brackets where the spread matters):
+//! (50,000: L R L R between 14:59 and 15:05, a quiet window; 20,480 and
+//! 5,120 around 15:25–15:35, a noisier one; 100,820: one LIGGGHTS run, then
+//! one repose run, 16:35–16:50). Mps/s, median of 3 segments (the range of
+//! single segments in brackets where the spread matters):
 //!
-//! | N       | repose 1 thr        | repose 2 thr  | LIGGGHTS               | ratio 1 thr |
-//! |---------|---------------------|---------------|------------------------|-------------|
-//! | 5,120   | 8.41, 9.22 (7.4–9.4)| 14.76, 17.11  | 4.63, 4.38             | 1.8–2.1     |
-//! | 20,480  | 6.38 (5.1–6.4); 7.76 beside a LIGGGHTS run | 11.10 | 4.24–4.34 | 1.5–1.8 |
-//! | 50,000  | 6.78, 6.80          | 13.94, 13.34  | 3.36, 3.46 (3.33–3.67) | 1.97        |
-//! | 100,820 | 5.86; 6.34 (1)      | 10.99         | 3.08 (2.83–3.20)       | 2.06        |
+//! | N       | repose 1 thr         | repose 2 thr | LIGGGHTS               | ratio 1 thr |
+//! |---------|----------------------|--------------|------------------------|-------------|
+//! | 5,120   | 8.41, 9.22 (7.4–9.6) | 14.76, 17.11 | 4.63, 4.38             | 1.8–2.1     |
+//! | 20,480  | 6.38 (5.1–6.4) (2)   | 11.10        | 4.24–4.34              | 1.5–1.8     |
+//! | 50,000  | 6.78, 6.80           | 13.94, 13.34 | 3.36, 3.46 (3.33–3.67) | 1.97        |
+//! | 100,820 | 5.86; 6.34 (1)       | 10.99        | 3.08 (2.83–3.20)       | 2.06        |
+//!
+//! (1) 6.34 is the run right after the LIGGGHTS one (the ratio's pair);
+//! 5.86 an earlier run alone. (2) 7.76 in an earlier run beside a LIGGGHTS
+//! settle on the other core.
 //!
 //! At 50,000 the second thread gives 2.0× (13.3–13.9 against 6.8) and the
 //! per-core ratio to LIGGGHTS is 1.97 in the quietest window measured so
-//! far; at 100,820 it is 2.06 ((1): 6.34 in a run right after the LIGGGHTS
-//! one, 16:35–16:50). Cost per particle-step on one thread (best quiet
-//! medians): 104 ns at 5,120, 129 ns at 20,480, 147 ns at 50,000, 158–171 ns
-//! at 100,820 — about 10 % more per doubling of N, still rising at 100,000,
-//! so the cost is not yet linear in N. LIGGGHTS rises too: 216 ns at 5,120,
+//! far; at 100,820 it is 2.06 (one pair of runs). Cost per particle-step
+//! on one thread (best medians): 104 ns at 5,120, 129 ns at 20,480, 147 ns
+//! at 50,000, 158–171 ns at 100,820 — about 10 % more per doubling of N,
+//! still rising at 100,000, so the cost is not yet linear in N. LIGGGHTS rises too: 216 ns at 5,120,
 //! 290 ns at 50,000, 325 ns at 100,820. The neighbour search is O(N) and
 //! under 1 % of the time, and every stage slows alike (the profile's split
 //! does not change with N), which points at the memory hierarchy rather than
