@@ -620,6 +620,13 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         self.row_start[i] as usize..self.row_start[i + 1] as usize
     }
 
+    /// CSR offsets of the rows: the pairs whose first particle is `i` are
+    /// `pairs()[offsets[i]..offsets[i + 1]]` (len = particles + 1).
+    #[inline]
+    pub fn row_offsets(&self) -> &[u32] {
+        &self.row_start
+    }
+
     /// Every pair involving particle `p`, each once, in increasing pair index (pairs where
     /// `p` is second come first, since their first particle has a lower index).
     #[inline]

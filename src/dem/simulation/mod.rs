@@ -32,10 +32,12 @@
 //!   shows the gather's first load of each pair record taking 26 % of its
 //!   samples (6 % at 5,120).
 //!
-//! Determinism: pair forces go to a per-pair buffer (no accumulation races),
-//! and each particle sums its pairs in the neighbour list's fixed order;
-//! reductions are either exact (max, counts) or summed serially. The result is
-//! bit-identical on any number of threads.
+//! Determinism: each particle sums its pairs in the neighbour list's fixed
+//! order, either straight from the pair kernel (a particle whose pairs one
+//! task evaluates) or from a per-pair buffer (a tile's head, see `tiles`), so
+//! there are no accumulation races and the order never depends on the thread
+//! count; reductions are either exact (max, counts) or summed serially. The
+//! result is bit-identical on any number of threads.
 
 use crate::dem::contact::normal_hertz::Hertz;
 use crate::dem::contact::normal_jkr::Jkr;
@@ -54,6 +56,7 @@ use crate::dem::walls::{Motion as WallMotion, Wall, WallError};
 
 mod pair_kernel;
 mod stepper;
+mod tiles;
 
 use stepper::Stepper;
 

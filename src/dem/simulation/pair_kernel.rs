@@ -61,6 +61,14 @@ pub(super) struct PairForce {
     pub(super) torque: [Vec3; 2],
 }
 
+/// Where the pair kernel puts each listed pair's result.
+pub(super) trait PairSink {
+    /// Pair `pair` (global index) between particles `i < j` carries `force`.
+    fn put(&mut self, pair: usize, i: usize, j: usize, force: &PairForce);
+    /// Pair `pair` between `i` and `j` is out of contact (no force).
+    fn skip(&mut self, pair: usize, i: usize, j: usize);
+}
+
 /// Contacts evaluated side by side in the pair kernel (one AVX2 register of
 /// f64, two SSE2 registers).
 pub(super) const PAIR_LANES: usize = 4;
@@ -79,40 +87,38 @@ pub(super) struct PairKernel<'a, B: Boundary> {
 
 impl<B: Boundary> PairKernel<'_, B> {
     /// Evaluates a run of listed pairs whose first pair has index `first`,
-    /// writing each pair's forces to `out`, four at a time and a short tail one
-    /// at a time; returns the force-carrying contacts and the worst (overlap
-    /// ratio, pair index).
-    pub(super) fn run<N: NormalModel, R: RollingModel>(
+    /// handing each pair's forces to `sink` in pair order, four at a time and a
+    /// short tail one at a time; returns the force-carrying contacts and the
+    /// worst (overlap ratio, pair index).
+    pub(super) fn run<N: NormalModel, R: RollingModel, S: PairSink>(
         &self,
         first: usize,
         pairs: &[[u32; 2]],
         history: &mut [ContactHistory<N, R>],
-        out: &mut [PairForce],
+        sink: &mut S,
     ) -> (usize, (f64, usize)) {
         let whole = pairs.len() / PAIR_LANES * PAIR_LANES;
         let (history, history_tail) = history.split_at_mut(whole);
-        let (out, out_tail) = out.split_at_mut(whole);
-        let a = self.run_lanes::<N, R, F64x4>(first, &pairs[..whole], history, out);
-        let b = self.run_lanes::<N, R, f64>(first + whole, &pairs[whole..], history_tail, out_tail);
+        let a = self.run_lanes::<N, R, F64x4, S>(first, &pairs[..whole], history, sink);
+        let b = self.run_lanes::<N, R, f64, S>(first + whole, &pairs[whole..], history_tail, sink);
         (a.0 + b.0, worse(a.1, b.1))
     }
 
     /// [`run`](Self::run) for a number of pairs that `T::LANES` divides.
-    fn run_lanes<N: NormalModel, R: RollingModel, T: Real>(
+    fn run_lanes<N: NormalModel, R: RollingModel, T: Real, S: PairSink>(
         &self,
         first: usize,
         pairs: &[[u32; 2]],
         history: &mut [ContactHistory<N, R>],
-        out: &mut [PairForce],
+        sink: &mut S,
     ) -> (usize, (f64, usize)) {
         let mut acc = (0, (0.0, usize::MAX));
-        for (k, ((p, h), o)) in pairs
+        for (k, (p, h)) in pairs
             .chunks_exact(T::LANES)
             .zip(history.chunks_exact_mut(T::LANES))
-            .zip(out.chunks_exact_mut(T::LANES))
             .enumerate()
         {
-            let found = self.lanes::<N, R, T>(first + k * T::LANES, p, h, o);
+            let found = self.lanes::<N, R, T, S>(first + k * T::LANES, p, h, sink);
             acc = (acc.0 + found.0, worse(acc.1, found.1));
         }
         acc
@@ -121,12 +127,12 @@ impl<B: Boundary> PairKernel<'_, B> {
     /// `T::LANES` listed pairs with indices `first..` at once (each slice
     /// holds one entry per lane).
     #[inline(always)]
-    fn lanes<N: NormalModel, R: RollingModel, T: Real>(
+    fn lanes<N: NormalModel, R: RollingModel, T: Real, S: PairSink>(
         &self,
         first: usize,
         pairs: &[[u32; 2]],
         history: &mut [ContactHistory<N, R>],
-        out: &mut [PairForce],
+        sink: &mut S,
     ) -> (usize, (f64, usize)) {
         let at = |l: usize| pairs[l.min(T::LANES - 1)].map(|k| k as usize);
         let si: [&Sphere; MAX_LANES] = std::array::from_fn(|l| &self.spheres[at(l)[0]]);
@@ -172,17 +178,19 @@ impl<B: Boundary> PairKernel<'_, B> {
         let torque_i = c.rolling_torque - lever.scale(arm_i);
         let torque_j = -c.rolling_torque - lever.scale(arm_j);
         let mut found = (0, (0.0, usize::MAX));
-        for (l, o) in out.iter_mut().enumerate() {
-            *o = if T::flag(c.active, l) {
+        for l in 0..T::LANES {
+            let [i, j] = at(l);
+            if T::flag(c.active, l) {
                 let ratio = overlap.lane(l).max(0.0) * mi[l].inv_r.max(mj[l].inv_r);
                 found = (found.0 + 1, worse(found.1, (ratio, first + l)));
-                PairForce {
+                let force = PairForce {
                     force_on_first: c.force.lane(l),
                     torque: [torque_i.lane(l), torque_j.lane(l)],
-                }
+                };
+                sink.put(first + l, i, j, &force);
             } else {
-                PairForce::default()
-            };
+                sink.skip(first + l, i, j);
+            }
         }
         found
     }
