@@ -124,6 +124,32 @@
 //! does not change with N), which points at the memory hierarchy rather than
 //! the algorithm; the experiments that did not remove it are listed in the
 //! simulation module's docs.
+//!
+//! # Measured 2026-11-25, evening (pair forces summed in place, 5ec424a)
+//!
+//! The pair stage now adds forces straight into per-particle sums (one tile
+//! on one thread, so no per-pair records at all; see
+//! `dem::simulation::tiles`). Results are bit-identical to the previous
+//! engine. Same decks and machine, Mps/s, median of 3 segments:
+//!
+//! | N      | repose 1 thr       | repose 2 thr  | LIGGGHTS   | ratio 1 thr | window          |
+//! |--------|--------------------|---------------|------------|-------------|-----------------|
+//! | 50,000 | 7.16               | 12.86         | 3.50       | 2.05        | 18:42–18:50, L R |
+//! | 50,000 | 5.85               |               | 2.52, 1.72 | (2.3–3.4)   | 18:54–19:00, noisy |
+//! | 50,000 | 5.13 (side by side) |              | 3.22       | 1.59        | 19:00–19:04, both at once |
+//! | 20,480 | 6.82               | 11.04         | 2.86       | (2.4)       | 19:08, noisy    |
+//! | 5,120  | 6.36; 8.3–9.3      | 11.74         | 4.17       | (1.5–2.2)   | 19:05–19:15, noisy |
+//!
+//! Against the previous binary (same machine, A/B): at 50,000 on one thread
+//! +21 %, +20 % and +12 % in three runs side by side (one core each), −8 %
+//! and +38 % in two alternating pairs of solo runs (the host's noise); at
+//! 5,120 equal within ±3 % (eight alternating solo runs, 8.3–9.4 against
+//! 9.2–9.5); at 50,000 on two threads 13.4–13.9 against 12.9–13.1. The best
+//! one-thread cost per particle-step is now 106 ns at 5,120 and 140 ns at
+//! 50,000 (1.32× more, against 1.41× before): still not linear in N. Run
+//! side by side with LIGGGHTS on the other core, both codes share the L3
+//! cache and memory bandwidth, and repose, which asks for about twice the
+//! bytes per second, loses more (1.59×).
 
 use std::io::Write;
 use std::time::Instant;

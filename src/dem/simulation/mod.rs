@@ -8,7 +8,12 @@
 //! pipeline): kick and drift, neighbours, pair forces, gather (walls, body
 //! force, kick), health. Within one `advance`, the gather also runs the next
 //! step's kick and drift, saving a pass over the particles; the operations and
-//! their order are unchanged.
+//! their order are unchanged. The pair stage adds each pair's forces straight
+//! into per-particle sums, one task per tile of particles, and writes a
+//! per-pair record only where a pair touches a particle another tile also
+//! reaches (`tiles`): on one thread there are no such records at all, which at
+//! N = 50,000 ran 12–21 % faster than writing and gathering every pair's
+//! record (2026-11-25, three side-by-side runs), at 5,120 equally fast.
 //!
 //! Tried and not kept (dense-bed benchmark, `repose bench`, this 2-vCPU
 //! builder):
