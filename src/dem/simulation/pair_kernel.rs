@@ -53,7 +53,7 @@ impl Kick {
     }
 }
 
-/// The force a pair exerts, stored per pair and gathered per particle.
+/// The force a pair exerts, handed to a [`PairSink`].
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct PairForce {
     pub(super) force_on_first: Vec3,

@@ -33,7 +33,7 @@ pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boun
     pair_forces: Vec<PairForce>,
     /// Per particle: the force and torque sums of non-heads.
     sums: Vec<Accumulated>,
-    /// How the pair sweep is cut, one tile per thread.
+    /// How the pair sweep is cut into tiles (see [`tiles_for`]).
     tiles: Tiles,
     /// Contact history per (particle, wall): index `p * wall_slots + w`.
     wall_history: Vec<ContactHistory<N, R>>,
@@ -72,8 +72,7 @@ fn tiles_for(threads: usize) -> usize {
     }
 }
 
-/// Pairs or particles per parallel task (fixed, so work splitting never
-/// depends on the thread count).
+/// Particles per parallel task of the per-particle passes.
 const PAR_MIN_LEN: usize = 256;
 
 impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G, B> {
@@ -284,7 +283,6 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         if self.kick.len() == order.len() {
             apply_permutation(&order, &mut self.kick);
         }
-
         let slots = self.wall_slots;
         let old = std::mem::take(&mut self.wall_history);
         self.wall_history = order
@@ -300,9 +298,9 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     }
 
     /// Pair forces into the per-particle sums and, for tile heads, the
-    /// per-pair buffer; then per particle: gather, walls,
-    /// body force, second half kick, finiteness check, and with `drift` the
-    /// next step's first half kick and drift. Returns whether that drift moved
+    /// per-pair buffer; then per particle: gather, walls, body force, second
+    /// half kick, finiteness check, and with `drift` the next step's first
+    /// half kick and drift. Returns whether that drift moved
     /// some particle far enough to need a neighbour rebuild.
     fn forces(&mut self, world: &mut World, drift: bool) -> Result<bool, HealthError> {
         let (contacts, worst_pair) = self.pair_forces(world);
@@ -390,9 +388,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     }
 
     /// Per particle: its pair sum (a head's gathered from the buffer), walls,
-    /// second half kick and finiteness check; with `drift` also the next step's first half kick and
-    /// drift (forces and torques are then not stored: the next force pass
-    /// replaces them), else the forces and torques are stored for it.
+    /// second half kick and finiteness check; with `drift` also the next
+    /// step's first half kick and drift (forces and torques are then not
+    /// stored: the next force pass replaces them), else the forces and
+    /// torques are stored for it.
     fn gather(&mut self, world: &mut World, drift: bool) -> GatherFound {
         let t = world.time_s;
         self.placed.clear();

@@ -32,8 +32,8 @@ pub(super) struct Tiles {
     pairs: Vec<usize>,
     /// Per particle: a head of its tile.
     head: Vec<bool>,
-    /// (Neighbour build, tiles) the cut is for.
-    cut_for: Option<(u64, usize)>,
+    /// (Neighbour build, tiles, particles, pairs) the cut is for.
+    cut_for: Option<(u64, usize, usize, usize)>,
 }
 
 impl Tiles {
@@ -41,12 +41,13 @@ impl Tiles {
     /// neighbour build number `build` with rows `rows` (CSR offsets, len =
     /// particles + 1) and `pairs`; keeps the cut if it is for the same.
     pub(super) fn cut(&mut self, build: u64, rows: &[u32], pairs: &[[u32; 2]], tiles: usize) {
-        if self.cut_for == Some((build, tiles)) {
-            return;
-        }
-        self.cut_for = Some((build, tiles));
         let n = rows.len() - 1;
         let total = pairs.len();
+        let cut_for = Some((build, tiles, n, total));
+        if self.cut_for == cut_for {
+            return;
+        }
+        self.cut_for = cut_for;
         self.particles.clear();
         self.particles.extend((0..tiles).map(|t| {
             rows.partition_point(|&start| start as usize * tiles < total * t)
