@@ -375,10 +375,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .jobs(pairs, history, &mut self.pair_forces, &mut self.sums)
             .into_par_iter()
             .map(|mut job| {
-                let (first_particle, first_pair) =
-                    (job.sink.first_particle(), job.sink.first_pair());
-                let masses = kernel.motion[first_particle..].iter().map(|m| m.m);
-                job.sink.start(g, masses);
+                job.sink.start(g, kernel.motion);
+                let first_pair = job.sink.first_pair();
                 kernel.run::<N, R, _>(first_pair, job.pairs, job.history, &mut job.sink)
             })
             .reduce(

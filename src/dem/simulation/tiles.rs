@@ -19,7 +19,7 @@
 //! heads; on more, the heads are about one cell slab per tile boundary (plus
 //! the last slab of a periodic axis, which the first tile reaches).
 
-use super::pair_kernel::{PairForce, PairSink};
+use super::pair_kernel::{Motion, PairForce, PairSink};
 use crate::dem::vec3::Vec3;
 
 /// How the pair sweep is cut into tiles, kept until the neighbour list is
@@ -149,21 +149,16 @@ pub(super) struct TileSink<'a> {
 }
 
 impl TileSink<'_> {
-    /// Index of the tile's first particle.
-    pub(super) fn first_particle(&self) -> usize {
-        self.first_particle
-    }
-
     /// Index of the tile's first pair.
     pub(super) fn first_pair(&self) -> usize {
         self.first_pair
     }
 
-    /// Starts every sum of the tile at the body force `g · m` (N), given
-    /// the masses (kg) of the tile's particles.
-    pub(super) fn start(&mut self, g: Vec3, masses: impl Iterator<Item = f64>) {
-        for (s, m) in self.sums.iter_mut().zip(masses) {
-            *s = Accumulated::body_force(g * m);
+    /// Starts every sum of the tile at the body force `g · m` (N), with the
+    /// masses of `motion` (all particles' records).
+    pub(super) fn start(&mut self, g: Vec3, motion: &[Motion]) {
+        for (s, p) in self.sums.iter_mut().zip(&motion[self.first_particle..]) {
+            *s = Accumulated::body_force(g * p.m);
         }
     }
 }
