@@ -36,6 +36,22 @@
 //!   more than the scattered reads they replace, although a profile at 50,000
 //!   shows the gather's first load of each pair record taking 26 % of its
 //!   samples (6 % at 5,120).
+//! - Finishing each particle (walls, kicks, drift) inside its tile's sweep as
+//!   soon as its last pair is done, with the in-place sums (no pair buffer on
+//!   one thread, records updated in place — a particle is never read after
+//!   its own row — and frozen copies of the heads for other tiles): on one
+//!   thread 4–6 % slower at 5,120 and 15 % slower at 50,000 (2026-11-26, side
+//!   by side with the separate pass). A profile at 5,120 shows the finishing
+//!   itself no cheaper than the separate pass and the pair kernel 4 % dearer:
+//!   interleaving the per-particle streams (state, walls, kicks) with the
+//!   kernel's (pairs, history, records) costs more than re-reading records
+//!   the separate pass finds in cache anyway.
+//! - Drifting only the packed centres and copying them to the particles'
+//!   positions before a rebuild, an energy check and the end of `advance`
+//!   (one read and one write of 24 B per particle and step fewer): −1 % at
+//!   5,120, +3.5 % and −3 % at 50,000 in two side-by-side pairs — within the
+//!   host's noise, so not worth a second copy of the positions to keep in
+//!   step.
 //!
 //! Determinism: each particle sums its pairs in the neighbour list's fixed
 //! order, either straight from the pair kernel (a particle whose pairs one
