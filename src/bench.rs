@@ -179,6 +179,28 @@
 //! same at 5,120 and 50,000 (pair kernel 68–70 %, per-particle pass
 //! 18.5–20.5 %, plane wall 3.5–4.4 %). Solo runs just before the window
 //! gave 9.50 at 5,120 and 7.93 at 50,000.
+//!
+//! bd2cf64 (the kick and drift no longer re-read the velocities they have
+//! just stored; bit-identical results), same window, 02:08–02:16 UTC:
+//!
+//! | N      | repose 1 thr | repose 2 thr     | 2 thr / 1 thr | LIGGGHTS | ratio 1 thr |
+//! |--------|--------------|------------------|---------------|----------|-------------|
+//! | 5,120  | 9.72         | 17.26 (1)        | 1.78          | 4.73     | 2.05        |
+//! | 20,480 | 8.56, 8.49   | 16.02            | 1.87          | 4.10 (2) | 1.93–2.09   |
+//! | 50,000 | 8.16         | 14.69            | 1.80          | 3.82     | 2.14        |
+//!
+//! (1) The one undisturbed segment; the other two ran at 11.4 while the
+//! process got half its CPU time (host noise). (2) LIGGGHTS at 20,480 over
+//! the window: 4.10, 4.30, 4.33, 4.41 (median 4.32: ratio 1.98). Side by side
+//! against a717b6f on one core each: +7 % and +3 % at 50,000, equal at
+//! 5,120; the profile at 5,120 shows the per-particle pass 17 % cheaper.
+//!
+//! Cost of each effect (bd2cf64, N = 5,120, one thread, same settled bed,
+//! Mps/s): Hertz without rolling resistance 9.84, with CDT 9.74, with EPSD
+//! 9.26; the JKR kernel (Γ = 1e-9 J/m²) 4.18, 4.19 and 3.95. Rolling
+//! resistance now costs 1 % (CDT) and 6 % (EPSD); the JKR kernel 2.3× the
+//! time of the Hertz one (its Newton solve for the contact radius); JKR with
+//! Γ = 0 runs the Hertz kernel and costs nothing.
 
 use std::io::Write;
 use std::time::Instant;
