@@ -185,13 +185,16 @@
 //!
 //! | N      | repose 1 thr | repose 2 thr     | 2 thr / 1 thr | LIGGGHTS | ratio 1 thr |
 //! |--------|--------------|------------------|---------------|----------|-------------|
-//! | 5,120  | 9.72         | 17.26 (1)        | 1.78          | 4.73     | 2.05        |
-//! | 20,480 | 8.56, 8.49   | 16.02            | 1.87          | 4.10 (2) | 1.93–2.09   |
+//! | 5,120  | 9.72         | 16.7–17.3 (1)    | 1.72–1.78     | 4.73     | 2.05        |
+//! | 20,480 | 8.38–8.56    | 16.02            | 1.87          | 4.10 (2) | 1.95–2.09   |
 //! | 50,000 | 8.16         | 14.69            | 1.80          | 3.82     | 2.14        |
 //!
-//! (1) The one undisturbed segment; the other two ran at 11.4 while the
-//! process got half its CPU time (host noise). (2) LIGGGHTS at 20,480 over
-//! the window: 4.10, 4.30, 4.33, 4.41 (median 4.32: ratio 1.98). Side by side
+//! (1) Undisturbed segments of four runs; 2-thread runs of both a717b6f and
+//! bd2cf64 had segments at 11–14 whenever the host took time from one of
+//! the two vCPUs (the waiting thread spins). (2) LIGGGHTS at 20,480 over the
+//! window: 4.07, 4.10, 4.30, 4.30, 4.32, 4.33, 4.41 (median 4.30); repose
+//! 8.38–8.56 (median 8.49): 1.97 median against median, 1.95–2.09 for the
+//! pairs run back to back. Side by side
 //! against a717b6f on one core each: +7 % and +3 % at 50,000, equal at
 //! 5,120; the profile at 5,120 shows the per-particle pass 17 % cheaper.
 //!
