@@ -194,9 +194,9 @@
 //! the two vCPUs (the waiting thread spins). (2) LIGGGHTS at 20,480 over the
 //! window: 4.07, 4.10, 4.30, 4.30, 4.32, 4.33, 4.41 (median 4.30); repose
 //! 8.38–8.56 (median 8.49): 1.97 median against median, 1.95–2.09 for the
-//! pairs run back to back. Side by side
-//! against a717b6f on one core each: +7 % and +3 % at 50,000, equal at
-//! 5,120; the profile at 5,120 shows the per-particle pass 17 % cheaper.
+//! pairs run back to back. Side by side against a717b6f on one core each:
+//! +7 % and +3 % at 50,000, equal at 5,120; the profile at 5,120 shows the
+//! per-particle pass 17 % cheaper.
 //!
 //! Cost of each effect (bd2cf64, N = 5,120, one thread, same settled bed,
 //! Mps/s): Hertz without rolling resistance 9.84, with CDT 9.74, with EPSD
