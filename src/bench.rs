@@ -389,6 +389,9 @@ pub struct BenchReport {
     pub particles: usize,
     /// Time step, s.
     pub dt_s: f64,
+    /// The instruction set the pair kernel ran on
+    /// ([`pair_kernel_isa`](crate::dem::lanes::pair_kernel_isa)).
+    pub pair_kernel_isa: &'static str,
     /// The settling phase.
     pub settle: SettleReport,
     /// Timed variants, in the order run.
@@ -528,6 +531,7 @@ pub fn run(
         n: options.n,
         particles: n_part,
         dt_s: DT_S,
+        pair_kernel_isa: crate::dem::lanes::pair_kernel_isa(),
         settle,
         variants,
     })
@@ -644,11 +648,12 @@ impl BenchReport {
     pub fn write_table(&self, out: &mut dyn Write) -> std::io::Result<()> {
         writeln!(
             out,
-            "bed: N = {} ({} x {} x {LAYERS}), dt = {:e} s; settled in {} steps, {:.1} s on {} thread(s), top z = {:.2} mm",
+            "bed: N = {} ({} x {} x {LAYERS}), dt = {:e} s, pair kernel on {}; settled in {} steps, {:.1} s on {} thread(s), top z = {:.2} mm",
             self.particles,
             self.n,
             self.n,
             self.dt_s,
+            self.pair_kernel_isa,
             self.settle.steps,
             self.settle.wall_s,
             self.settle.threads,

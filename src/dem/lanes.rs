@@ -206,6 +206,40 @@ impl Real for F64x4 {
     }
 }
 
+/// Whether this processor runs AVX-512 (F, VL, DQ, BW and CD: x86-64-v4).
+///
+/// The pair kernel then runs a copy of itself compiled for it
+/// (`simulation::pair_kernel`): the same four-lane AVX arithmetic, but with
+/// 32 vector registers instead of 16, so its live state (about 20 vectors of
+/// four contacts) no longer spills to the stack. The copy performs the same
+/// IEEE operations in the same order, so results are bit-identical either way.
+pub fn has_avx512() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::is_x86_feature_detected!("avx512f")
+            && std::is_x86_feature_detected!("avx512vl")
+            && std::is_x86_feature_detected!("avx512dq")
+            && std::is_x86_feature_detected!("avx512bw")
+            && std::is_x86_feature_detected!("avx512cd")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// The instruction set the pair kernel runs on here, for reports: AVX-512
+/// when [`has_avx512`], else the one this build was compiled for.
+pub fn pair_kernel_isa() -> &'static str {
+    if has_avx512() {
+        "avx512"
+    } else if cfg!(target_feature = "avx2") {
+        "avx2"
+    } else {
+        "baseline"
+    }
+}
+
 /// 3-vectors stored component by component, one per lane (m, m/s, N, ... as
 /// the variable using it says).
 #[derive(Clone, Copy, Debug)]

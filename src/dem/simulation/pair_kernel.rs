@@ -89,8 +89,43 @@ impl<B: Boundary> PairKernel<'_, B> {
     /// Evaluates a run of listed pairs whose first pair has index `first`,
     /// handing each pair's forces to `sink` in pair order, four at a time and a
     /// short tail one at a time; returns the force-carrying contacts and the
-    /// worst (overlap ratio, pair index).
+    /// worst (overlap ratio, pair index). Runs the AVX-512 copy of the loop
+    /// where the processor has it.
     pub(super) fn run<N: NormalModel, R: RollingModel, S: PairSink>(
+        &self,
+        first: usize,
+        pairs: &[[u32; 2]],
+        history: &mut [ContactHistory<N, R>],
+        sink: &mut S,
+    ) -> (usize, (f64, usize)) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::dem::lanes::has_avx512() {
+            // SAFETY: `has_avx512` found every feature `run_avx512` enables.
+            return unsafe { self.run_avx512(first, pairs, history, sink) };
+        }
+        self.run_inline(first, pairs, history, sink)
+    }
+
+    /// [`run`](Self::run) compiled for AVX-512 (see [`has_avx512`](crate::dem::lanes::has_avx512)): the
+    /// whole loop, contact laws and sink included, is inlined here so that
+    /// all of it gets the 32 registers; 6 % faster on the dense bed at 5,120
+    /// particles, one thread (2026-11-26, four side-by-side pairs). Eight
+    /// contacts at a time (two four-lane halves) was 12 % slower than four.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx512cd")]
+    fn run_avx512<N: NormalModel, R: RollingModel, S: PairSink>(
+        &self,
+        first: usize,
+        pairs: &[[u32; 2]],
+        history: &mut [ContactHistory<N, R>],
+        sink: &mut S,
+    ) -> (usize, (f64, usize)) {
+        self.run_inline(first, pairs, history, sink)
+    }
+
+    /// The body of [`run`](Self::run), inlined into each instruction-set copy.
+    #[inline(always)]
+    fn run_inline<N: NormalModel, R: RollingModel, S: PairSink>(
         &self,
         first: usize,
         pairs: &[[u32; 2]],
@@ -105,6 +140,7 @@ impl<B: Boundary> PairKernel<'_, B> {
     }
 
     /// [`run`](Self::run) for a number of pairs that `T::LANES` divides.
+    #[inline(always)]
     fn run_lanes<N: NormalModel, R: RollingModel, T: Real, S: PairSink>(
         &self,
         first: usize,
@@ -193,5 +229,119 @@ impl<B: Boundary> PairKernel<'_, B> {
             }
         }
         found
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::contact::normal_hertz::Hertz;
+    use crate::dem::contact::normal_jkr::Jkr;
+    use crate::dem::contact::rolling_cdt::ConstantDirectionalTorque;
+    use crate::dem::contact::rolling_epsd::ElasticPlasticSpring;
+    use crate::dem::contact::test_support::coefficients;
+    use crate::dem::effects::Periodic;
+    use rand::{Rng, SeedableRng};
+
+    /// Every pair the kernel hands over, as bits: (pair, i, j, force and
+    /// torques or `None` for a skipped pair).
+    #[derive(Default, PartialEq, Debug)]
+    struct Recorder(Vec<(usize, usize, usize, Option<[u64; 9]>)>);
+
+    impl PairSink for Recorder {
+        fn put(&mut self, pair: usize, i: usize, j: usize, f: &PairForce) {
+            let v = [f.force_on_first, f.torque[0], f.torque[1]];
+            let bits = std::array::from_fn(|k| v[k / 3][k % 3].to_bits());
+            self.0.push((pair, i, j, Some(bits)));
+        }
+        fn skip(&mut self, pair: usize, i: usize, j: usize) {
+            self.0.push((pair, i, j, None));
+        }
+    }
+
+    /// The dispatching `run` (the AVX-512 copy where this processor has it)
+    /// against the portable body, on a jittered 4×4×4 lattice of 1 mm spheres
+    /// 1.9 mm apart in a periodic box (so pairs touch, barely touch, and lie
+    /// apart across the boundary), for three steps so that histories build
+    /// up: forces, torques, counts and histories must agree bit for bit.
+    fn dispatch_matches_portable<N: NormalModel, R: RollingModel>() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(20261126);
+        let mut jitter = |s: f64| s * (2.0 * rng.random::<f64>() - 1.0);
+        let side = 4;
+        let spacing = 1.9e-3;
+        let count = side * side * side;
+        let spheres: Vec<Sphere> = (0..count)
+            .map(|k| Sphere {
+                x: Vec3::new(
+                    (k % side) as f64 * spacing + jitter(2e-4),
+                    (k / side % side) as f64 * spacing + jitter(2e-4),
+                    (k / side / side) as f64 * spacing + jitter(2e-4),
+                ),
+                r: 1e-3 * (1.0 + jitter(0.05)),
+            })
+            .collect();
+        let motion: Vec<Motion> = spheres
+            .iter()
+            .map(|s| Motion {
+                v: Vec3::new(jitter(0.1), jitter(0.1), jitter(0.1)),
+                w: Vec3::new(jitter(50.0), jitter(50.0), jitter(50.0)),
+                m: 2500.0 * 4.0 / 3.0 * std::f64::consts::PI * s.r.powi(3),
+                inv_r: 1.0 / s.r,
+            })
+            .collect();
+        let pairs: Vec<[u32; 2]> = (0..count as u32)
+            .flat_map(|i| (i + 1..count as u32).map(move |j| [i, j]))
+            .collect();
+        let box_side = side as f64 * spacing;
+        let domain = Domain::new(
+            Vec3::repeat(-0.5 * spacing),
+            Vec3::repeat(box_side - 0.5 * spacing),
+            [true; 3],
+        )
+        .unwrap();
+        let coef = coefficients(0.3, 0.4, 0.2, if N::ADHESIVE { 0.05 } else { 0.0 });
+        let kernel = PairKernel::<Periodic> {
+            spheres: &spheres,
+            motion: &motion,
+            domain,
+            coef,
+            reach: N::reach_m(&coef, 1e-3),
+            dt: 1e-5,
+            _boundary: std::marker::PhantomData,
+        };
+        let mut portable = vec![ContactHistory::<N, R>::default(); pairs.len()];
+        let mut dispatched = portable.clone();
+        let mut touching = 0;
+        for _ in 0..3 {
+            let (mut a, mut b) = (Recorder::default(), Recorder::default());
+            let found_a = kernel.run_inline(0, &pairs, &mut portable, &mut a);
+            let found_b = kernel.run(0, &pairs, &mut dispatched, &mut b);
+            assert_eq!(found_a.0, found_b.0);
+            assert_eq!(found_a.1 .0.to_bits(), found_b.1 .0.to_bits());
+            assert_eq!(found_a.1 .1, found_b.1 .1);
+            assert_eq!(a, b);
+            // Debug prints each f64 so that it round-trips: equal text, equal bits.
+            let text = |h: &[ContactHistory<N, R>]| -> Vec<String> {
+                h.iter()
+                    .map(|h| format!("{:?} {:?} {:?}", h.normal, h.tangential, h.rolling))
+                    .collect()
+            };
+            assert_eq!(text(&portable), text(&dispatched));
+            touching = found_a.0;
+        }
+        assert!(
+            touching > 50 && touching < pairs.len() / 4,
+            "{touching} of {} pairs touch",
+            pairs.len()
+        );
+    }
+
+    #[test]
+    fn the_dispatched_kernel_is_bit_identical_to_the_portable_one() {
+        if !crate::dem::lanes::has_avx512() {
+            eprintln!("no AVX-512 here: the dispatched kernel is the portable one");
+        }
+        dispatch_matches_portable::<Hertz, ConstantDirectionalTorque>();
+        dispatch_matches_portable::<Jkr, ElasticPlasticSpring>();
     }
 }
