@@ -266,7 +266,7 @@ pub struct NormalLanes<T: Real> {
 /// The normal-force slot.
 pub trait NormalModel: Send + Sync + 'static {
     /// Per-contact state this model keeps between steps (zero-sized if none).
-    type History: Copy + Default + Send + Sync + std::fmt::Debug;
+    type History: Copy + Default + PartialEq + Send + Sync + std::fmt::Debug;
     /// Name recorded in results (`hertz`, `jkr`).
     const NAME: &'static str;
     /// Whether the model can attract (then surface energy turns into kinetic
@@ -312,7 +312,7 @@ pub trait NormalModel: Send + Sync + 'static {
 /// The rolling-resistance slot.
 pub trait RollingModel: Send + Sync + 'static {
     /// Per-contact state (zero-sized if none).
-    type History: Copy + Default + Send + Sync + std::fmt::Debug;
+    type History: Copy + Default + PartialEq + Send + Sync + std::fmt::Debug;
     /// Name recorded in results (`none`, `cdt`, `epsd`).
     const NAME: &'static str;
     /// Rolling torque on body *i*, N·m.
@@ -378,6 +378,11 @@ impl<N: NormalModel, R: RollingModel> Clone for ContactHistory<N, R> {
     }
 }
 impl<N: NormalModel, R: RollingModel> Copy for ContactHistory<N, R> {}
+impl<N: NormalModel, R: RollingModel> PartialEq for ContactHistory<N, R> {
+    fn eq(&self, o: &Self) -> bool {
+        self.normal == o.normal && self.tangential == o.tangential && self.rolling == o.rolling
+    }
+}
 impl<N: NormalModel, R: RollingModel> Default for ContactHistory<N, R> {
     fn default() -> Self {
         Self {

@@ -431,7 +431,11 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                     let mut found = GatherFound::default();
                     for (k, wall) in placed.iter().enumerate() {
                         let Some(wc) = wall.contact(xc, r, wall_reach[k]) else {
-                            hist[k] = ContactHistory::default();
+                            // Most particles touch no wall: leave their empty
+                            // history unwritten rather than dirty its cache line.
+                            if hist[k] != ContactHistory::default() {
+                                hist[k] = ContactHistory::default();
+                            }
                             continue;
                         };
                         let n = wc.normal;
