@@ -204,6 +204,44 @@
 //! resistance now costs 1 % (CDT) and 6 % (EPSD); the JKR kernel 2.3× the
 //! time of the Hertz one (its Newton solve for the contact radius); JKR with
 //! Γ = 0 runs the Hertz kernel and costs nothing.
+//!
+//! 3be6676 (the pair kernel's AVX-512 copy, see
+//! [`has_avx512`](crate::dem::lanes::has_avx512); bit-identical results),
+//! 04:12–04:37 UTC, one process at a time, LIGGGHTS right after repose at
+//! each size:
+//!
+//! | N       | repose 1 thr | repose 2 thr  | 2 thr / 1 thr | LIGGGHTS   | ratio 1 thr |
+//! |---------|--------------|---------------|---------------|------------|-------------|
+//! | 5,120   | 10.17        | 18.04         | 1.77          | 4.63       | 2.20        |
+//! | 20,480  | 9.27, 9.29   | 16.25, 17.11  | 1.75, 1.84    | 4.10, 4.38 | 2.26, 2.12  |
+//! | 50,000  | 8.16         | 15.43         | 1.89          | 3.85       | 2.12        |
+//! | 100,820 | 7.65         | 13.52         | 1.77          | 3.29       | 2.33        |
+//!
+//! Cost per particle-step on one thread: repose 98, 108, 123 and 131 ns
+//! (1.33× over 20× N), LIGGGHTS 216, 228–244, 260 and 304 ns (1.41×). Side
+//! by side against 63535be on one core each (four pairs, settled 8,000
+//! steps): +6 % at 5,120, +8–10 % at 20,480 and +8–11 % at 50,000.
+//! Compiling the whole program for x86-64-v4 was no faster than the kernel's
+//! copy alone at 5,120; eight contacts at a time (two four-lane halves) in the
+//! AVX-512 copy was 12 % slower than four.
+//!
+//! Where the second thread's time goes (5,120 particles, wall time per step,
+//! timed around the stages in a scratch build): on one thread the pair sweep
+//! takes 371 µs, the per-particle pass 117 µs and neighbour rebuilds 7 µs
+//! (amortised); on two, 193, 77 and 5 µs. The pair sweep scales 1.92×; the
+//! per-particle pass only 1.52×, and neither one tile per thread instead of
+//! two nor handing each thread one contiguous half of the particles in the
+//! per-particle pass changed that (75–81 µs). That pass streams about 470 B
+//! per particle and step, about 20 GB/s on one core; the likeliest limit on
+//! two is the cache bandwidth both cores share, but I have not shown it.
+//! Rayon's idle thread falling asleep is not it: `perf stat` counts 0.56
+//! context switches per step on two threads, about one sleep and wake every
+//! four steps.
+//!
+//! Leaving a particle's empty wall history unwritten when it touches no wall
+//! (24 B fewer written per particle, wall and step): +1 % at 5,120 and +2 %
+//! at 50,000, mean of four side-by-side pairs each, within the host's noise;
+//! kept because it costs one comparison.
 
 use std::io::Write;
 use std::time::Instant;
