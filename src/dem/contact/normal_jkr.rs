@@ -16,7 +16,8 @@
 //! the next step, and a_c, which costs a power function and is computed once
 //! per contact, at its first touch.
 
-use super::{NormalModel, NormalResponse, PairCoefficients};
+use super::{NormalLanes, NormalModel, NormalResponse, PairCoefficients};
+use crate::dem::lanes::Real;
 use std::f64::consts::PI;
 
 /// The JKR normal model; its history is a [`JkrContact`].
@@ -52,27 +53,32 @@ pub fn pull_off_force_n(coef: &PairCoefficients, r_star_m: f64) -> f64 {
     3.0 * PI * coef.surface_energy_j_m2 * r_star_m
 }
 
-/// Contact radius a (m) for overlap δ ≥ δ_c, starting Newton from `guess`.
-fn contact_radius(c: f64, r_star: f64, overlap: f64, ac: f64, guess: f64) -> f64 {
+/// Contact radius a (m) per lane for overlaps δ ≥ δ_c, by Newton's method
+/// from `guess` (the previous radius) or from a start right of the root;
+/// only the lanes in `active` are solved. Each lane stops on its own test and
+/// keeps its value while others go on, so a lane gives bit for bit what it
+/// gives alone.
+#[inline(always)]
+fn contact_radius<T: Real>(c: f64, r_star: T, overlap: T, ac: T, guess: T, active: T::Mask) -> T {
+    let zero = T::splat(0.0);
     // 4a_c + √(R*δ⁺) is always right of the root (see the module docs); a
     // previous radius comfortably above a_c is a better start.
-    let safe = 4.0 * ac + (r_star * overlap.max(0.0)).sqrt();
-    let mut a = if guess > 1.01 * ac && guess < safe {
-        guess
-    } else {
-        safe
-    };
+    let positive = T::select(overlap.ge(zero), overlap, zero);
+    let safe = T::splat(4.0) * ac + (r_star * positive).sqrt();
+    let warm = T::and(guess.gt(T::splat(1.01) * ac), safe.gt(guess));
+    let mut a = T::select(warm, guess, safe);
+    let mut running = active;
     for _ in 0..100 {
         let sa = a.sqrt();
-        let f = a * a / r_star - c * sa - overlap;
-        let df = 2.0 * a / r_star - 0.5 * c / sa;
-        if df <= 0.0 {
-            break;
-        }
-        let next = (a - f / df).max(ac);
-        let done = (next - a).abs() <= 1e-14 * a;
-        a = next;
-        if done {
+        let f = a * a / r_star - T::splat(c) * sa - overlap;
+        let df = T::splat(2.0) * a / r_star - T::splat(0.5 * c) / sa;
+        running = T::and(running, T::not(df.le(zero)));
+        let step = a - f / df;
+        let next = T::select(step.ge(ac), step, ac);
+        let done = (next - a).abs().le(T::splat(1e-14) * a);
+        a = T::select(running, next, a);
+        running = T::and(running, T::not(done));
+        if !T::any(running) {
             break;
         }
     }
@@ -95,29 +101,60 @@ impl NormalModel for Jkr {
         overlap: f64,
         history: &mut JkrContact,
     ) -> Option<NormalResponse> {
-        let c = coef.jkr_adhesion;
-        if history.radius_m <= 0.0 {
-            // Not touching yet: no force, and no power function until it does.
-            if overlap <= 0.0 {
-                *history = JkrContact::default();
-                return None;
-            }
-            history.critical_radius_m = critical_radius(c, r_star);
-        }
-        let ac = history.critical_radius_m;
-        if overlap <= -3.0 * ac * ac / r_star {
-            *history = JkrContact::default();
-            return None;
-        }
-        let a = contact_radius(c, r_star, overlap, ac, history.radius_m);
-        history.radius_m = a;
-        let elastic =
-            4.0 * coef.e_star * a * a * a / (3.0 * r_star) - coef.jkr_tension * a * a.sqrt();
-        Some(NormalResponse {
-            elastic_force_n: elastic,
-            contact_radius_m: a,
-            pull_off_force_n: pull_off_force_n(coef, r_star),
+        let r = Self::normal_lanes::<f64>(coef, r_star, overlap, std::slice::from_mut(history));
+        r.active.then_some(NormalResponse {
+            elastic_force_n: r.elastic_force_n,
+            contact_radius_m: r.contact_radius_m,
+            pull_off_force_n: r.pull_off_force_n,
         })
+    }
+
+    /// Lane-wise: only the critical radius of a contact's first touch (a
+    /// power function, once per contact) is computed lane by lane.
+    #[inline(always)]
+    fn normal_lanes<T: Real>(
+        coef: &PairCoefficients,
+        r_star: T,
+        overlap: T,
+        history: &mut [JkrContact],
+    ) -> NormalLanes<T> {
+        let c = coef.jkr_adhesion;
+        let zero = T::splat(0.0);
+        let guess = T::from_fn(|l| history[l].radius_m);
+        let untouched = guess.le(zero);
+        // Not touching yet: no force, and no power function until it does.
+        let first = T::and(untouched, overlap.gt(zero));
+        if T::any(first) {
+            for (l, h) in history.iter_mut().enumerate() {
+                if T::flag(first, l) {
+                    h.critical_radius_m = critical_radius(c, r_star.lane(l));
+                }
+            }
+        }
+        let ac = T::from_fn(|l| history[l].critical_radius_m);
+        let broken = overlap.le(T::splat(-3.0) * ac * ac / r_star);
+        let active = T::and(T::not(T::and(untouched, overlap.le(zero))), T::not(broken));
+        let a = T::select(
+            active,
+            contact_radius(c, r_star, overlap, ac, guess, active),
+            zero,
+        );
+        for (l, h) in history.iter_mut().enumerate() {
+            if T::flag(active, l) {
+                h.radius_m = a.lane(l);
+            } else {
+                *h = JkrContact::default();
+            }
+        }
+        let elastic = T::splat(4.0 * coef.e_star) * a * a * a / (T::splat(3.0) * r_star)
+            - T::splat(coef.jkr_tension) * a * a.sqrt();
+        let pull_off = T::splat(3.0 * PI * coef.surface_energy_j_m2) * r_star;
+        NormalLanes {
+            active,
+            elastic_force_n: T::select(active, elastic, zero),
+            contact_radius_m: a,
+            pull_off_force_n: T::select(active, pull_off, zero),
+        }
     }
 }
 
