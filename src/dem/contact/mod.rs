@@ -275,37 +275,31 @@ pub trait NormalModel: Send + Sync + 'static {
     /// How far beyond touching (m, ≥ 0) this model can still act for a contact
     /// of effective radius `r_star_m`; the neighbour search widens by this.
     fn reach_m(c: &PairCoefficients, r_star_m: f64) -> f64;
-    /// Evaluates the model at overlap `overlap_m`; `None` when the bodies do not
-    /// interact (the caller then resets the whole contact history).
-    fn normal(
-        c: &PairCoefficients,
-        r_star_m: f64,
-        overlap_m: f64,
-        history: &mut Self::History,
-    ) -> Option<NormalResponse>;
-    /// [`normal`](Self::normal) for `T::LANES` contacts at once (`history`
-    /// holds one entry per lane). The default asks [`normal`](Self::normal)
-    /// lane by lane; a model whose formula is branch-free overrides it so the
-    /// lanes run side by side.
-    #[inline(always)]
+    /// Evaluates the model for `T::LANES` contacts at once (`history` holds
+    /// one entry per lane): overlaps `overlap_m` (m), effective radii
+    /// `r_star_m` (m). Lanes where the bodies do not interact are inactive
+    /// (the caller then resets their whole contact history).
     fn normal_lanes<T: Real>(
         c: &PairCoefficients,
         r_star_m: T,
         overlap_m: T,
         history: &mut [Self::History],
-    ) -> NormalLanes<T> {
-        let r: [Option<NormalResponse>; MAX_LANES] = std::array::from_fn(|l| {
-            (l < T::LANES)
-                .then(|| Self::normal(c, r_star_m.lane(l), overlap_m.lane(l), &mut history[l]))
-                .flatten()
-        });
-        let field = |f: fn(&NormalResponse) -> f64| T::from_fn(|l| r[l].as_ref().map_or(0.0, f));
-        NormalLanes {
-            active: T::mask_from_fn(|l| r[l].is_some()),
-            elastic_force_n: field(|r| r.elastic_force_n),
-            contact_radius_m: field(|r| r.contact_radius_m),
-            pull_off_force_n: field(|r| r.pull_off_force_n),
-        }
+    ) -> NormalLanes<T>;
+    /// [`normal_lanes`](Self::normal_lanes) for one contact; `None` when the
+    /// bodies do not interact.
+    #[inline(always)]
+    fn normal(
+        c: &PairCoefficients,
+        r_star_m: f64,
+        overlap_m: f64,
+        history: &mut Self::History,
+    ) -> Option<NormalResponse> {
+        let r = Self::normal_lanes::<f64>(c, r_star_m, overlap_m, std::slice::from_mut(history));
+        r.active.then_some(NormalResponse {
+            elastic_force_n: r.elastic_force_n,
+            contact_radius_m: r.contact_radius_m,
+            pull_off_force_n: r.pull_off_force_n,
+        })
     }
 }
 

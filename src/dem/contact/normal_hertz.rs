@@ -1,7 +1,7 @@
 //! Hertz normal force: `F = (4/3) E* √R* δ^{3/2}` for overlap δ > 0
 //! (yan2015 Eq. 4), written as `(4/3) E* a³ / R*` with contact radius a = √(R*δ).
 
-use super::{NormalLanes, NormalModel, NormalResponse, PairCoefficients};
+use super::{NormalLanes, NormalModel, PairCoefficients};
 use crate::dem::lanes::Real;
 
 /// The Hertz normal model: acts only while the bodies overlap, keeps no history.
@@ -16,21 +16,6 @@ impl NormalModel for Hertz {
     #[inline(always)]
     fn reach_m(_: &PairCoefficients, _: f64) -> f64 {
         0.0
-    }
-
-    #[inline(always)]
-    fn normal(
-        c: &PairCoefficients,
-        r_star_m: f64,
-        overlap_m: f64,
-        _: &mut (),
-    ) -> Option<NormalResponse> {
-        let r = Self::normal_lanes::<f64>(c, r_star_m, overlap_m, &mut [()]);
-        r.active.then_some(NormalResponse {
-            elastic_force_n: r.elastic_force_n,
-            contact_radius_m: r.contact_radius_m,
-            pull_off_force_n: 0.0,
-        })
     }
 
     #[inline(always)]

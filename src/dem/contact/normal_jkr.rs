@@ -16,7 +16,7 @@
 //! the next step, and a_c, which costs a power function and is computed once
 //! per contact, at its first touch.
 
-use super::{NormalLanes, NormalModel, NormalResponse, PairCoefficients};
+use super::{NormalLanes, NormalModel, PairCoefficients};
 use crate::dem::lanes::Real;
 use std::f64::consts::PI;
 
@@ -92,21 +92,6 @@ impl NormalModel for Jkr {
 
     fn reach_m(coef: &PairCoefficients, r_star_m: f64) -> f64 {
         -separation_overlap_m(coef, r_star_m)
-    }
-
-    #[inline(always)]
-    fn normal(
-        coef: &PairCoefficients,
-        r_star: f64,
-        overlap: f64,
-        history: &mut JkrContact,
-    ) -> Option<NormalResponse> {
-        let r = Self::normal_lanes::<f64>(coef, r_star, overlap, std::slice::from_mut(history));
-        r.active.then_some(NormalResponse {
-            elastic_force_n: r.elastic_force_n,
-            contact_radius_m: r.contact_radius_m,
-            pull_off_force_n: r.pull_off_force_n,
-        })
     }
 
     /// Lane-wise: only the critical radius of a contact's first touch (a
