@@ -48,9 +48,11 @@ pub fn separation_overlap_m(coef: &PairCoefficients, r_star_m: f64) -> f64 {
     -3.0 * ac * ac / r_star_m
 }
 
-/// Pull-off force 3πΓR*, N: the largest tensile force a JKR contact sustains.
-pub fn pull_off_force_n(coef: &PairCoefficients, r_star_m: f64) -> f64 {
-    3.0 * PI * coef.surface_energy_j_m2 * r_star_m
+/// Pull-off force 3πΓR*, N: the largest tensile force a JKR contact sustains
+/// (per lane for effective radii `r_star_m`, m).
+#[inline(always)]
+pub fn pull_off_force_n<T: Real>(coef: &PairCoefficients, r_star_m: T) -> T {
+    T::splat(3.0 * PI * coef.surface_energy_j_m2) * r_star_m
 }
 
 /// Contact radius a (m) per lane for overlaps δ ≥ δ_c, by Newton's method
@@ -133,7 +135,7 @@ impl NormalModel for Jkr {
         }
         let elastic = T::splat(4.0 * coef.e_star) * a * a * a / (T::splat(3.0) * r_star)
             - T::splat(coef.jkr_tension) * a * a.sqrt();
-        let pull_off = T::splat(3.0 * PI * coef.surface_energy_j_m2) * r_star;
+        let pull_off = pull_off_force_n(coef, r_star);
         NormalLanes {
             active,
             elastic_force_n: T::select(active, elastic, zero),
