@@ -35,8 +35,10 @@ pub struct Outcome {
 }
 
 /// Runs every replicate of every point (cached by id; already complete runs
-/// are not repeated), in parallel over runs on `threads` threads; outcomes in
-/// plan order.
+/// are not repeated), in parallel over runs on `threads` threads, each run
+/// on one thread of its own (in the outer pool a simulation would start a
+/// team of `threads` and compete with the other runs for the cores);
+/// outcomes in plan order.
 pub fn run(store: &Store, points: &[Point], threads: usize) -> Vec<Vec<Outcome>> {
     let all: Vec<&Experiment> = points.iter().flat_map(|p| &p.replicates).collect();
     let pool = rayon::ThreadPoolBuilder::new()
@@ -45,7 +47,13 @@ pub fn run(store: &Store, points: &[Point], threads: usize) -> Vec<Vec<Outcome>>
         .expect("a thread pool can be built");
     let mut flat: Vec<Outcome> = pool.install(|| {
         all.par_iter()
-            .map(|e| run_one(store, e))
+            .map(|e| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(1)
+                    .build()
+                    .expect("a thread pool can be built")
+                    .install(|| run_one(store, e))
+            })
             .collect::<Vec<_>>()
     });
     let mut out = Vec::new();

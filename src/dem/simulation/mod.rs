@@ -78,7 +78,9 @@ use crate::dem::vec3::Vec3;
 use crate::dem::walls::{Motion as WallMotion, Wall, WallError};
 
 mod pair_kernel;
+mod particle_runs;
 mod stepper;
+mod team;
 mod tiles;
 
 use stepper::Stepper;

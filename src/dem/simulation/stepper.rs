@@ -2,6 +2,8 @@
 //! effects.
 
 use super::pair_kernel::{Kick, Motion, PairForce, PairKernel, Sphere};
+use super::particle_runs::ParticleRun;
+use super::team::{run_jobs, Team};
 use super::tiles::{Accumulated, Tiles};
 use super::{min_option, worse, Kernel, SetupError, SimulationSetup, StepStats, World};
 use crate::dem::contact::{
@@ -15,7 +17,6 @@ use crate::dem::material::harmonic;
 use crate::dem::neighbor::{apply_permutation, NeighborError, NeighborList, PairRef};
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::PlacedWall;
-use rayon::prelude::*;
 
 /// One kernel: state and scratch of a simulation with fixed effects.
 pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> {
@@ -33,8 +34,13 @@ pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boun
     pair_forces: Vec<PairForce>,
     /// Per particle: the force and torque sums of non-heads.
     sums: Vec<Accumulated>,
-    /// How the pair sweep is cut into tiles (see [`tiles_for`]).
+    /// How the pair sweep is cut into tiles, one per team member (see
+    /// [`super::tiles`]); the kick and drift use the same cut, the gather
+    /// one moved so that its shares cost the same.
     tiles: Tiles,
+    /// The threads that run the stages on more than one thread (see
+    /// [`super::team`]); `None` on one.
+    team: Option<Team>,
     /// Contact history per (particle, wall): index `p * wall_slots + w`.
     wall_history: Vec<ContactHistory<N, R>>,
     /// `max(walls, 1)`, so per-particle chunks are never empty.
@@ -59,22 +65,6 @@ pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boun
 
 /// Re-sort particles by cell every this many neighbour rebuilds.
 const SORT_EVERY_REBUILDS: u32 = 8;
-/// Tiles of the pair sweep on `threads` threads: one on one thread (no
-/// heads at all), else two per thread, so that work stealing can even out a
-/// tile that runs slow. Measured on the 50,000-particle bench bed on two
-/// threads: two tiles per thread as fast as one, four or eight per thread
-/// 10–20 % slower (more heads); at 5,120 one tile per thread ran 17.4 Mps/s
-/// against 16.4–17.3 for two (2026-11-26), within the host's noise.
-fn tiles_for(threads: usize) -> usize {
-    if threads <= 1 {
-        1
-    } else {
-        2 * threads
-    }
-}
-
-/// Particles per parallel task of the per-particle passes.
-const PAR_MIN_LEN: usize = 256;
 
 impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G, B> {
     pub(super) fn new(
@@ -140,6 +130,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             pair_forces: Vec::new(),
             sums: Vec::new(),
             tiles: Tiles::default(),
+            team: None,
             wall_history: vec![ContactHistory::default(); world.particles.len() * wall_slots],
             wall_slots,
             placed: Vec::new(),
@@ -157,27 +148,73 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .sort_and_rebuild(world)
             .map_err(SetupError::Neighbor)?;
         stepper.pack(world);
+        stepper.join_team();
         stepper.forces(world, false).map_err(SetupError::Health)?;
+        stepper.rest_team();
         Ok(stepper)
+    }
+
+    /// Makes the team as large as rayon's current thread count (the pool
+    /// the caller runs in); no team on one thread.
+    fn join_team(&mut self) {
+        let threads = rayon::current_num_threads();
+        if threads <= 1 {
+            self.team = None;
+        } else if self.team.as_ref().map(Team::size) != Some(threads) {
+            self.team = Some(Team::new(threads));
+        }
+    }
+
+    /// Lets the team's helpers yield their CPUs until the next stage (before
+    /// rayon's parallel work and when `advance` returns).
+    fn rest_team(&self) {
+        if let Some(team) = &self.team {
+            team.rest();
+        }
+    }
+
+    /// Cuts the tiles (kept while the neighbour list, the particles and the
+    /// team stay the same): one per team member.
+    fn cut_tiles(&mut self) {
+        self.tiles.cut(
+            self.neighbors.rebuild_count(),
+            self.neighbors.row_offsets(),
+            self.neighbors.pairs(),
+            self.team.as_ref().map_or(1, Team::size),
+        );
     }
 
     /// First half kick and drift on its own (when the last force pass did
     /// not drift), from the stored forces and torques; returns whether some
     /// particle moved far enough to need a neighbour rebuild.
     fn kick_and_drift(&mut self, world: &mut World) -> Result<bool, HealthError> {
+        self.cut_tiles();
         let drift = Drift::<B>::new(world.domain, self.dt, &self.neighbors);
-        let p = &mut world.particles;
-        let (left, moved) = p
-            .position
-            .par_iter_mut()
-            .zip(p.velocity.par_iter_mut())
-            .zip(p.angular_velocity.par_iter_mut())
-            .zip(p.force.par_iter().zip(p.torque.par_iter()))
-            .zip(self.spheres.par_iter_mut().zip(self.motion.par_iter_mut()))
-            .zip(self.kick.par_iter())
-            .enumerate()
-            .with_min_len(PAR_MIN_LEN)
-            .map(|(i, (((((x, v), w), (f, t)), (sphere, motion)), kick))| {
+        let runs = ParticleRun::whole(
+            &mut world.particles,
+            &mut self.spheres,
+            &mut self.motion,
+            &self.kick,
+            &mut self.wall_history,
+            &self.sums,
+        )
+        .cut(self.tiles.bounds(), self.wall_slots);
+        let (left, moved) = run_jobs(self.team.as_ref(), runs, |run| {
+            let mut found = (None, false);
+            for (k, ((((x, v), w), (f, t)), ((sphere, motion), kick))) in run
+                .position
+                .iter_mut()
+                .zip(run.velocity.iter_mut())
+                .zip(run.angular_velocity.iter_mut())
+                .zip(run.force.iter().zip(run.torque.iter()))
+                .zip(
+                    run.spheres
+                        .iter_mut()
+                        .zip(run.motion.iter_mut())
+                        .zip(run.kick),
+                )
+                .enumerate()
+            {
                 let state = ParticleMut {
                     x,
                     v,
@@ -186,9 +223,14 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                     motion,
                 };
                 let (v0, w0) = (*state.v, *state.w);
-                drift.apply(i, v0, w0, f * kick.v, t * kick.w, state)
-            })
-            .reduce(|| (None, false), |a, b| (min_option(a.0, b.0), a.1 || b.1));
+                let (left, moved) =
+                    drift.apply(run.first + k, v0, w0, f * kick.v, t * kick.w, state);
+                found = (min_option(found.0, left), found.1 || moved);
+            }
+            found
+        })
+        .into_iter()
+        .fold((None, false), |a, b| (min_option(a.0, b.0), a.1 || b.1));
         self.left_domain(world, left)?;
         Ok(moved)
     }
@@ -353,12 +395,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     /// ([`evaluate_lanes`](crate::dem::contact::evaluate_lanes); a short tail
     /// one at a time), each lane bit-identical to evaluating its pair alone.
     fn pair_forces(&mut self, world: &World) -> (usize, (f64, usize)) {
-        self.tiles.cut(
-            self.neighbors.rebuild_count(),
-            self.neighbors.row_offsets(),
-            self.neighbors.pairs(),
-            tiles_for(rayon::current_num_threads()),
-        );
+        self.cut_tiles();
         let kernel = PairKernel::<B> {
             spheres: &self.spheres,
             motion: &self.motion,
@@ -373,18 +410,16 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         self.pair_forces.resize(pairs.len(), PairForce::default());
         self.sums
             .resize(world.particles.len(), Accumulated::default());
-        self.tiles
-            .jobs(pairs, history, &mut self.pair_forces, &mut self.sums)
-            .into_par_iter()
-            .map(|mut job| {
-                job.sink.start(g, kernel.motion);
-                let first_pair = job.sink.first_pair();
-                kernel.run::<N, R, _>(first_pair, job.pairs, job.history, &mut job.sink)
-            })
-            .reduce(
-                || (0, (0.0, usize::MAX)),
-                |a, b| (a.0 + b.0, worse(a.1, b.1)),
-            )
+        let jobs = self
+            .tiles
+            .jobs(pairs, history, &mut self.pair_forces, &mut self.sums);
+        run_jobs(self.team.as_ref(), jobs, |mut job| {
+            job.sink.start(g, kernel.motion);
+            let first_pair = job.sink.first_pair();
+            kernel.run::<N, R, _>(first_pair, job.pairs, job.history, &mut job.sink)
+        })
+        .into_iter()
+        .fold((0, (0.0, usize::MAX)), |a, b| (a.0 + b.0, worse(a.1, b.1)))
     }
 
     /// Per particle: its pair sum (a head's gathered from the buffer), walls,
@@ -407,89 +442,101 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         let tiles = &self.tiles;
         let neighbors = &self.neighbors;
         let drift = drift.then(|| Drift::<B>::new(world.domain, dt, neighbors));
-        let p = &mut world.particles;
-        p.force
-            .par_iter_mut()
-            .zip(p.torque.par_iter_mut())
-            .zip(p.velocity.par_iter_mut())
-            .zip(p.angular_velocity.par_iter_mut())
-            .zip(p.position.par_iter_mut())
-            .zip(self.wall_history.par_chunks_mut(slots))
-            .zip(self.spheres.par_iter_mut().zip(self.motion.par_iter_mut()))
-            .zip(self.kick.par_iter().zip(self.sums.par_iter()))
-            .enumerate()
-            .with_min_len(PAR_MIN_LEN)
-            .map(
-                |(i, (((((((f, t), v), w), x), hist), (sphere, motion)), (kick, sum)))| {
-                    let (xc, r, m) = (sphere.x, sphere.r, motion.m);
-                    let (ve, we) = (motion.v, motion.w);
-                    let (mut force, mut torque) = if tiles.is_head(i) {
-                        sum_pair_forces(neighbors.incident(i), buffer, g * m)
-                    } else {
-                        (sum.force, sum.torque)
+        let runs = ParticleRun::whole(
+            &mut world.particles,
+            &mut self.spheres,
+            &mut self.motion,
+            &self.kick,
+            &mut self.wall_history,
+            &self.sums,
+        )
+        .cut(tiles.gather_bounds(), slots);
+        run_jobs(self.team.as_ref(), runs, |run| {
+            let mut found = GatherFound::default();
+            for (offset, (((((((f, t), v), w), x), hist), (sphere, motion)), (kick, sum))) in run
+                .force
+                .iter_mut()
+                .zip(run.torque.iter_mut())
+                .zip(run.velocity.iter_mut())
+                .zip(run.angular_velocity.iter_mut())
+                .zip(run.position.iter_mut())
+                .zip(run.wall_history.chunks_mut(slots))
+                .zip(run.spheres.iter_mut().zip(run.motion.iter_mut()))
+                .zip(run.kick.iter().zip(run.sums))
+                .enumerate()
+            {
+                let i = run.first + offset;
+                let (xc, r, m) = (sphere.x, sphere.r, motion.m);
+                let (ve, we) = (motion.v, motion.w);
+                let (mut force, mut torque) = if tiles.is_head(i) {
+                    sum_pair_forces(neighbors.incident(i), buffer, g * m)
+                } else {
+                    (sum.force, sum.torque)
+                };
+                for (k, wall) in placed.iter().enumerate() {
+                    let Some(wc) = wall.contact(xc, r, wall_reach[k]) else {
+                        // Most particles touch no wall: leave their empty
+                        // history unwritten rather than dirty its cache line.
+                        if hist[k] != ContactHistory::default() {
+                            hist[k] = ContactHistory::default();
+                        }
+                        continue;
                     };
-                    let mut found = GatherFound::default();
-                    for (k, wall) in placed.iter().enumerate() {
-                        let Some(wc) = wall.contact(xc, r, wall_reach[k]) else {
-                            // Most particles touch no wall: leave their empty
-                            // history unwritten rather than dirty its cache line.
-                            if hist[k] != ContactHistory::default() {
-                                hist[k] = ContactHistory::default();
-                            }
-                            continue;
-                        };
-                        let n = wc.normal;
-                        let arm = r - 0.5 * wc.overlap_m;
-                        let motion = RelativeMotion {
-                            velocity: ve - (we * arm).cross(&n) - wc.velocity,
-                            angular_velocity: we,
-                        };
-                        let geometry = ContactGeometry {
-                            normal: n,
-                            overlap_m: wc.overlap_m,
-                            r_star_m: r,
-                            m_star_kg: m,
-                        };
-                        if let Some(c) =
-                            evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k])
-                        {
-                            force += c.force;
-                            torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
-                            found.wall_contacts += 1;
-                            found.worst_wall =
-                                worse(found.worst_wall, (wc.overlap_m.max(0.0) / r, i * slots + k));
-                        }
+                    let n = wc.normal;
+                    let arm = r - 0.5 * wc.overlap_m;
+                    let motion = RelativeMotion {
+                        velocity: ve - (we * arm).cross(&n) - wc.velocity,
+                        angular_velocity: we,
+                    };
+                    let geometry = ContactGeometry {
+                        normal: n,
+                        overlap_m: wc.overlap_m,
+                        r_star_m: r,
+                        m_star_kg: m,
+                    };
+                    if let Some(c) =
+                        evaluate::<N, R>(&wall_coef[k], &geometry, &motion, dt, &mut hist[k])
+                    {
+                        force += c.force;
+                        torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
+                        found.wall_contacts += 1;
+                        found.worst_wall =
+                            worse(found.worst_wall, (wc.overlap_m.max(0.0) / r, i * slots + k));
                     }
-                    let dv = force * kick.v;
-                    let dw = torque * kick.w;
-                    let (v1, w1) = (*v + dv, *w + dw);
-                    // 0·c is 0 for a finite c and NaN otherwise: one test, no branches.
-                    let probe = xc * 0.0 + v1 * 0.0 + w1 * 0.0;
-                    if probe.x + probe.y + probe.z != 0.0 {
-                        found.non_finite = Some(i);
+                }
+                let dv = force * kick.v;
+                let dw = torque * kick.w;
+                let (v1, w1) = (*v + dv, *w + dw);
+                // 0·c is 0 for a finite c and NaN otherwise: one test, no branches.
+                let probe = xc * 0.0 + v1 * 0.0 + w1 * 0.0;
+                if probe.x + probe.y + probe.z != 0.0 {
+                    found.non_finite = found.non_finite.or(Some(i));
+                }
+                match &drift {
+                    Some(drift) => {
+                        let state = ParticleMut {
+                            x,
+                            v,
+                            w,
+                            sphere,
+                            motion,
+                        };
+                        let (left, moved) = drift.apply(i, v1, w1, dv, dw, state);
+                        found.left = found.left.or(left);
+                        found.moved |= moved;
                     }
-                    match &drift {
-                        Some(drift) => {
-                            let state = ParticleMut {
-                                x,
-                                v,
-                                w,
-                                sphere,
-                                motion,
-                            };
-                            (found.left, found.moved) = drift.apply(i, v1, w1, dv, dw, state);
-                        }
-                        None => {
-                            *v = v1;
-                            *w = w1;
-                            *f = force;
-                            *t = torque;
-                        }
+                    None => {
+                        *v = v1;
+                        *w = w1;
+                        *f = force;
+                        *t = torque;
                     }
-                    found
-                },
-            )
-            .reduce(GatherFound::default, GatherFound::merge)
+                }
+            }
+            found
+        })
+        .into_iter()
+        .fold(GatherFound::default(), GatherFound::merge)
     }
 
     /// Kinetic + gravitational (measured from the domain corner lowest along
@@ -561,6 +608,34 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                     reference_j: reference,
                 },
             ));
+        }
+        Ok(())
+    }
+
+    /// The step loop of [`Kernel::advance`] (see there), on the team
+    /// [`join_team`](Self::join_team) made.
+    fn steps(&mut self, world: &mut World, steps: u64) -> Result<(), HealthError> {
+        let mut drifted: Option<bool> = None;
+        for s in 0..steps {
+            let moved = match drifted {
+                Some(moved) => moved,
+                None => self.kick_and_drift(world)?,
+            };
+            world.time_s += self.dt;
+            world.step += 1;
+            if moved || self.neighbors.is_stale(world.particles.len()) {
+                // The rebuild is rayon's: the team's helpers rest meanwhile.
+                self.rest_team();
+                self.rebuild(world)?;
+            }
+            let check = self.energy_check && world.step.is_multiple_of(ENERGY_CHECK_INTERVAL);
+            let drift = s + 1 < steps && !check;
+            let moved = self.forces(world, drift)?;
+            if check {
+                self.rest_team();
+                self.check_energy(world)?;
+            }
+            drifted = drift.then_some(moved);
         }
         Ok(())
     }
@@ -729,26 +804,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Step
     /// the undrifted state); the operations and their order are the same
     /// either way.
     fn advance(&mut self, world: &mut World, steps: u64) -> Result<(), HealthError> {
-        let mut drifted: Option<bool> = None;
-        for s in 0..steps {
-            let moved = match drifted {
-                Some(moved) => moved,
-                None => self.kick_and_drift(world)?,
-            };
-            world.time_s += self.dt;
-            world.step += 1;
-            if moved || self.neighbors.is_stale(world.particles.len()) {
-                self.rebuild(world)?;
-            }
-            let check = self.energy_check && world.step.is_multiple_of(ENERGY_CHECK_INTERVAL);
-            let drift = s + 1 < steps && !check;
-            let moved = self.forces(world, drift)?;
-            if check {
-                self.check_energy(world)?;
-            }
-            drifted = drift.then_some(moved);
-        }
-        Ok(())
+        self.join_team();
+        let result = self.steps(world, steps);
+        self.rest_team();
+        result
     }
 
     fn name(&self) -> String {
@@ -780,6 +839,9 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Step
         self.sort_and_rebuild(world)
             .map_err(|e| self.neighbor_failure(world, e))?;
         self.pack(world);
-        self.forces(world, false).map(|_| ())
+        self.join_team();
+        let result = self.forces(world, false).map(|_| ());
+        self.rest_team();
+        result
     }
 }
