@@ -13,7 +13,10 @@
 //! per-pair record only where a pair touches a particle another tile also
 //! reaches (`tiles`): on one thread there are no such records at all, which at
 //! N = 50,000 ran 12–21 % faster than writing and gathering every pair's
-//! record (2026-11-25, three side-by-side runs), at 5,120 equally fast.
+//! record (2026-11-25, three side-by-side runs), at 5,120 equally fast. On
+//! more than one thread the stages run on a `team` of threads that stays
+//! awake between them, member `t` always on tile `t` and on the matching
+//! share of the per-particle passes, instead of rayon's fork-join.
 //!
 //! Tried and not kept (dense-bed benchmark, `repose bench`, this 2-vCPU
 //! builder):

@@ -3,7 +3,7 @@
 
 use super::pair_kernel::{Kick, Motion, PairForce, PairKernel, Sphere};
 use super::particle_runs::ParticleRun;
-use super::team::{run_jobs, Team};
+use super::team::{run_jobs, Team, JOBS_PER_MEMBER};
 use super::tiles::{Accumulated, Tiles};
 use super::{min_option, worse, Kernel, SetupError, SimulationSetup, StepStats, World};
 use crate::dem::contact::{
@@ -34,7 +34,7 @@ pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boun
     pair_forces: Vec<PairForce>,
     /// Per particle: the force and torque sums of non-heads.
     sums: Vec<Accumulated>,
-    /// How the pair sweep is cut into tiles, one per team member (see
+    /// How the pair sweep is cut into tiles, two per team member (see
     /// [`super::tiles`]); the kick and drift use the same cut, the gather
     /// one moved so that its shares cost the same.
     tiles: Tiles,
@@ -174,13 +174,16 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     }
 
     /// Cuts the tiles (kept while the neighbour list, the particles and the
-    /// team stay the same): one per team member.
+    /// team stay the same): [`JOBS_PER_MEMBER`] per team member, one
+    /// without a team.
     fn cut_tiles(&mut self) {
         self.tiles.cut(
             self.neighbors.rebuild_count(),
             self.neighbors.row_offsets(),
             self.neighbors.pairs(),
-            self.team.as_ref().map_or(1, Team::size),
+            self.team
+                .as_ref()
+                .map_or(1, |team| JOBS_PER_MEMBER * team.size()),
         );
     }
 

@@ -44,8 +44,13 @@ struct TaskRef(*const (dyn Fn(usize) + Sync));
 // SAFETY: the pointee is `Sync` and outlives every use (see `Team::run`).
 unsafe impl Send for TaskRef {}
 
-/// Runs one job per share, job `t` on share `t` of `team`, or all of them
-/// here in order without a team; returns the results in job order.
+/// Jobs per team member in each stage (tiles of the pair sweep, runs of the
+/// per-particle passes): two, so that a member can take over the second
+/// half of a share whose thread is held up.
+pub(super) const JOBS_PER_MEMBER: usize = 2;
+
+/// Runs `jobs` on `team` (see [`Team::for_each`]), or all of them here in
+/// order without a team; returns the results in job order.
 pub(super) fn run_jobs<J: Send, R: Send>(
     team: Option<&Team>,
     jobs: Vec<J>,
@@ -139,33 +144,48 @@ impl Team {
         }
     }
 
-    /// Runs one job per share, job `t` on share `t`, and returns the results
-    /// in job order. `jobs` must hold exactly [`size`](Self::size) jobs.
+    /// Runs `jobs` (a whole number per member, [`JOBS_PER_MEMBER`]) and
+    /// returns their results in job order. Member `t` owns the `t`-th run of
+    /// consecutive jobs and takes them in order; a member done with its own
+    /// takes the next untaken job of the others, so that a member the system
+    /// keeps off its CPU for a while (another process on a shared machine)
+    /// delays the stage by less than its whole share.
     pub(super) fn for_each<J: Send, R: Send>(
         &self,
         jobs: Vec<J>,
         work: impl Fn(J) -> R + Sync,
     ) -> Vec<R> {
-        assert_eq!(jobs.len(), self.size(), "one job per team member");
+        let size = self.size();
+        assert!(
+            !jobs.is_empty() && jobs.len().is_multiple_of(size),
+            "{} jobs for {size} members",
+            jobs.len()
+        );
+        let per = jobs.len() / size;
         let jobs: Vec<Mutex<Option<J>>> = jobs.into_iter().map(|j| Mutex::new(Some(j))).collect();
         let results: Vec<Mutex<Option<R>>> = jobs.iter().map(|_| Mutex::new(None)).collect();
+        // Per member: the index of its next untaken job.
+        let next: Vec<AtomicUsize> = (0..size).map(|t| AtomicUsize::new(t * per)).collect();
         self.run(&|t| {
-            let job = jobs[t].lock().ok().and_then(|mut j| j.take());
-            if let Some(job) = job {
-                let r = work(job);
-                if let Ok(mut slot) = results[t].lock() {
-                    *slot = Some(r);
+            for owner in (0..size).map(|d| (t + d) % size) {
+                loop {
+                    let k = next[owner].fetch_add(1, Ordering::Relaxed);
+                    if k >= (owner + 1) * per {
+                        break;
+                    }
+                    let job = jobs[k].lock().ok().and_then(|mut j| j.take());
+                    if let Some(job) = job {
+                        let r = work(job);
+                        if let Ok(mut slot) = results[k].lock() {
+                            *slot = Some(r);
+                        }
+                    }
                 }
             }
         });
         results
             .into_iter()
-            .map(|r| {
-                r.into_inner()
-                    .ok()
-                    .flatten()
-                    .expect("every share ran its job")
-            })
+            .map(|r| r.into_inner().ok().flatten().expect("every job ran"))
             .collect()
     }
 
@@ -308,23 +328,38 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_share_runs_once_on_its_own_thread_and_results_keep_job_order() {
+    fn every_job_runs_once_and_results_keep_job_order() {
         let team = Team::new(3);
+        let runs = AtomicUsize::new(0);
         for round in 0..100 {
-            let out = team.for_each(vec![10, 20, 30], |j| {
-                (j + round, std::thread::current().name().map(String::from))
+            let jobs: Vec<usize> = (0..6).map(|j| 10 * j + round).collect();
+            let out = team.for_each(jobs.clone(), |j| {
+                runs.fetch_add(1, Ordering::Relaxed);
+                2 * j
             });
-            assert_eq!(
-                out.iter().map(|o| o.0).collect::<Vec<_>>(),
-                [10 + round, 20 + round, 30 + round]
-            );
-            assert_eq!(out[1].1.as_deref(), Some("repose-team-1"));
-            assert_eq!(out[2].1.as_deref(), Some("repose-team-2"));
+            assert_eq!(out, jobs.iter().map(|j| 2 * j).collect::<Vec<_>>());
             if round % 10 == 0 {
                 team.rest();
                 std::thread::sleep(Duration::from_millis(1));
             }
         }
+        assert_eq!(runs.load(Ordering::Relaxed), 600);
+    }
+
+    #[test]
+    fn a_member_held_up_has_its_later_jobs_taken_over() {
+        let team = Team::new(2);
+        // Jobs 0 and 1 are the caller's, 2 and 3 the helper's; the helper
+        // is held up in whatever job it takes first.
+        let out = team.for_each(vec![0, 1, 2, 3], |j| {
+            let name = std::thread::current().name().map(String::from);
+            if name.as_deref() == Some("repose-team-1") {
+                std::thread::sleep(Duration::from_millis(100));
+            }
+            (j, name)
+        });
+        assert_eq!(out.iter().map(|o| o.0).collect::<Vec<_>>(), [0, 1, 2, 3]);
+        assert_ne!(out[3].1.as_deref(), Some("repose-team-1"), "{out:?}");
     }
 
     #[test]
