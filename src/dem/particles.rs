@@ -106,24 +106,32 @@ impl Particles {
     }
 }
 
+/// `count` resting particles in a row for tests: particle `k` at x = `k` m,
+/// of radius `k + 1` mm and density 1000 kg/m³.
+#[cfg(test)]
+pub(crate) fn row_of_particles(count: usize) -> Particles {
+    let mut p = Particles::default();
+    for k in 0..count {
+        p.push(
+            &ParticleInit {
+                position: Vec3::new(k as f64, 0.0, 0.0),
+                velocity: Vec3::zeros(),
+                angular_velocity: Vec3::zeros(),
+                radius_m: 1e-3 * (k + 1) as f64,
+            },
+            1000.0,
+        );
+    }
+    p
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn push_permute_retain_keep_ids_with_their_data() {
-        let mut p = Particles::default();
-        for k in 0..4 {
-            p.push(
-                &ParticleInit {
-                    position: Vec3::new(k as f64, 0.0, 0.0),
-                    velocity: Vec3::zeros(),
-                    angular_velocity: Vec3::zeros(),
-                    radius_m: 1e-3 * (k + 1) as f64,
-                },
-                1000.0,
-            );
-        }
+        let mut p = row_of_particles(4);
         p.permute(&[3, 1, 0, 2]);
         assert_eq!(p.id, vec![3, 1, 0, 2]);
         assert_eq!(p.position[0].x, 3.0);

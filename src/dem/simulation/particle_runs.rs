@@ -1,13 +1,143 @@
-//! The per-particle state a step updates, cut into runs of consecutive
-//! particles, one run per team member: at the tiles of the pair sweep, or
-//! at the gather's cut (`Tiles::gather_bounds`), which moves the tiles' so
-//! that the shares cost the same. Either way a member mostly finishes the
-//! particles whose forces it summed.
+//! The per-particle state a step updates: the stepper's own records
+//! ([`ParticleRecords`]) beside the particles' state, cut into runs of
+//! consecutive particles, one run per job of the team: at the tiles of the
+//! pair sweep, or at the gather's cut (`Tiles::gather_bounds`), which moves
+//! the tiles' so that the shares cost the same. Either way a member mostly
+//! finishes the particles whose forces it summed.
 
 use super::pair_kernel::{Kick, Motion, Sphere};
 use super::tiles::Accumulated;
+use crate::dem::neighbor::apply_permutation;
 use crate::dem::particles::Particles;
 use crate::dem::vec3::Vec3;
+
+/// The stepper's own per-particle records, in the particles' index order
+/// (permuted with them): packed copies of what the force stages read, the
+/// kick factors, the wall contact history and the sweep's sums.
+pub(super) struct ParticleRecords<H> {
+    /// Centre and radius per particle, refreshed by every drift.
+    pub(super) spheres: Vec<Sphere>,
+    /// Velocity estimates, mass and inverse radius, refreshed by every drift.
+    pub(super) motion: Vec<Motion>,
+    /// Kick factors per particle (see [`Kick`]).
+    pub(super) kick: Vec<Kick>,
+    /// Contact history per (particle, wall): index `p * wall_slots + w`.
+    pub(super) wall_history: Vec<H>,
+    /// `max(walls, 1)`, so a particle's run of wall history is never empty.
+    pub(super) wall_slots: usize,
+    /// Per particle: the pair-force sums of the sweep's non-heads (see
+    /// [`super::tiles`]); empty before the first sweep.
+    pub(super) sums: Vec<Accumulated>,
+}
+
+impl<H: Copy + Default> ParticleRecords<H> {
+    /// Records for `particles` particles and `walls` walls: empty wall
+    /// histories, nothing packed yet (see [`pack`](Self::pack)).
+    pub(super) fn new(particles: usize, walls: usize) -> Self {
+        let wall_slots = walls.max(1);
+        Self {
+            spheres: Vec::new(),
+            motion: Vec::new(),
+            kick: Vec::new(),
+            wall_history: vec![H::default(); particles * wall_slots],
+            wall_slots,
+            sums: Vec::new(),
+        }
+    }
+
+    /// Fills the packed records and kick factors (step `dt`, s) from the
+    /// particles, with the velocities themselves as estimates (no force
+    /// history yet: at setup and after particles were added or removed).
+    pub(super) fn pack(&mut self, p: &Particles, dt: f64) {
+        self.spheres.clear();
+        self.spheres.extend(
+            p.position
+                .iter()
+                .zip(&p.radius)
+                .map(|(&x, &r)| Sphere { x, r }),
+        );
+        self.motion.clear();
+        self.motion.extend((0..p.len()).map(|i| Motion {
+            v: p.velocity[i],
+            w: p.angular_velocity[i],
+            m: p.mass[i],
+            inv_r: 1.0 / p.radius[i],
+        }));
+        self.kick.clear();
+        self.kick.extend(
+            p.mass
+                .iter()
+                .zip(&p.radius)
+                .map(|(&m, &r)| Kick::new(dt, m, r)),
+        );
+    }
+
+    /// Applies the permutation `order` (`order[new] = old`) of the
+    /// particles: wall histories always, packed records and kick factors
+    /// when they are packed for as many particles (before a
+    /// [`pack`](Self::pack) they are not used).
+    pub(super) fn permute(&mut self, order: &[u32]) {
+        if self.spheres.len() == order.len() && self.motion.len() == order.len() {
+            apply_permutation(order, &mut self.spheres);
+            apply_permutation(order, &mut self.motion);
+        }
+        if self.kick.len() == order.len() {
+            apply_permutation(order, &mut self.kick);
+        }
+        let slots = self.wall_slots;
+        let old = std::mem::take(&mut self.wall_history);
+        self.wall_history = order
+            .iter()
+            .flat_map(|&o| {
+                old[o as usize * slots..(o as usize + 1) * slots]
+                    .iter()
+                    .copied()
+            })
+            .collect();
+    }
+
+    /// Keeps the wall histories of the particles flagged in `kept` (all
+    /// when `None`), in order, and gives each of the `particles` particles
+    /// after them (new ones) empty histories.
+    pub(super) fn keep(&mut self, kept: Option<&[bool]>, particles: usize) {
+        let slots = self.wall_slots;
+        if let Some(mask) = kept {
+            let old = std::mem::take(&mut self.wall_history);
+            self.wall_history = mask
+                .iter()
+                .enumerate()
+                .filter(|(_, k)| **k)
+                .flat_map(|(i, _)| old[i * slots..(i + 1) * slots].iter().copied())
+                .collect();
+        }
+        self.wall_history.resize(particles * slots, H::default());
+    }
+
+    /// The state of the particles `p` and these records cut into runs at
+    /// the particle indices `bounds` (ascending, from 0 to the particle
+    /// count): one run per window.
+    pub(super) fn runs<'a>(
+        &'a mut self,
+        p: &'a mut Particles,
+        bounds: &[usize],
+    ) -> Vec<ParticleRun<'a, H>> {
+        let slots = self.wall_slots;
+        ParticleRun {
+            first: 0,
+            position: &mut p.position,
+            velocity: &mut p.velocity,
+            angular_velocity: &mut p.angular_velocity,
+            force: &mut p.force,
+            torque: &mut p.torque,
+            spheres: &mut self.spheres,
+            motion: &mut self.motion,
+            kick: &self.kick,
+            wall_history: &mut self.wall_history,
+            sums: &self.sums,
+        }
+        .cut(bounds, slots)
+    }
+}
 
 /// The state of particles `first..first + len` that the kick, drift and
 /// gather update, one slice per quantity (all in the particles' index order).
@@ -34,35 +164,9 @@ pub(super) struct ParticleRun<'a, H> {
 }
 
 impl<'a, H> ParticleRun<'a, H> {
-    /// All particles as one run: the particles' own state and the stepper's
-    /// per-particle records (each as long as the particles, `sums` possibly
-    /// empty and `wall_history` `slots` per particle).
-    pub(super) fn whole(
-        p: &'a mut Particles,
-        spheres: &'a mut [Sphere],
-        motion: &'a mut [Motion],
-        kick: &'a [Kick],
-        wall_history: &'a mut [H],
-        sums: &'a [Accumulated],
-    ) -> Self {
-        Self {
-            first: 0,
-            position: &mut p.position,
-            velocity: &mut p.velocity,
-            angular_velocity: &mut p.angular_velocity,
-            force: &mut p.force,
-            torque: &mut p.torque,
-            spheres,
-            motion,
-            kick,
-            wall_history,
-            sums,
-        }
-    }
-
     /// Cuts the run at the particle indices `bounds` (ascending, starting at
     /// `first` and ending at `first + len`): one run per window.
-    pub(super) fn cut(self, bounds: &[usize], slots: usize) -> Vec<Self> {
+    fn cut(self, bounds: &[usize], slots: usize) -> Vec<Self> {
         let mut runs = Vec::with_capacity(bounds.len().saturating_sub(1));
         let mut rest = self;
         for w in bounds.windows(2).take(bounds.len().saturating_sub(2)) {
@@ -113,5 +217,52 @@ impl<'a, H> ParticleRun<'a, H> {
             sums: u1,
         };
         (head, tail)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::particles::row_of_particles;
+
+    #[test]
+    fn records_follow_their_particles_through_permutations_and_removals() {
+        let mut p = row_of_particles(3);
+        // Two walls; history (particle, wall) tagged 10 * particle + wall.
+        let mut records = ParticleRecords::<u32>::new(3, 2);
+        assert_eq!(records.wall_history, vec![0; 6]);
+        records.wall_history = vec![0, 1, 10, 11, 20, 21];
+        records.pack(&p, 1e-5);
+        let order = [2, 0, 1];
+        p.permute(&order);
+        records.permute(&order);
+        assert_eq!(records.wall_history, vec![20, 21, 0, 1, 10, 11]);
+        let radii: Vec<f64> = records.spheres.iter().map(|s| s.r).collect();
+        assert_eq!(
+            radii, p.radius,
+            "packed records permuted with the particles"
+        );
+        assert_eq!(records.motion[0].m, p.mass[0]);
+        // Drop the middle particle (old 0) and add one: empty history for it.
+        records.keep(Some(&[true, false, true]), 3);
+        assert_eq!(records.wall_history, vec![20, 21, 10, 11, 0, 0]);
+    }
+
+    #[test]
+    fn runs_cut_every_quantity_at_the_same_particles() {
+        let mut p = row_of_particles(3);
+        let mut records = ParticleRecords::<u32>::new(3, 2);
+        records.wall_history = vec![0, 1, 10, 11, 20, 21];
+        records.pack(&p, 1e-5);
+        let runs = records.runs(&mut p, &[0, 1, 3]);
+        assert_eq!(runs.len(), 2);
+        assert_eq!((runs[0].first, runs[1].first), (0, 1));
+        assert_eq!(
+            runs[1].position,
+            &[Vec3::new(1.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0)]
+        );
+        assert_eq!(runs[1].wall_history, &[10, 11, 20, 21]);
+        assert_eq!((runs[0].spheres.len(), runs[1].kick.len()), (1, 2));
+        assert!(runs.iter().all(|r| r.sums.is_empty()), "no sweep yet");
     }
 }

@@ -1,8 +1,8 @@
 //! One monomorphised kernel: the state and stages of a simulation with fixed
 //! effects.
 
-use super::pair_kernel::{Kick, Motion, PairForce, PairKernel, Sphere};
-use super::particle_runs::ParticleRun;
+use super::pair_kernel::{Motion, PairForce, PairKernel, Sphere};
+use super::particle_runs::ParticleRecords;
 use super::team::{run_jobs, Team, JOBS_PER_MEMBER};
 use super::tiles::{Accumulated, Tiles};
 use super::{min_option, worse, Kernel, SetupError, SimulationSetup, StepStats, World};
@@ -14,7 +14,7 @@ use crate::dem::domain::Domain;
 use crate::dem::effects::{BodyForce, Boundary};
 use crate::dem::health::{HealthCause, HealthError, HealthLimits, ENERGY_CHECK_INTERVAL};
 use crate::dem::material::harmonic;
-use crate::dem::neighbor::{apply_permutation, NeighborError, NeighborList, PairRef};
+use crate::dem::neighbor::{NeighborError, NeighborList, PairRef};
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::PlacedWall;
 
@@ -32,8 +32,6 @@ pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boun
     neighbors: NeighborList<ContactHistory<N, R>>,
     /// Per pair: forces of the pairs that touch a head (see [`super::tiles`]).
     pair_forces: Vec<PairForce>,
-    /// Per particle: the force and torque sums of non-heads.
-    sums: Vec<Accumulated>,
     /// How the pair sweep is cut into tiles, two per team member (see
     /// [`super::tiles`]); the kick and drift use the same cut, the gather
     /// one moved so that its shares cost the same.
@@ -41,17 +39,11 @@ pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boun
     /// The threads that run the stages on more than one thread (see
     /// [`super::team`]); `None` on one.
     team: Option<Team>,
-    /// Contact history per (particle, wall): index `p * wall_slots + w`.
-    wall_history: Vec<ContactHistory<N, R>>,
-    /// `max(walls, 1)`, so per-particle chunks are never empty.
-    wall_slots: usize,
+    /// The walls placed at the current time.
     placed: Vec<PlacedWall>,
-    /// Per particle (same index order as the world's particles): packed
-    /// copies of what the force stages read, refreshed by every drift.
-    spheres: Vec<Sphere>,
-    motion: Vec<Motion>,
-    /// Per particle, same index order: see [`Kick`].
-    kick: Vec<Kick>,
+    /// Per-particle records: packed state, kick factors, wall contact
+    /// history and the sweep's sums.
+    records: ParticleRecords<ContactHistory<N, R>>,
     stats: StepStats,
     limits: HealthLimits,
     /// Energy check enabled (non-adhesive kernel — the JKR kernel runs only
@@ -118,7 +110,6 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .collect();
         let neighbors =
             NeighborList::new(setup.skin_m, pair_reach).map_err(SetupError::Neighbor)?;
-        let wall_slots = world.walls.len().max(1);
         let mut stepper = Self {
             particle_particle,
             wall_coefficients,
@@ -128,15 +119,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             body,
             neighbors,
             pair_forces: Vec::new(),
-            sums: Vec::new(),
             tiles: Tiles::default(),
             team: None,
-            wall_history: vec![ContactHistory::default(); world.particles.len() * wall_slots],
-            wall_slots,
             placed: Vec::new(),
-            spheres: Vec::new(),
-            motion: Vec::new(),
-            kick: Vec::new(),
+            records: ParticleRecords::new(world.particles.len(), world.walls.len()),
             stats: StepStats::default(),
             limits: setup.health,
             energy_reference: None,
@@ -147,7 +133,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         stepper
             .sort_and_rebuild(world)
             .map_err(SetupError::Neighbor)?;
-        stepper.pack(world);
+        stepper.records.pack(&world.particles, stepper.dt);
         stepper.join_team();
         stepper.forces(world, false).map_err(SetupError::Health)?;
         stepper.rest_team();
@@ -193,15 +179,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     fn kick_and_drift(&mut self, world: &mut World) -> Result<bool, HealthError> {
         self.cut_tiles();
         let drift = Drift::<B>::new(world.domain, self.dt, &self.neighbors);
-        let runs = ParticleRun::whole(
-            &mut world.particles,
-            &mut self.spheres,
-            &mut self.motion,
-            &self.kick,
-            &mut self.wall_history,
-            &self.sums,
-        )
-        .cut(self.tiles.bounds(), self.wall_slots);
+        let runs = self.records.runs(&mut world.particles, self.tiles.bounds());
         let (left, moved) = run_jobs(self.team.as_ref(), runs, |run| {
             let mut found = (None, false);
             for (k, ((((x, v), w), (f, t)), ((sphere, motion), kick))) in run
@@ -252,34 +230,6 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         }
     }
 
-    /// Fills the packed records from the particles with the velocities
-    /// themselves as estimates (no force history yet: at setup and after
-    /// particles were added or removed).
-    fn pack(&mut self, world: &World) {
-        let p = &world.particles;
-        self.spheres.clear();
-        self.spheres.extend(
-            p.position
-                .iter()
-                .zip(&p.radius)
-                .map(|(&x, &r)| Sphere { x, r }),
-        );
-        self.motion.clear();
-        self.motion.extend((0..p.len()).map(|i| Motion {
-            v: p.velocity[i],
-            w: p.angular_velocity[i],
-            m: p.mass[i],
-            inv_r: 1.0 / p.radius[i],
-        }));
-        self.kick.clear();
-        self.kick.extend(
-            p.mass
-                .iter()
-                .zip(&p.radius)
-                .map(|(&m, &r)| Kick::new(self.dt, m, r)),
-        );
-    }
-
     fn health(&self, world: &World, index: usize, cause: HealthCause) -> HealthError {
         HealthError {
             particle_id: world.particles.id[index],
@@ -323,23 +273,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .neighbors
             .cell_order(&p.position, &p.radius, &world.domain)?;
         p.permute(&order);
-        if self.spheres.len() == order.len() && self.motion.len() == order.len() {
-            apply_permutation(&order, &mut self.spheres);
-            apply_permutation(&order, &mut self.motion);
-        }
-        if self.kick.len() == order.len() {
-            apply_permutation(&order, &mut self.kick);
-        }
-        let slots = self.wall_slots;
-        let old = std::mem::take(&mut self.wall_history);
-        self.wall_history = order
-            .iter()
-            .flat_map(|&o| {
-                old[o as usize * slots..(o as usize + 1) * slots]
-                    .iter()
-                    .copied()
-            })
-            .collect();
+        self.records.permute(&order);
         self.neighbors
             .rebuild(&p.position, &p.radius, &p.id, &world.domain)
     }
@@ -373,8 +307,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             } else {
                 (
                     worst_wall.0,
-                    worst_wall.1 / self.wall_slots,
-                    format!("wall {}", worst_wall.1 % self.wall_slots),
+                    worst_wall.1 / self.records.wall_slots,
+                    format!("wall {}", worst_wall.1 % self.records.wall_slots),
                 )
             };
             return Err(self.health(
@@ -400,8 +334,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     fn pair_forces(&mut self, world: &World) -> (usize, (f64, usize)) {
         self.cut_tiles();
         let kernel = PairKernel::<B> {
-            spheres: &self.spheres,
-            motion: &self.motion,
+            spheres: &self.records.spheres,
+            motion: &self.records.motion,
             domain: world.domain,
             coef: self.particle_particle,
             reach: self.pair_reach,
@@ -411,11 +345,9 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         let g = self.body.acceleration();
         let (pairs, history) = self.neighbors.pairs_and_history_mut();
         self.pair_forces.resize(pairs.len(), PairForce::default());
-        self.sums
-            .resize(world.particles.len(), Accumulated::default());
-        let jobs = self
-            .tiles
-            .jobs(pairs, history, &mut self.pair_forces, &mut self.sums);
+        let sums = &mut self.records.sums;
+        sums.resize(world.particles.len(), Accumulated::default());
+        let jobs = self.tiles.jobs(pairs, history, &mut self.pair_forces, sums);
         run_jobs(self.team.as_ref(), jobs, |mut job| {
             job.sink.start(g, kernel.motion);
             let first_pair = job.sink.first_pair();
@@ -436,7 +368,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         self.placed
             .extend(world.walls.iter().map(|w| w.placed_at(t)));
         let dt = self.dt;
-        let slots = self.wall_slots;
+        let slots = self.records.wall_slots;
         let g = self.body.acceleration();
         let placed = &self.placed;
         let wall_coef = &self.wall_coefficients;
@@ -445,15 +377,9 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         let tiles = &self.tiles;
         let neighbors = &self.neighbors;
         let drift = drift.then(|| Drift::<B>::new(world.domain, dt, neighbors));
-        let runs = ParticleRun::whole(
-            &mut world.particles,
-            &mut self.spheres,
-            &mut self.motion,
-            &self.kick,
-            &mut self.wall_history,
-            &self.sums,
-        )
-        .cut(tiles.gather_bounds(), slots);
+        let runs = self
+            .records
+            .runs(&mut world.particles, tiles.gather_bounds());
         run_jobs(self.team.as_ref(), runs, |run| {
             let mut found = GatherFound::default();
             for (offset, (((((((f, t), v), w), x), hist), (sphere, motion)), (kick, sum))) in run
@@ -826,22 +752,11 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Step
         world: &mut World,
         kept: Option<&[bool]>,
     ) -> Result<(), HealthError> {
-        let slots = self.wall_slots;
-        if let Some(mask) = kept {
-            let old = std::mem::take(&mut self.wall_history);
-            self.wall_history = mask
-                .iter()
-                .enumerate()
-                .filter(|(_, k)| **k)
-                .flat_map(|(i, _)| old[i * slots..(i + 1) * slots].iter().copied())
-                .collect();
-        }
-        self.wall_history
-            .resize(world.particles.len() * slots, ContactHistory::default());
+        self.records.keep(kept, world.particles.len());
         self.energy_reference = None;
         self.sort_and_rebuild(world)
             .map_err(|e| self.neighbor_failure(world, e))?;
-        self.pack(world);
+        self.records.pack(&world.particles, self.dt);
         self.join_team();
         let result = self.forces(world, false).map(|_| ());
         self.rest_team();
