@@ -13,9 +13,14 @@
 //! 16,000 for n ≥ 50) with the deck's physics (Hertz + CDT). The settled bed is
 //! kept in memory; every requested variant (normal model × rolling model ×
 //! thread count) starts a fresh simulation from it (contact history starts
-//! empty, as after a LIGGGHTS restart), runs a warm-up (500 steps) and then
-//! timed segments (6,000 / 2,000 / 1,000 steps for n = 16 / 32 / 50, the
-//! deck's `nb`). Throughput is N × steps / wall seconds of a segment.
+//! empty, as after a LIGGGHTS restart) and runs a warm-up (500 steps). Then
+//! the timed segments (6,000 / 2,000 / 1,000 steps for n = 16 / 32 / 50, the
+//! deck's `nb`) run in rounds: round k runs segment k of every variant, one
+//! after the other, so that a change in the machine's speed (other tenants
+//! of a shared host) hits every variant alike instead of whichever ran
+//! last. Throughput is N × steps / wall seconds of a segment; a variant's
+//! speedup is the median over the rounds of its throughput over that of the
+//! same kernel on the fewest threads in the same round.
 //!
 //! # Measured
 //!
@@ -255,7 +260,7 @@ use std::time::Instant;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rayon::ThreadPoolBuilder;
+use rayon::{ThreadPool, ThreadPoolBuilder};
 use serde::Serialize;
 
 use crate::dem::contact::PairParameters;
@@ -409,6 +414,11 @@ pub struct VariantReport {
     pub segment_cpu_mps: Vec<f64>,
     /// Median of `segment_cpu_mps` (0 when empty).
     pub median_cpu_mps: f64,
+    /// Median over the rounds of this variant's throughput over that of the
+    /// same kernel on the fewest threads timed, in the same round (1 for
+    /// that variant itself): the speedup from the extra threads, measured
+    /// segment by segment so that the machine's changing speed cancels.
+    pub speedup: f64,
     /// Force-carrying particle pairs per particle at the end.
     pub pairs_per_particle: f64,
     /// Particle contacts per particle (2 × pairs per particle).
@@ -563,15 +573,23 @@ pub fn run(
         top_z_m: p.position.iter().map(|x| x.z).fold(f64::MIN, f64::max),
         kinetic_energy_j: p.kinetic_energy_j(),
     };
-    let mut variants = Vec::new();
+    let mut timings = Vec::new();
     for &normal in &options.normals {
         for &rolling in &options.rollings {
             for &threads in &options.threads {
-                let v = time_variant(options, &settled, normal, rolling, threads, progress)?;
-                variants.push(v);
+                timings.push(VariantTiming::start(
+                    options, &settled, normal, rolling, threads,
+                )?);
             }
         }
     }
+    for round in 0..options.segments {
+        for timing in &mut timings {
+            timing.segment(options, round, progress)?;
+        }
+    }
+    let mut variants: Vec<VariantReport> = timings.into_iter().map(VariantTiming::finish).collect();
+    set_speedups(&mut variants);
     Ok(BenchReport {
         n: options.n,
         particles: n_part,
@@ -599,69 +617,137 @@ fn check(options: &BenchOptions) -> Result<(), BenchError> {
     Ok(())
 }
 
-fn time_variant(
-    options: &BenchOptions,
-    settled: &World,
-    normal: NormalChoice,
-    rolling: RollingChoice,
-    threads: usize,
-    progress: &mut (dyn Write + Send),
-) -> Result<VariantReport, BenchError> {
-    let pool = ThreadPoolBuilder::new().num_threads(threads).build()?;
-    let n_part = settled.particles.len() as f64;
-    let steps = options.segment_steps();
-    pool.install(|| {
-        let t0 = Instant::now();
-        let mut sim = Simulation::new(settled.clone(), &bed_setup(normal, rolling))?;
-        let setup_s = t0.elapsed().as_secs_f64();
-        let kernel = sim.kernel_name();
-        let t1 = Instant::now();
-        sim.advance(options.warmup)?;
-        let warmup_s = t1.elapsed().as_secs_f64();
-        let rebuilds_before = sim.stats().rebuilds;
-        let mut segment_mps = Vec::with_capacity(options.segments);
-        let mut segment_cpu_mps = Vec::with_capacity(options.segments);
-        let work = n_part * steps as f64 / 1e6;
-        for k in 0..options.segments {
-            let (t, cpu) = (Instant::now(), process_cpu_s());
-            sim.advance(steps)?;
-            let mps = work / t.elapsed().as_secs_f64();
-            let cpu_mps = cpu
-                .zip(process_cpu_s())
-                .map(|(a, b)| work / (b - a).max(1e-2));
-            writeln!(
-                progress,
-                "  {kernel}, {threads} thread(s), segment {}: {mps:.2} M particle-steps/s, {:.2} per CPU s",
-                k + 1,
-                cpu_mps.unwrap_or(0.0)
-            )?;
-            segment_mps.push(mps);
-            segment_cpu_mps.extend(cpu_mps);
-        }
-        let timed_s =
-            n_part * steps as f64 / 1e6 * segment_mps.iter().map(|m| 1.0 / m).sum::<f64>();
-        let s = sim.stats();
-        Ok(VariantReport {
-            kernel,
+/// One variant being timed: its pool, its simulation and the report so far.
+struct VariantTiming {
+    pool: ThreadPool,
+    sim: Simulation,
+    /// Spheres, as a float for throughputs.
+    particles: f64,
+    /// Neighbour rebuilds before the first timed segment.
+    rebuilds_before: u64,
+    report: VariantReport,
+}
+
+impl VariantTiming {
+    /// A fresh simulation of the settled bed with the variant's laws in a
+    /// pool of `threads` threads, set up and warmed up (both timed).
+    fn start(
+        options: &BenchOptions,
+        settled: &World,
+        normal: NormalChoice,
+        rolling: RollingChoice,
+        threads: usize,
+    ) -> Result<Self, BenchError> {
+        let pool = ThreadPoolBuilder::new().num_threads(threads).build()?;
+        let (sim, setup_s, warmup_s) = pool.install(|| -> Result<_, BenchError> {
+            let t0 = Instant::now();
+            let mut sim = Simulation::new(settled.clone(), &bed_setup(normal, rolling))?;
+            let setup_s = t0.elapsed().as_secs_f64();
+            let t1 = Instant::now();
+            sim.advance(options.warmup)?;
+            Ok((sim, setup_s, t1.elapsed().as_secs_f64()))
+        })?;
+        let report = VariantReport {
+            kernel: sim.kernel_name(),
             threads,
-            segment_steps: steps,
-            median_mps: median(&segment_mps),
-            segment_mps,
-            median_cpu_mps: if segment_cpu_mps.is_empty() {
-                0.0
-            } else {
-                median(&segment_cpu_mps)
-            },
-            segment_cpu_mps,
-            pairs_per_particle: s.contacts as f64 / n_part,
-            contacts_per_particle: 2.0 * s.contacts as f64 / n_part,
-            wall_contacts_per_particle: s.wall_contacts as f64 / n_part,
-            rebuilds: s.rebuilds - rebuilds_before,
+            segment_steps: options.segment_steps(),
+            segment_mps: Vec::with_capacity(options.segments),
+            median_mps: 0.0,
+            segment_cpu_mps: Vec::with_capacity(options.segments),
+            median_cpu_mps: 0.0,
+            speedup: 1.0,
+            pairs_per_particle: 0.0,
+            contacts_per_particle: 0.0,
+            wall_contacts_per_particle: 0.0,
+            rebuilds: 0,
             setup_s,
             warmup_s,
-            timed_s,
+            timed_s: 0.0,
+        };
+        Ok(Self {
+            pool,
+            particles: settled.particles.len() as f64,
+            rebuilds_before: sim.stats().rebuilds,
+            sim,
+            report,
         })
-    })
+    }
+
+    /// Times segment `round` (0-based) in the variant's pool.
+    fn segment(
+        &mut self,
+        options: &BenchOptions,
+        round: usize,
+        progress: &mut (dyn Write + Send),
+    ) -> Result<(), BenchError> {
+        let steps = self.report.segment_steps;
+        let work = self.particles * steps as f64 / 1e6;
+        let sim = &mut self.sim;
+        let (t, cpu) = (Instant::now(), process_cpu_s());
+        self.pool.install(|| sim.advance(steps))?;
+        let wall_s = t.elapsed().as_secs_f64();
+        let cpu_mps = cpu
+            .zip(process_cpu_s())
+            .map(|(a, b)| work / (b - a).max(1e-2));
+        let r = &mut self.report;
+        writeln!(
+            progress,
+            "  {}, {} thread(s), segment {} of {}: {:.2} M particle-steps/s, {:.2} per CPU s",
+            r.kernel,
+            r.threads,
+            round + 1,
+            options.segments,
+            work / wall_s,
+            cpu_mps.unwrap_or(0.0)
+        )?;
+        r.segment_mps.push(work / wall_s);
+        r.segment_cpu_mps.extend(cpu_mps);
+        r.timed_s += wall_s;
+        Ok(())
+    }
+
+    /// The report, with medians and the bed's contacts at the end.
+    fn finish(self) -> VariantReport {
+        let mut r = self.report;
+        let s = self.sim.stats();
+        r.median_mps = median(&r.segment_mps);
+        r.median_cpu_mps = if r.segment_cpu_mps.is_empty() {
+            0.0
+        } else {
+            median(&r.segment_cpu_mps)
+        };
+        r.pairs_per_particle = s.contacts as f64 / self.particles;
+        r.contacts_per_particle = 2.0 * r.pairs_per_particle;
+        r.wall_contacts_per_particle = s.wall_contacts as f64 / self.particles;
+        r.rebuilds = s.rebuilds - self.rebuilds_before;
+        r
+    }
+}
+
+/// Sets each variant's [`speedup`](VariantReport::speedup): the median over
+/// the rounds of its throughput over that of the same kernel on the fewest
+/// threads in the same round.
+fn set_speedups(variants: &mut [VariantReport]) {
+    let speedups: Vec<f64> = variants
+        .iter()
+        .map(|v| {
+            let base = variants
+                .iter()
+                .filter(|b| b.kernel == v.kernel)
+                .min_by_key(|b| b.threads)
+                .unwrap_or(v);
+            let ratios: Vec<f64> = v
+                .segment_mps
+                .iter()
+                .zip(&base.segment_mps)
+                .map(|(m, b)| m / b)
+                .collect();
+            median(&ratios)
+        })
+        .collect();
+    for (v, s) in variants.iter_mut().zip(speedups) {
+        v.speedup = s;
+    }
 }
 
 /// User + system CPU time of this process (all threads), s, from
@@ -706,12 +792,13 @@ impl BenchReport {
         )?;
         writeln!(
             out,
-            "{:<34} {:>3} {:>6}  {:<23} {:>7} {:>7} {:>7} {:>7} {:>6} {:>5} {:>8} {:>8}",
+            "{:<34} {:>3} {:>6}  {:<23} {:>7} {:>7} {:>7} {:>7} {:>7} {:>6} {:>5} {:>8} {:>8}",
             "kernel",
             "thr",
             "steps",
             "segments Mps/s",
             "median",
+            "speedup",
             "cpu Mps",
             "pairs/p",
             "cont/p",
@@ -724,12 +811,13 @@ impl BenchReport {
             let segs: Vec<String> = v.segment_mps.iter().map(|m| format!("{m:.2}")).collect();
             writeln!(
                 out,
-                "{:<34} {:>3} {:>6}  {:<23} {:>7.2} {:>7.2} {:>7.3} {:>7.3} {:>6.3} {:>5} {:>8.2} {:>8.2}",
+                "{:<34} {:>3} {:>6}  {:<23} {:>7.2} {:>7.2} {:>7.2} {:>7.3} {:>7.3} {:>6.3} {:>5} {:>8.2} {:>8.2}",
                 v.kernel,
                 v.threads,
                 v.segment_steps,
                 segs.join(" "),
                 v.median_mps,
+                v.speedup,
                 v.median_cpu_mps,
                 v.pairs_per_particle,
                 v.contacts_per_particle,
@@ -761,6 +849,42 @@ mod tests {
         assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
     }
 
+    /// A report of `kernel` on `threads` threads with these segments.
+    fn timed(kernel: &str, threads: usize, segment_mps: Vec<f64>) -> VariantReport {
+        VariantReport {
+            kernel: kernel.into(),
+            threads,
+            segment_steps: 1,
+            median_mps: median(&segment_mps),
+            segment_mps,
+            segment_cpu_mps: Vec::new(),
+            median_cpu_mps: 0.0,
+            speedup: 0.0,
+            pairs_per_particle: 0.0,
+            contacts_per_particle: 0.0,
+            wall_contacts_per_particle: 0.0,
+            rebuilds: 0,
+            setup_s: 0.0,
+            warmup_s: 0.0,
+            timed_s: 0.0,
+        }
+    }
+
+    #[test]
+    fn speedups_pair_the_segments_of_one_round() {
+        // Round 2 ran while the machine was slow: per round the 2-thread
+        // variant did 1.8, 2.0 and 1.7 times the 1-thread one, median 1.8;
+        // the ratio of the medians would be 17 / 10 = 1.7.
+        let mut v = vec![
+            timed("a", 1, vec![10.0, 5.0, 10.0]),
+            timed("b", 1, vec![4.0, 4.0, 4.0]),
+            timed("a", 2, vec![18.0, 10.0, 17.0]),
+        ];
+        set_speedups(&mut v);
+        let speedups: Vec<f64> = v.iter().map(|v| v.speedup).collect();
+        assert_eq!(speedups, vec![1.0, 1.0, 18.0 / 10.0]);
+    }
+
     #[test]
     fn a_tiny_bed_settles_and_times() {
         let mut o = BenchOptions::deck(3);
@@ -774,6 +898,14 @@ mod tests {
         let r = run(&o, &mut std::io::sink()).unwrap();
         assert_eq!(r.variants.len(), 4);
         assert!(r.variants.iter().all(|v| v.median_mps > 0.0));
+        assert!(r.variants.iter().all(|v| v.segment_mps.len() == 2));
+        let one_thread: Vec<f64> = r
+            .variants
+            .iter()
+            .filter(|v| v.threads == 1)
+            .map(|v| v.speedup)
+            .collect();
+        assert_eq!(one_thread, vec![1.0, 1.0]);
         assert!(r.variants[0]
             .kernel
             .starts_with("jkr+mindlin+none+gravity+periodic"));
