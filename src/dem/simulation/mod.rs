@@ -15,8 +15,10 @@
 //! N = 50,000 ran 12–21 % faster than writing and gathering every pair's
 //! record (2026-11-25, three side-by-side runs), at 5,120 equally fast. On
 //! more than one thread the stages run on a `team` of threads that stays
-//! awake between them, member `t` always on tile `t` and on the matching
-//! share of the per-particle passes, instead of rayon's fork-join.
+//! awake between them, instead of rayon's fork-join. Each stage is cut
+//! into one job per member (a tile of the sweep, a run of the per-particle
+//! passes); member `t` first runs its own, the same particles in every
+//! stage, and then takes the job of a member that has not started yet.
 //!
 //! Tried and not kept (dense-bed benchmark, `repose bench`, this 2-vCPU
 //! builder):

@@ -32,7 +32,7 @@ pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boun
     neighbors: NeighborList<ContactHistory<N, R>>,
     /// Per pair: forces of the pairs that touch a head (see [`super::tiles`]).
     pair_forces: Vec<PairForce>,
-    /// How the pair sweep is cut into tiles, two per team member (see
+    /// How the pair sweep is cut into tiles, one per team member (see
     /// [`super::tiles`]); the kick and drift use the same cut, the gather
     /// one moved so that its shares cost the same.
     tiles: Tiles,

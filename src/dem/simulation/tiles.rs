@@ -2,7 +2,7 @@
 //! per-particle sums instead of passing through the per-pair buffer.
 //!
 //! Particles are cut into index ranges (tiles) with about the same number of
-//! pairs in each: two per member of the stepper's team (one tile on one
+//! pairs in each: one per member of the stepper's team (one tile on one
 //! thread). A tile's pairs are the rows of its particles
 //! (`[i, j]`, `i` in the tile, `j > i`), evaluated in pair order by one task.
 //! A particle that some pair of an *earlier* tile reaches is a *head* of its
