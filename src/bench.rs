@@ -254,6 +254,42 @@
 //! resistance 10.20, with CDT 10.27, with EPSD 9.57; the JKR kernel 6.19,
 //! 6.15 and 6.23 (before: 4.18 with CDT, side by side 4.18 against 6.29).
 //! The JKR kernel now takes 1.65× the time of the Hertz one.
+//!
+//! # Measured 2026-11-26, 11:25–11:42 (the team, one job per member; segments in rounds)
+//!
+//! 7e53417: the stages run on a persistent team of threads, one tile per
+//! member; the benchmark runs its segments in rounds, so each 2-thread
+//! segment is paired with the 1-thread segment just before it. Five
+//! segments per variant, LIGGGHTS right after repose at each size, one
+//! process at a time on a host that was loaded throughout (LIGGGHTS ran
+//! 3.2–3.6 Mps/s at 20,480, against 4.1–4.4 in the quiet windows above).
+//! Mps/s, median of the segments; speedup = median of the per-round ratios:
+//!
+//! | N       | repose 1 thr            | repose 2 thr               | speedup                | LIGGGHTS | ratio 1 thr |
+//! |---------|-------------------------|----------------------------|------------------------|----------|-------------|
+//! | 5,120   | 9.48, 9.31, 9.52, 10.08 | 17.36, 14.56, 16.42, 15.04 | 1.78, 1.55, 1.83, 1.45 | 4.55     | 2.05–2.22   |
+//! | 20,480  | 8.82                    | 16.37                      | 1.92                   | 3.50     | 2.52        |
+//! | 50,000  | 8.20                    | 15.77                      | 1.86                   | 3.25     | 2.52        |
+//! | 100,820 | 7.25                    | 12.59                      | 1.74                   |          |             |
+//!
+//! Per-round ratios at 5,120 in the first and third runs: 1.78, 1.85,
+//! 1.86, 1.49, 1.09 and 1.84, 1.84, 1.32, 2.00, 1.81; the rounds whose
+//! segments the host left alone give 1.78–1.86, and a disturbed round
+//! drops to 1.1–1.5 (a member kept off its CPU holds up every stage it
+//! has a job in). At 50,000 the rounds gave 1.73, 1.86, 1.86, 1.98, 1.85.
+//! The ratios to LIGGGHTS are inflated by the loaded window; the quiet
+//! windows above give 2.1–2.3.
+//!
+//! What the second thread costs: with `t` tiles the pair sweep has `t`
+//! boundaries (the last one the periodic wrap), and about one cell slab of
+//! particles beyond each is a head, gathered from the pair buffer at about
+//! three times the cost of a particle whose sum is ready. Counted on the
+//! settled bed with four tiles: 16.9 % heads at 5,120, 8.2 % at 20,480,
+//! 5.3 % at 50,000, 3.8 % at 100,820 (28.4, 13.9, 8.9 and 6.3 % of the
+//! listed pairs buffered); two tiles have two boundaries instead of four,
+//! so about half as many (not counted). One thread has no
+//! heads, so the per-particle pass does more work on two threads than on
+//! one, most at 5,120 — the size whose speedup stays below 1.9.
 
 use std::io::Write;
 use std::time::Instant;
