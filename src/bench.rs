@@ -630,7 +630,7 @@ pub fn run(
             timing.segment(options, round, progress)?;
         }
     }
-    let mut variants: Vec<VariantReport> = timings.into_iter().map(VariantTiming::finish).collect();
+    let mut variants: Vec<VariantReport> = timings.into_iter().map(|t| t.finish(options)).collect();
     set_speedups(&mut variants);
     Ok(BenchReport {
         n: options.n,
@@ -659,15 +659,22 @@ fn check(options: &BenchOptions) -> Result<(), BenchError> {
     Ok(())
 }
 
-/// One variant being timed: its pool, its simulation and the report so far.
+/// One variant being timed: its pool, its simulation and what its segments
+/// measured so far.
 struct VariantTiming {
     pool: ThreadPool,
     sim: Simulation,
-    /// Spheres, as a float for throughputs.
-    particles: f64,
+    threads: usize,
     /// Neighbour rebuilds before the first timed segment.
     rebuilds_before: u64,
-    report: VariantReport,
+    /// Set-up and warm-up wall times, s.
+    setup_s: f64,
+    warmup_s: f64,
+    /// Per segment: M particle-steps per wall second and per CPU second.
+    segment_mps: Vec<f64>,
+    segment_cpu_mps: Vec<f64>,
+    /// Wall time of the timed segments so far, s.
+    timed_s: f64,
 }
 
 impl VariantTiming {
@@ -689,30 +696,22 @@ impl VariantTiming {
             sim.advance(options.warmup)?;
             Ok((sim, setup_s, t1.elapsed().as_secs_f64()))
         })?;
-        let report = VariantReport {
-            kernel: sim.kernel_name(),
-            threads,
-            segment_steps: options.segment_steps(),
-            segment_mps: Vec::with_capacity(options.segments),
-            median_mps: 0.0,
-            segment_cpu_mps: Vec::with_capacity(options.segments),
-            median_cpu_mps: 0.0,
-            speedup: 1.0,
-            pairs_per_particle: 0.0,
-            contacts_per_particle: 0.0,
-            wall_contacts_per_particle: 0.0,
-            rebuilds: 0,
-            setup_s,
-            warmup_s,
-            timed_s: 0.0,
-        };
         Ok(Self {
             pool,
-            particles: settled.particles.len() as f64,
+            threads,
             rebuilds_before: sim.stats().rebuilds,
             sim,
-            report,
+            setup_s,
+            warmup_s,
+            segment_mps: Vec::with_capacity(options.segments),
+            segment_cpu_mps: Vec::with_capacity(options.segments),
+            timed_s: 0.0,
         })
+    }
+
+    /// Spheres in the bed, as a float for throughputs.
+    fn particles(&self) -> f64 {
+        self.sim.world().particles.len() as f64
     }
 
     /// Times segment `round` (0-based) in the variant's pool.
@@ -722,47 +721,57 @@ impl VariantTiming {
         round: usize,
         progress: &mut (dyn Write + Send),
     ) -> Result<(), BenchError> {
-        let steps = self.report.segment_steps;
-        let work = self.particles * steps as f64 / 1e6;
+        let steps = options.segment_steps();
+        let work = self.particles() * steps as f64 / 1e6;
         let sim = &mut self.sim;
         let (t, cpu) = (Instant::now(), process_cpu_s());
         self.pool.install(|| sim.advance(steps))?;
         let wall_s = t.elapsed().as_secs_f64();
+        let mps = work / wall_s;
         let cpu_mps = cpu
             .zip(process_cpu_s())
             .map(|(a, b)| work / (b - a).max(1e-2));
-        let r = &mut self.report;
         writeln!(
             progress,
-            "  {}, {} thread(s), segment {} of {}: {:.2} M particle-steps/s, {:.2} per CPU s",
-            r.kernel,
-            r.threads,
+            "  {}, {} thread(s), segment {} of {}: {mps:.2} M particle-steps/s, {:.2} per CPU s",
+            self.sim.kernel_name(),
+            self.threads,
             round + 1,
             options.segments,
-            work / wall_s,
             cpu_mps.unwrap_or(0.0)
         )?;
-        r.segment_mps.push(work / wall_s);
-        r.segment_cpu_mps.extend(cpu_mps);
-        r.timed_s += wall_s;
+        self.segment_mps.push(mps);
+        self.segment_cpu_mps.extend(cpu_mps);
+        self.timed_s += wall_s;
         Ok(())
     }
 
-    /// The report, with medians and the bed's contacts at the end.
-    fn finish(self) -> VariantReport {
-        let mut r = self.report;
+    /// The variant's report (speedup 1 until [`set_speedups`]), with the
+    /// bed's contacts at the end.
+    fn finish(self, options: &BenchOptions) -> VariantReport {
+        let n = self.particles();
         let s = self.sim.stats();
-        r.median_mps = median(&r.segment_mps);
-        r.median_cpu_mps = if r.segment_cpu_mps.is_empty() {
-            0.0
-        } else {
-            median(&r.segment_cpu_mps)
-        };
-        r.pairs_per_particle = s.contacts as f64 / self.particles;
-        r.contacts_per_particle = 2.0 * r.pairs_per_particle;
-        r.wall_contacts_per_particle = s.wall_contacts as f64 / self.particles;
-        r.rebuilds = s.rebuilds - self.rebuilds_before;
-        r
+        VariantReport {
+            kernel: self.sim.kernel_name(),
+            threads: self.threads,
+            segment_steps: options.segment_steps(),
+            median_mps: median(&self.segment_mps),
+            segment_mps: self.segment_mps,
+            median_cpu_mps: if self.segment_cpu_mps.is_empty() {
+                0.0
+            } else {
+                median(&self.segment_cpu_mps)
+            },
+            segment_cpu_mps: self.segment_cpu_mps,
+            speedup: 1.0,
+            pairs_per_particle: s.contacts as f64 / n,
+            contacts_per_particle: 2.0 * s.contacts as f64 / n,
+            wall_contacts_per_particle: s.wall_contacts as f64 / n,
+            rebuilds: s.rebuilds - self.rebuilds_before,
+            setup_s: self.setup_s,
+            warmup_s: self.warmup_s,
+            timed_s: self.timed_s,
+        }
     }
 }
 

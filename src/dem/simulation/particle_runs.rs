@@ -84,33 +84,28 @@ impl<H: Copy + Default> ParticleRecords<H> {
         if self.kick.len() == order.len() {
             apply_permutation(order, &mut self.kick);
         }
-        let slots = self.wall_slots;
-        let old = std::mem::take(&mut self.wall_history);
-        self.wall_history = order
-            .iter()
-            .flat_map(|&o| {
-                old[o as usize * slots..(o as usize + 1) * slots]
-                    .iter()
-                    .copied()
-            })
-            .collect();
+        self.gather_wall_history(order.iter().map(|&o| o as usize));
     }
 
     /// Keeps the wall histories of the particles flagged in `kept` (all
-    /// when `None`), in order, and gives each of the `particles` particles
-    /// after them (new ones) empty histories.
+    /// when `None`), in order, then gives empty histories to the particles
+    /// beyond them up to `particles` (the ones just added).
     pub(super) fn keep(&mut self, kept: Option<&[bool]>, particles: usize) {
-        let slots = self.wall_slots;
         if let Some(mask) = kept {
-            let old = std::mem::take(&mut self.wall_history);
-            self.wall_history = mask
-                .iter()
-                .enumerate()
-                .filter(|(_, k)| **k)
-                .flat_map(|(i, _)| old[i * slots..(i + 1) * slots].iter().copied())
-                .collect();
+            self.gather_wall_history(mask.iter().enumerate().filter(|(_, k)| **k).map(|(i, _)| i));
         }
-        self.wall_history.resize(particles * slots, H::default());
+        self.wall_history
+            .resize(particles * self.wall_slots, H::default());
+    }
+
+    /// Replaces the wall histories by those of the old particle indices
+    /// `from`, in that order.
+    fn gather_wall_history(&mut self, from: impl Iterator<Item = usize>) {
+        let slots = self.wall_slots;
+        let old = std::mem::take(&mut self.wall_history);
+        self.wall_history = from
+            .flat_map(|i| old[i * slots..(i + 1) * slots].iter().copied())
+            .collect();
     }
 
     /// The state of the particles `p` and these records cut into runs at
