@@ -842,14 +842,7 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
 
         // Stable counting sort by cell.
         let nc = grid.n_cells();
-        s.cell_start.clear();
-        s.cell_start.resize(nc + 1, 0);
-        for &c in &s.cell_of {
-            s.cell_start[c as usize + 1] += 1;
-        }
-        for c in 0..nc {
-            s.cell_start[c + 1] += s.cell_start[c];
-        }
+        offsets_of(&mut s.cell_start, nc, s.cell_of.iter().map(|&c| c as usize));
         s.sorted.resize(n, 0);
         s.sorted_xr.resize(n, [0.0; 4]);
         // cell_start[c] doubles as the fill cursor of cell c ...
@@ -932,8 +925,6 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         if s.chunk_pairs.len() < n_chunks {
             s.chunk_pairs.resize_with(n_chunks, Vec::new);
         }
-        self.row_start.clear();
-        self.row_start.resize(n + 1, 0);
         let (cell_start, sorted, sorted_xr) = (&s.cell_start, &s.sorted, &s.sorted_xr);
         let periodic = domain.any_periodic();
         let cs = |cell: usize| cell_start[cell] as usize;
@@ -1037,12 +1028,11 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         if total >= (1usize << 31) {
             return Err(NeighborError::TooManyPairs { count: total });
         }
-        for p in chunks.iter().flatten() {
-            self.row_start[p[0] as usize + 1] += 1;
-        }
-        for i in 0..n {
-            self.row_start[i + 1] += self.row_start[i];
-        }
+        offsets_of(
+            &mut self.row_start,
+            n,
+            chunks.iter().flatten().map(|p| p[0] as usize),
+        );
         std::mem::swap(&mut self.pairs, &mut s.old_pairs);
         std::mem::swap(&mut self.history, &mut s.old_history);
         self.pairs.clear();
@@ -1132,21 +1122,18 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         // Express the old pairs in new indices and sort them by (i, j): counting sort by
         // i, then sort each (short) row by j, rows in parallel.
         let n = self.row_start.len() - 1;
-        s.rem_start.clear();
-        s.rem_start.resize(n + 1, 0);
         let carry = &s.carry;
         let mapped = |p: &[u32; 2]| {
             let (a, b) = (carry[p[0] as usize], carry[p[1] as usize]);
             (a != u32::MAX && b != u32::MAX).then_some(if a < b { (a, b) } else { (b, a) })
         };
-        for p in &s.old_pairs {
-            if let Some((a, _)) = mapped(p) {
-                s.rem_start[a as usize + 1] += 1;
-            }
-        }
-        for i in 0..n {
-            s.rem_start[i + 1] += s.rem_start[i];
-        }
+        offsets_of(
+            &mut s.rem_start,
+            n,
+            s.old_pairs
+                .iter()
+                .filter_map(|p| Some(mapped(p)?.0 as usize)),
+        );
         let m = s.rem_start[n] as usize;
         s.rem.clear();
         s.rem.resize(m, [0; 3]);
@@ -1242,6 +1229,24 @@ where
                 };
             }
         });
+}
+
+/// Fills `offsets` with the CSR offsets of `keys` in `bins` bins (len =
+/// bins + 1): `offsets[b]` is how many keys are below `b`, so bin `b`'s
+/// entries go to `offsets[b]..offsets[b + 1]` of a counting sort.
+pub(crate) fn offsets_of(
+    offsets: &mut Vec<u32>,
+    bins: usize,
+    keys: impl IntoIterator<Item = usize>,
+) {
+    offsets.clear();
+    offsets.resize(bins + 1, 0);
+    for key in keys {
+        offsets[key + 1] += 1;
+    }
+    for b in 0..bins {
+        offsets[b + 1] += offsets[b];
+    }
 }
 
 /// Re-orders `v` by `perm` (`perm[new] = old`, as from [`NeighborList::cell_order`]):

@@ -9,16 +9,21 @@
 //! force, kick), health. Within one `advance`, the gather also runs the next
 //! step's kick and drift, saving a pass over the particles; the operations and
 //! their order are unchanged. The pair stage adds each pair's forces straight
-//! into per-particle sums, one task per tile of particles, and writes a
-//! per-pair record only where a pair touches a particle another tile also
-//! reaches (`tiles`): on one thread there are no such records at all, which at
-//! N = 50,000 ran 12–21 % faster than writing and gathering every pair's
-//! record (2026-11-25, three side-by-side runs), at 5,120 equally fast. On
+//! into per-particle sums: a particle's own sum for the pairs of its own
+//! block of particles and a partial sum for each earlier block whose pairs
+//! reach it (`tiles`), so no pair's forces are ever written to a buffer and
+//! read back (a buffer of every pair's forces, gathered per particle, ran
+//! 12–21 % slower at N = 50,000 on one thread, 2026-11-25). The blocks depend on the particle count alone; on more than
+//! one thread the sweep runs one tile (a run of whole blocks) per thread.
+//! Until 2026-11-26 the sums followed the tiles instead, and the particles
+//! one tile's pairs reached in another were gathered from a per-pair buffer
+//! on two threads but not on one: at 5,120 particles the second thread then
+//! added 1.6–1.9 instead of 2 (the pair sweep alone now scales 1.98×). On
 //! more than one thread the stages run on a `team` of threads that stays
-//! awake between them, instead of rayon's fork-join. Each stage is cut
-//! into one job per member (a tile of the sweep, a run of the per-particle
-//! passes); member `t` first runs its own, the same particles in every
-//! stage, and then takes the job of a member that has not started yet.
+//! awake between them, instead of rayon's fork-join. Each stage is cut into
+//! one job per member (a tile of the sweep, an equal share of the particles
+//! in the per-particle passes); member `t` first runs its own and then takes
+//! the job of a member that has not started yet.
 //!
 //! Tried and not kept (dense-bed benchmark, `repose bench`, this 2-vCPU
 //! builder):
@@ -61,11 +66,12 @@
 //!   samples at 5,120 as a call of its own): −1 % at 5,120, within noise.
 //!
 //! Determinism: each particle sums its pairs in the neighbour list's fixed
-//! order, either straight from the pair kernel (a particle whose pairs one
-//! task evaluates) or from a per-pair buffer (a tile's head, see `tiles`), so
-//! there are no accumulation races and the order never depends on the thread
-//! count; reductions are either exact (max, counts) or summed serially. The
-//! result is bit-identical on any number of threads.
+//! order, its own block's pairs in its own sum and each earlier block's in a
+//! partial, and adds its partials in block order (see `tiles`); the blocks
+//! never depend on the thread count, so there are no accumulation races and
+//! no order that changes with the threads; reductions are either exact (max,
+//! counts) or summed serially. The result is bit-identical on any number of
+//! threads.
 
 use crate::dem::contact::normal_hertz::Hertz;
 use crate::dem::contact::normal_jkr::Jkr;
@@ -89,6 +95,7 @@ mod team;
 mod tiles;
 
 use stepper::Stepper;
+pub use tiles::blocks_for as sweep_blocks;
 
 /// Everything the engine simulates: particles, walls, the domain and the clock.
 #[derive(Clone, Debug)]

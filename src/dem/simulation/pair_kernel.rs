@@ -63,10 +63,9 @@ pub(super) struct PairForce {
 
 /// Where the pair kernel puts each listed pair's result.
 pub(super) trait PairSink {
-    /// Pair `pair` (global index) between particles `i < j` carries `force`.
-    fn put(&mut self, pair: usize, i: usize, j: usize, force: &PairForce);
-    /// Pair `pair` between `i` and `j` is out of contact (no force).
-    fn skip(&mut self, pair: usize, i: usize, j: usize);
+    /// The pair of particles `i < j` carries `force` (pairs out of contact
+    /// are not handed over).
+    fn put(&mut self, i: usize, j: usize, force: &PairForce);
 }
 
 /// Contacts evaluated side by side in the pair kernel (one AVX2 register of
@@ -223,9 +222,7 @@ impl<B: Boundary> PairKernel<'_, B> {
                     force_on_first: c.force.lane(l),
                     torque: [torque_i.lane(l), torque_j.lane(l)],
                 };
-                sink.put(first + l, i, j, &force);
-            } else {
-                sink.skip(first + l, i, j);
+                sink.put(i, j, &force);
             }
         }
         found
@@ -243,19 +240,16 @@ mod tests {
     use crate::dem::effects::Periodic;
     use rand::{Rng, SeedableRng};
 
-    /// Every pair the kernel hands over, as bits: (pair, i, j, force and
-    /// torques or `None` for a skipped pair).
+    /// Every pair the kernel hands over, in order, as bits: (i, j, force
+    /// and torques).
     #[derive(Default, PartialEq, Debug)]
-    struct Recorder(Vec<(usize, usize, usize, Option<[u64; 9]>)>);
+    struct Recorder(Vec<(usize, usize, [u64; 9])>);
 
     impl PairSink for Recorder {
-        fn put(&mut self, pair: usize, i: usize, j: usize, f: &PairForce) {
+        fn put(&mut self, i: usize, j: usize, f: &PairForce) {
             let v = [f.force_on_first, f.torque[0], f.torque[1]];
             let bits = std::array::from_fn(|k| v[k / 3][k % 3].to_bits());
-            self.0.push((pair, i, j, Some(bits)));
-        }
-        fn skip(&mut self, pair: usize, i: usize, j: usize) {
-            self.0.push((pair, i, j, None));
+            self.0.push((i, j, bits));
         }
     }
 

@@ -1,9 +1,8 @@
 //! The per-particle state a step updates: the stepper's own records
 //! ([`ParticleRecords`]) beside the particles' state, cut into runs of
-//! consecutive particles, one run per job of the team: at the tiles of the
-//! pair sweep, or at the gather's cut (`Tiles::gather_bounds`), which moves
-//! the tiles' so that the shares cost the same. Either way a member mostly
-//! finishes the particles whose forces it summed.
+//! consecutive particles, one run per job of the team (equal shares of the
+//! particles, `Tiles::shares`; with tiles of about equal pairs a member
+//! mostly finishes the particles whose forces it summed).
 
 use super::pair_kernel::{Kick, Motion, Sphere};
 use super::tiles::Accumulated;
@@ -25,7 +24,7 @@ pub(super) struct ParticleRecords<H> {
     pub(super) wall_history: Vec<H>,
     /// `max(walls, 1)`, so a particle's run of wall history is never empty.
     pub(super) wall_slots: usize,
-    /// Per particle: the pair-force sums of the sweep's non-heads (see
+    /// Per particle: its own sum of the sweep's pair forces (see
     /// [`super::tiles`]); empty before the first sweep.
     pub(super) sums: Vec<Accumulated>,
 }

@@ -1,7 +1,7 @@
 //! One monomorphised kernel: the state and stages of a simulation with fixed
 //! effects.
 
-use super::pair_kernel::{Motion, PairForce, PairKernel, Sphere};
+use super::pair_kernel::{Motion, PairKernel, Sphere};
 use super::particle_runs::ParticleRecords;
 use super::team::{run_jobs, Team, JOBS_PER_MEMBER};
 use super::tiles::{Accumulated, Tiles};
@@ -14,7 +14,7 @@ use crate::dem::domain::Domain;
 use crate::dem::effects::{BodyForce, Boundary};
 use crate::dem::health::{HealthCause, HealthError, HealthLimits, ENERGY_CHECK_INTERVAL};
 use crate::dem::material::harmonic;
-use crate::dem::neighbor::{NeighborError, NeighborList, PairRef};
+use crate::dem::neighbor::{NeighborError, NeighborList};
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::PlacedWall;
 
@@ -30,11 +30,12 @@ pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boun
     dt: f64,
     body: G,
     neighbors: NeighborList<ContactHistory<N, R>>,
-    /// Per pair: forces of the pairs that touch a head (see [`super::tiles`]).
-    pair_forces: Vec<PairForce>,
-    /// How the pair sweep is cut into tiles, one per team member (see
-    /// [`super::tiles`]); the kick and drift use the same cut, the gather
-    /// one moved so that its shares cost the same.
+    /// Partial sums of the pairs that reach a particle from an earlier block
+    /// (see [`super::tiles`]).
+    partials: Vec<Accumulated>,
+    /// How the pair sweep is cut into blocks and tiles, one tile per team
+    /// member, and the per-particle passes into shares (see
+    /// [`super::tiles`]).
     tiles: Tiles,
     /// The threads that run the stages on more than one thread (see
     /// [`super::team`]); `None` on one.
@@ -118,7 +119,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             dt: setup.dt_s,
             body,
             neighbors,
-            pair_forces: Vec::new(),
+            partials: Vec::new(),
             tiles: Tiles::default(),
             team: None,
             placed: Vec::new(),
@@ -179,7 +180,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     fn kick_and_drift(&mut self, world: &mut World) -> Result<bool, HealthError> {
         self.cut_tiles();
         let drift = Drift::<B>::new(world.domain, self.dt, &self.neighbors);
-        let runs = self.records.runs(&mut world.particles, self.tiles.bounds());
+        let runs = self.records.runs(&mut world.particles, self.tiles.shares());
         let (left, moved) = run_jobs(self.team.as_ref(), runs, |run| {
             let mut found = (None, false);
             for (k, ((((x, v), w), (f, t)), ((sphere, motion), kick))) in run
@@ -278,8 +279,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .rebuild(&p.position, &p.radius, &p.id, &world.domain)
     }
 
-    /// Pair forces into the per-particle sums and, for tile heads, the
-    /// per-pair buffer; then per particle: gather, walls, body force, second
+    /// Pair forces into the per-particle sums and partials; then per
+    /// particle: its pair sum, walls, body force, second
     /// half kick, finiteness check, and with `drift` the next step's first
     /// half kick and drift. Returns whether that drift moved
     /// some particle far enough to need a neighbour rebuild.
@@ -344,10 +345,11 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         };
         let g = self.body.acceleration();
         let (pairs, history) = self.neighbors.pairs_and_history_mut();
-        self.pair_forces.resize(pairs.len(), PairForce::default());
+        self.partials
+            .resize(self.tiles.partial_count(), Accumulated::default());
         let sums = &mut self.records.sums;
         sums.resize(world.particles.len(), Accumulated::default());
-        let jobs = self.tiles.jobs(pairs, history, &mut self.pair_forces, sums);
+        let jobs = self.tiles.jobs(pairs, history, &mut self.partials, sums);
         run_jobs(self.team.as_ref(), jobs, |mut job| {
             job.sink.start(g, kernel.motion);
             let first_pair = job.sink.first_pair();
@@ -357,7 +359,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         .fold((0, (0.0, usize::MAX)), |a, b| (a.0 + b.0, worse(a.1, b.1)))
     }
 
-    /// Per particle: its pair sum (a head's gathered from the buffer), walls,
+    /// Per particle: its pair sum (own sum plus partials), walls,
     /// second half kick and finiteness check; with `drift` also the next
     /// step's first half kick and drift (forces and torques are then not
     /// stored: the next force pass replaces them), else the forces and
@@ -369,17 +371,14 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .extend(world.walls.iter().map(|w| w.placed_at(t)));
         let dt = self.dt;
         let slots = self.records.wall_slots;
-        let g = self.body.acceleration();
         let placed = &self.placed;
         let wall_coef = &self.wall_coefficients;
         let wall_reach = &self.wall_reach;
-        let buffer = &self.pair_forces;
+        let partials = &self.partials;
         let tiles = &self.tiles;
         let neighbors = &self.neighbors;
         let drift = drift.then(|| Drift::<B>::new(world.domain, dt, neighbors));
-        let runs = self
-            .records
-            .runs(&mut world.particles, tiles.gather_bounds());
+        let runs = self.records.runs(&mut world.particles, tiles.shares());
         run_jobs(self.team.as_ref(), runs, |run| {
             let mut found = GatherFound::default();
             for (offset, (((((((f, t), v), w), x), hist), (sphere, motion)), (kick, sum))) in run
@@ -397,11 +396,11 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                 let i = run.first + offset;
                 let (xc, r, m) = (sphere.x, sphere.r, motion.m);
                 let (ve, we) = (motion.v, motion.w);
-                let (mut force, mut torque) = if tiles.is_head(i) {
-                    sum_pair_forces(neighbors.incident(i), buffer, g * m)
-                } else {
-                    (sum.force, sum.torque)
-                };
+                let (mut force, mut torque) = (sum.force, sum.torque);
+                for k in tiles.partials_of(i) {
+                    force += partials[k].force;
+                    torque += partials[k].torque;
+                }
                 for (k, wall) in placed.iter().enumerate() {
                     let Some(wc) = wall.contact(xc, r, wall_reach[k]) else {
                         // Most particles touch no wall: leave their empty
@@ -577,27 +576,6 @@ fn hertz_energy(e_star: f64, r_star: f64, overlap: f64) -> f64 {
     } else {
         8.0 / 15.0 * e_star * r_star.sqrt() * overlap.powf(2.5)
     }
-}
-
-/// `start` plus the force and the torque of each listed pair on one particle,
-/// in the order of its gather list (N, N·m).
-#[inline(always)]
-fn sum_pair_forces(incident: &[PairRef], buffer: &[PairForce], start: Vec3) -> (Vec3, Vec3) {
-    let (mut fx, mut fy, mut fz) = (start.x, start.y, start.z);
-    let (mut tx, mut ty, mut tz) = (0.0, 0.0, 0.0);
-    for e in incident {
-        let pf = &buffer[e.pair()];
-        // Branch-free: x + (−1)·f is bit-identical to x − f.
-        let sign = e.sign();
-        let t = &pf.torque[usize::from(!e.is_first())];
-        fx += pf.force_on_first.x * sign;
-        fy += pf.force_on_first.y * sign;
-        fz += pf.force_on_first.z * sign;
-        tx += t.x;
-        ty += t.y;
-        tz += t.z;
-    }
-    (Vec3::new(fx, fy, fz), Vec3::new(tx, ty, tz))
 }
 
 /// The first half kick and the drift.

@@ -50,19 +50,15 @@ unsafe impl Send for TaskRef {}
 /// [`Team::for_each`]).
 ///
 /// Two per member let a member take over the second half of a held-up
-/// share, but every extra tile adds a boundary whose heads (particles
-/// reached from the tile before, see `tiles`) are gathered from the pair
-/// buffer at about three times the cost of a particle whose sum is ready:
-/// with four tiles, 16.9 % of the particles are heads at 5,120 and 5.3 % at
-/// 50,000 (8.9 % of the listed pairs buffered), about twice as many as with
-/// two. Interleaved runs on 2026-11-26 (`repose bench --threads 1,2
-/// --segments 5`, two-thread speedup per round, 10:58–11:08 on a loaded
-/// host): one job per member 1.61, 1.67, 1.70 at 5,120 and 1.48, 1.65,
-/// 1.93 at 50,000; two per member 1.48, 1.42, 1.52 and 1.80, 1.76, 1.78.
-/// In the quietest round, the last, one job won at both sizes, as in the
-/// morning's runs at 50,000 (16.8 and 16.4 Mps/s on two threads against
-/// 14.5 and 15.2); two jobs held up better while another process kept a
-/// core busy (7.2 against 6.2 Mps/s at 5,120, where one thread did 10.1).
+/// share. Measured while every extra tile boundary still cost the particles
+/// beyond it a gather from a per-pair buffer (before the blocks of `tiles`,
+/// which now fix the sums whatever the tiles): interleaved runs on
+/// 2026-11-26 (`repose bench --threads 1,2 --segments 5`, two-thread
+/// speedup per round, 10:58–11:08 on a loaded host) gave 1.61, 1.67, 1.70
+/// at 5,120 and 1.48, 1.65, 1.93 at 50,000 with one job per member, and
+/// 1.48, 1.42, 1.52 and 1.80, 1.76, 1.78 with two. With blocks a second
+/// job per member would cost nothing extra only where there are twice as
+/// many blocks as members, which 5,120 particles (two blocks) do not have.
 pub(super) const JOBS_PER_MEMBER: usize = 1;
 
 /// Runs `jobs` on `team` (see [`Team::for_each`]), or all of them here in

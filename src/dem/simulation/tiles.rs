@@ -1,145 +1,260 @@
-//! Tiles of the pair sweep: most pair forces are added straight into
-//! per-particle sums instead of passing through the per-pair buffer.
+//! Blocks and tiles of the pair sweep: every pair force goes straight into a
+//! per-particle sum, in an order that never depends on the threads.
 //!
-//! Particles are cut into index ranges (tiles) with about the same number of
-//! pairs in each: one per member of the stepper's team (one tile on one
-//! thread). A tile's pairs are the rows of its particles
-//! (`[i, j]`, `i` in the tile, `j > i`), evaluated in pair order by one task.
-//! A particle that some pair of an *earlier* tile reaches is a *head* of its
-//! tile: its sum has contributions that another task computes. For every pair
-//! touching a head the kernel writes the pair's forces to the per-pair
-//! buffer, and the head's sum is gathered from that buffer afterwards in pair
-//! order (the stepper's gather). Every other particle has its pairs' forces
-//! added to its [`Accumulated`] sum in the order the kernel meets them, which
-//! is also pair order. Both ways add the same terms in the same order as
-//! gathering every particle from the buffer, so the results do not depend on
-//! the tiles at all — they are bit-identical on any thread count — and only
-//! the memory traffic differs: a pair's 72-byte record is neither written nor
-//! read back unless it touches a head. On one thread there is one tile and no
-//! heads; on more, the heads are about one cell slab per tile boundary (plus
-//! the last slab of a periodic axis, which the first tile reaches).
+//! The particles are cut into *blocks*: index ranges with about the same
+//! number of pairs each, as many as [`blocks_for`] gives for the particle
+//! count (never for the thread count). A block's pairs are the rows of its
+//! particles (`[i, j]`, `i` in the block, `j > i`). Every particle has an own
+//! sum, started at the body force, of the pairs in its own block's rows, in
+//! pair order; and for every earlier block whose rows reach it (a slab at
+//! each block boundary, plus the last slab of a periodic axis, which the
+//! first block reaches) a *partial* sum of those pairs, in pair order,
+//! started at zero. Its total is its own sum plus its partials in block
+//! order. The blocks fix every term and every addition, so the result is
+//! bit-identical on any number of threads.
+//!
+//! The pair sweep is cut into *tiles*, one per team member: runs of whole
+//! blocks with about the same number of pairs. A tile writes the own sums of
+//! its particles and the partials of its blocks (partials are laid out block
+//! by block), so tiles run side by side without sharing a sum. On one thread
+//! the single tile still writes the partials: that is what keeps its result
+//! the same as on two.
+//!
+//! Why not a per-pair buffer for the particles other tiles reach (the design
+//! before 2026-11-26): their sums then had to follow the tiles' cut to stay
+//! in pair order, so one thread buffered nothing and two buffered every pair
+//! of 8–9 % of the particles at 5,120, each gathered at three times the cost
+//! of a ready sum — the second thread's extra work. A partial costs one more
+//! addition of a 48-byte sum per reached particle and block, on any number
+//! of threads.
 
 use super::pair_kernel::{Motion, PairForce, PairSink};
+use crate::dem::neighbor::offsets_of;
 use crate::dem::vec3::Vec3;
 
-/// Cost of gathering a head (summing its pairs' records from the buffer)
-/// relative to a particle whose sum is ready. Measured on the 5,120-particle
-/// bench bed on two threads (2026-11-26): with 2 and 3, the two shares' gather
-/// profiles agree within 20 % and the step ran 17.9–18.7 Mps/s, against
-/// 12–16 with 0 and 13–15 with 1 (alternating runs on a noisy host).
-const HEAD_GATHER_COST: f64 = 3.0;
+/// Particles per block, at least: [`blocks_for`] gives the largest power of
+/// two of blocks that keeps each block this large. A block boundary costs a
+/// partial for about one cell slab of particles, on any thread count, and a
+/// team of more members than blocks leaves the extra members without a tile
+/// in the pair sweep.
+const PARTICLES_PER_BLOCK: usize = 2_500;
 
-/// How the pair sweep is cut into tiles, kept until the neighbour list is
-/// rebuilt or the thread count changes.
+/// Most blocks: enough tiles for a team of this many members.
+const MAX_BLOCKS: usize = 64;
+
+/// Blocks of the pair sweep for `particles` particles: the largest power of
+/// two (so that teams of 2, 4, 8... members split them evenly) with at least
+/// 2,500 particles per block, between 1 and 64. A team of more members than
+/// blocks sweeps the pairs on as many members as there are blocks (a scene
+/// of fewer than 5,000 particles on one), and the blocks, not the threads,
+/// fix the order in which each particle's pair forces are added.
+pub fn blocks_for(particles: usize) -> usize {
+    let most = (particles / PARTICLES_PER_BLOCK).clamp(1, MAX_BLOCKS);
+    1 << most.ilog2()
+}
+
+/// How the pair sweep is cut into blocks (kept until the neighbour list is
+/// rebuilt) and tiles (kept until then or until the team changes).
 #[derive(Clone, Debug, Default)]
 pub(super) struct Tiles {
-    /// First particle of each tile, then the particle count.
-    particles: Vec<usize>,
-    /// First pair of each tile, then the pair count.
-    pairs: Vec<usize>,
-    /// Per particle: a head of its tile.
-    head: Vec<bool>,
-    /// First particle of each share of the per-particle gather, then the
-    /// particle count (see [`gather_bounds`](Self::gather_bounds)).
-    gather: Vec<usize>,
-    /// (Neighbour build, tiles, particles, pairs) the cut is for.
-    cut_for: Option<(u64, usize, usize, usize)>,
+    /// First particle of each block, then the particle count.
+    block_particles: Vec<usize>,
+    /// First pair of each block, then the pair count.
+    block_pairs: Vec<usize>,
+    /// First partial of each block (partials are laid out by the block whose
+    /// rows they sum), then the partial count.
+    block_partials: Vec<usize>,
+    /// Per particle: its block.
+    block_of: Vec<u32>,
+    /// Per particle: where its partials start in `partial_of`, then the
+    /// partial count (CSR offsets, len = particles + 1).
+    partials_start: Vec<u32>,
+    /// Per particle, in block order: `[block, partial index]` of each of its
+    /// partials.
+    partial_of: Vec<[u32; 2]>,
+    /// Per particle: the last block found reaching it (scratch of the cut).
+    reached_by: Vec<u32>,
+    /// Per partial: its particle (scratch of the cut).
+    partial_particle: Vec<u32>,
+    /// First block of each tile, then the block count.
+    tile_blocks: Vec<usize>,
+    /// First particle of each share of the per-particle passes, then the
+    /// particle count.
+    shares: Vec<usize>,
+    /// (Neighbour build, particles, pairs) the blocks are for.
+    blocks_for: Option<(u64, usize, usize)>,
+    /// Tiles the tile cut is for (`None`: cut again).
+    tiles_for: Option<usize>,
 }
 
 impl Tiles {
-    /// Cuts `tiles` tiles, with about equal shares of the pairs, for
-    /// neighbour build number `build` with rows `rows` (CSR offsets, len =
-    /// particles + 1) and `pairs`; keeps the cut if it is for the same.
+    /// Cuts the blocks for neighbour build number `build` with rows `rows`
+    /// (CSR offsets, len = particles + 1) and `pairs`, and groups them into
+    /// `tiles` tiles; keeps what is already cut for the same.
     pub(super) fn cut(&mut self, build: u64, rows: &[u32], pairs: &[[u32; 2]], tiles: usize) {
+        let blocks_for = Some((build, rows.len() - 1, pairs.len()));
+        if self.blocks_for != blocks_for {
+            self.blocks_for = blocks_for;
+            self.cut_blocks(rows, pairs);
+            self.tiles_for = None;
+        }
+        if self.tiles_for != Some(tiles) {
+            self.tiles_for = Some(tiles);
+            self.group_tiles(tiles);
+        }
+    }
+
+    /// Blocks with about equal shares of the pairs, and the partials.
+    fn cut_blocks(&mut self, rows: &[u32], pairs: &[[u32; 2]]) {
         let n = rows.len() - 1;
         let total = pairs.len();
-        let cut_for = Some((build, tiles, n, total));
-        if self.cut_for == cut_for {
-            return;
-        }
-        self.cut_for = cut_for;
-        self.particles.clear();
-        self.particles.extend((0..tiles).map(|t| {
-            rows.partition_point(|&start| start as usize * tiles < total * t)
+        let blocks = blocks_for(n);
+        self.block_particles.clear();
+        self.block_particles.extend((0..blocks).map(|b| {
+            rows.partition_point(|&start| start as usize * blocks < total * b)
                 .min(n)
         }));
-        self.particles.push(n);
-        self.pairs.clear();
-        self.pairs
-            .extend(self.particles.iter().map(|&i| rows[i] as usize));
-        self.head.clear();
-        self.head.resize(n, false);
-        for (tile, range) in self.particles.windows(2).zip(self.pairs.windows(2)) {
-            for &[_, j] in &pairs[range[0]..range[1]] {
-                if j as usize >= tile[1] {
-                    self.head[j as usize] = true;
+        self.block_particles.push(n);
+        self.block_pairs.clear();
+        self.block_pairs
+            .extend(self.block_particles.iter().map(|&i| rows[i] as usize));
+        self.find_partials(pairs);
+    }
+
+    /// Each particle's block, and the partials of the blocks as cut.
+    fn find_partials(&mut self, pairs: &[[u32; 2]]) {
+        let n = *self.block_particles.last().expect("blocks are cut");
+        self.block_of.clear();
+        for (b, w) in self.block_particles.windows(2).enumerate() {
+            self.block_of.resize(w[1], b as u32);
+        }
+        // The partials, block by block, each particle once per block in the
+        // order the block's pairs first reach it.
+        self.reached_by.clear();
+        self.reached_by.resize(n, u32::MAX);
+        self.partial_particle.clear();
+        self.block_partials.clear();
+        for (b, w) in self.block_pairs.windows(2).enumerate() {
+            self.block_partials.push(self.partial_particle.len());
+            let b = b as u32;
+            for &[_, j] in &pairs[w[0]..w[1]] {
+                let reached = &mut self.reached_by[j as usize];
+                if self.block_of[j as usize] != b && *reached != b {
+                    *reached = b;
+                    self.partial_particle.push(j);
                 }
             }
         }
-        // Cut the gather where the cumulative cost, heads counted at
-        // HEAD_GATHER_COST, reaches each tile's share.
-        let cost = |i: usize| if self.head[i] { HEAD_GATHER_COST } else { 1.0 };
-        let total_cost: f64 = (0..n).map(cost).sum();
-        self.gather.clear();
-        let mut sum = 0.0;
-        let mut i = 0;
-        for t in 0..tiles {
-            let target = total_cost * t as f64 / tiles as f64;
-            while i < n && sum < target {
-                sum += cost(i);
-                i += 1;
+        self.block_partials.push(self.partial_particle.len());
+        // Per particle, its partials in block order (a counting sort).
+        offsets_of(
+            &mut self.partials_start,
+            n,
+            self.partial_particle.iter().map(|&j| j as usize),
+        );
+        self.partial_of.clear();
+        self.partial_of.resize(self.partial_particle.len(), [0, 0]);
+        let mut fill = self.partials_start.clone();
+        for (b, w) in self.block_partials.windows(2).enumerate() {
+            for k in w[0]..w[1] {
+                let slot = &mut fill[self.partial_particle[k] as usize];
+                self.partial_of[*slot as usize] = [b as u32, k as u32];
+                *slot += 1;
             }
-            self.gather.push(i);
         }
-        self.gather.push(n);
     }
 
-    /// First particle of each tile, then the particle count.
-    pub(super) fn bounds(&self) -> &[usize] {
-        &self.particles
+    /// `tiles` runs of whole blocks with about equal shares of the pairs
+    /// (some empty if there are fewer blocks), and as many equal shares of
+    /// the particles for the per-particle passes.
+    fn group_tiles(&mut self, tiles: usize) {
+        let n = *self.block_particles.last().expect("blocks are cut");
+        let total = *self.block_pairs.last().expect("blocks are cut");
+        let blocks = self.block_pairs.len() - 1;
+        self.tile_blocks.clear();
+        self.tile_blocks.extend((0..tiles).map(|t| {
+            // The block boundary nearest to the tile's share of the pairs
+            // (on a tie the later one, so that with one block the first
+            // tile, the caller's, sweeps it).
+            let target = total as f64 * t as f64 / tiles as f64;
+            let after = self
+                .block_pairs
+                .partition_point(|&p| (p as f64) < target)
+                .min(blocks);
+            let before = after.saturating_sub(1);
+            let (low, high) = (
+                self.block_pairs[before] as f64,
+                self.block_pairs[after] as f64,
+            );
+            if target - low < high - target {
+                before
+            } else {
+                after
+            }
+        }));
+        self.tile_blocks.push(blocks);
+        self.shares.clear();
+        self.shares.extend((0..=tiles).map(|t| n * t / tiles));
     }
 
-    /// First particle of each share of the gather, then the particle count:
-    /// the tiles' cut moved so that each share costs about the same, a head
-    /// counting as [`HEAD_GATHER_COST`] particles. Without the move, the
-    /// heads, all in later tiles, made the last share of two 1.5–2× as
-    /// costly as the first at 5,120 particles.
-    pub(super) fn gather_bounds(&self) -> &[usize] {
-        &self.gather
+    /// First particle of each share of the per-particle passes (kick, drift,
+    /// gather), then the particle count: equal shares, one per tile.
+    pub(super) fn shares(&self) -> &[usize] {
+        &self.shares
     }
 
-    /// Whether particle `i` is a head (its sum is gathered from the buffer).
+    /// The indices of particle `i`'s partials, in block order.
     #[inline]
-    pub(super) fn is_head(&self, i: usize) -> bool {
-        self.head[i]
+    pub(super) fn partials_of(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        let range = self.partials_start[i] as usize..self.partials_start[i + 1] as usize;
+        self.partial_of[range].iter().map(|&[_, k]| k as usize)
+    }
+
+    /// Partials in all (the length the partial sums need).
+    pub(super) fn partial_count(&self) -> usize {
+        *self.block_partials.last().unwrap_or(&0)
+    }
+
+    /// The index of particle `j`'s partial for the rows of block `b`.
+    #[inline(always)]
+    fn partial(&self, j: usize, b: u32) -> usize {
+        let range = self.partials_start[j] as usize..self.partials_start[j + 1] as usize;
+        let found = self.partial_of[range]
+            .iter()
+            .find(|&&[block, _]| block == b);
+        found.expect("a block reaching a particle has its partial")[1] as usize
     }
 
     /// One job per tile, from the sweep's pairs and their history, the
-    /// per-pair buffer and the per-particle sums (each as long as the cut's
-    /// pairs or particles).
+    /// partial sums and the own sums (each as long as the cut's pairs,
+    /// partials or particles).
     pub(super) fn jobs<'a, H>(
         &'a self,
         pairs: &'a [[u32; 2]],
         mut history: &'a mut [H],
-        mut buffer: &'a mut [PairForce],
+        mut partials: &'a mut [Accumulated],
         mut sums: &'a mut [Accumulated],
     ) -> Vec<TileJob<'a, H>> {
-        let mut jobs = Vec::with_capacity(self.particles.len());
-        for (tile, range) in self.particles.windows(2).zip(self.pairs.windows(2)) {
-            let len = range[1] - range[0];
-            let (h, rest_h) = std::mem::take(&mut history).split_at_mut(len);
-            let (b, rest_b) = std::mem::take(&mut buffer).split_at_mut(len);
-            let (s, rest_s) = std::mem::take(&mut sums).split_at_mut(tile[1] - tile[0]);
-            (history, buffer, sums) = (rest_h, rest_b, rest_s);
+        let mut jobs = Vec::with_capacity(self.tile_blocks.len());
+        for w in self.tile_blocks.windows(2) {
+            let (b0, b1) = (w[0], w[1]);
+            let pair_range = self.block_pairs[b0]..self.block_pairs[b1];
+            let (h, rest_h) = std::mem::take(&mut history).split_at_mut(pair_range.len());
+            let (p, rest_p) = std::mem::take(&mut partials)
+                .split_at_mut(self.block_partials[b1] - self.block_partials[b0]);
+            let (s, rest_s) = std::mem::take(&mut sums)
+                .split_at_mut(self.block_particles[b1] - self.block_particles[b0]);
+            (history, partials, sums) = (rest_h, rest_p, rest_s);
             jobs.push(TileJob {
-                pairs: &pairs[range[0]..range[1]],
+                pairs: &pairs[pair_range.clone()],
                 history: h,
                 sink: TileSink {
-                    first_particle: tile[0],
-                    first_pair: range[0],
-                    head: &self.head,
+                    first_particle: self.block_particles[b0],
+                    first_pair: pair_range.start,
+                    first_partial: self.block_partials[b0],
+                    tiles: self,
                     sums: s,
-                    buffer: b,
+                    partials: p,
                 },
             });
         }
@@ -155,8 +270,7 @@ pub(super) struct TileJob<'a, H> {
     pub(super) sink: TileSink<'a>,
 }
 
-/// One particle's sum of forces (N) and torques (N·m) over its pairs so far,
-/// started at the body force.
+/// A sum of forces (N) and torques (N·m) over pairs.
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Accumulated {
     pub(super) force: Vec3,
@@ -173,19 +287,21 @@ impl Accumulated {
     }
 }
 
-/// Where one tile's pair forces go: into the sums of the tile's non-head
-/// particles, and into the per-pair buffer for pairs touching a head.
+/// Where one tile's pair forces go: the own sums of its particles and the
+/// partials of its blocks.
 pub(super) struct TileSink<'a> {
     /// Index of the tile's first particle.
     first_particle: usize,
     /// Index of the tile's first pair.
     first_pair: usize,
-    /// Head flags of all particles.
-    head: &'a [bool],
-    /// The tile's particles' sums.
+    /// Index of the tile's first partial.
+    first_partial: usize,
+    /// The cut (blocks and partials of all particles).
+    tiles: &'a Tiles,
+    /// The tile's particles' own sums.
     sums: &'a mut [Accumulated],
-    /// The tile's pairs' slots in the per-pair buffer.
-    buffer: &'a mut [PairForce],
+    /// The tile's blocks' partials.
+    partials: &'a mut [Accumulated],
 }
 
 impl TileSink<'_> {
@@ -194,40 +310,32 @@ impl TileSink<'_> {
         self.first_pair
     }
 
-    /// Starts every sum of the tile at the body force `g · m` (N), with the
-    /// masses of `motion` (all particles' records).
+    /// Starts the own sums of the tile's particles at the body force `g · m`
+    /// (N), with the masses of `motion` (all particles' records), and its
+    /// partials at zero.
     pub(super) fn start(&mut self, g: Vec3, motion: &[Motion]) {
         for (s, p) in self.sums.iter_mut().zip(&motion[self.first_particle..]) {
             *s = Accumulated::body_force(g * p.m);
         }
+        self.partials.fill(Accumulated::default());
     }
 }
 
 impl PairSink for TileSink<'_> {
     #[inline(always)]
-    fn put(&mut self, pair: usize, i: usize, j: usize, force: &PairForce) {
-        let (head_i, head_j) = (self.head[i], self.head[j]);
-        if head_i || head_j {
-            self.buffer[pair - self.first_pair] = *force;
-        }
-        if !head_i {
-            let s = &mut self.sums[i - self.first_particle];
-            s.force += force.force_on_first;
-            s.torque += force.torque[0];
-        }
-        if !head_j {
-            // j is in this tile: a j of a later tile is a head there.
-            let s = &mut self.sums[j - self.first_particle];
-            s.force -= force.force_on_first;
-            s.torque += force.torque[1];
-        }
-    }
-
-    #[inline(always)]
-    fn skip(&mut self, pair: usize, i: usize, j: usize) {
-        if self.head[i] || self.head[j] {
-            self.buffer[pair - self.first_pair] = PairForce::default();
-        }
+    fn put(&mut self, i: usize, j: usize, force: &PairForce) {
+        // i's row is in its own block, so in this tile.
+        let s = &mut self.sums[i - self.first_particle];
+        s.force += force.force_on_first;
+        s.torque += force.torque[0];
+        let block = self.tiles.block_of[i];
+        let s = if self.tiles.block_of[j] == block {
+            &mut self.sums[j - self.first_particle]
+        } else {
+            &mut self.partials[self.tiles.partial(j, block) - self.first_partial]
+        };
+        s.force -= force.force_on_first;
+        s.torque += force.torque[1];
     }
 }
 
@@ -237,82 +345,112 @@ mod tests {
 
     /// CSR row offsets of `pairs` (sorted by first particle) for `n` particles.
     fn rows_of(pairs: &[[u32; 2]], n: usize) -> Vec<u32> {
-        let mut rows = vec![0u32; n + 1];
-        for &[i, _] in pairs {
-            rows[i as usize + 1] += 1;
-        }
-        for i in 0..n {
-            rows[i + 1] += rows[i];
-        }
+        let mut rows = Vec::new();
+        offsets_of(&mut rows, n, pairs.iter().map(|&[i, _]| i as usize));
         rows
     }
 
     #[test]
-    fn tiles_split_the_pairs_evenly_and_heads_are_the_particles_reached_from_earlier_tiles() {
-        // A chain 0-1-2-...-11 plus one long pair 0-11 (a periodic wrap).
-        let n = 12;
-        let mut pairs: Vec<[u32; 2]> = (0..11).map(|i| [i, i + 1]).collect();
-        pairs.insert(1, [0, 11]);
+    fn blocks_are_powers_of_two_of_at_least_the_block_size() {
+        assert_eq!(blocks_for(0), 1);
+        assert_eq!(blocks_for(2 * PARTICLES_PER_BLOCK - 1), 1);
+        assert_eq!(blocks_for(2 * PARTICLES_PER_BLOCK), 2);
+        assert_eq!(blocks_for(7 * PARTICLES_PER_BLOCK), 4);
+        assert_eq!(blocks_for(1000 * PARTICLES_PER_BLOCK), MAX_BLOCKS);
+    }
+
+    /// A chain 0-1-...-(n−1) plus a long pair 0-(n−1) (a periodic wrap), cut
+    /// into `blocks` blocks by hand (the cut's block count depends on the
+    /// particle count alone, and a test bed of thousands would hide the
+    /// structure).
+    fn chain_in_blocks(n: usize, blocks: usize) -> (Vec<[u32; 2]>, Tiles) {
+        let mut pairs: Vec<[u32; 2]> = (0..n as u32 - 1).map(|i| [i, i + 1]).collect();
+        pairs.insert(1, [0, n as u32 - 1]);
         let rows = rows_of(&pairs, n);
         let mut tiles = Tiles::default();
-        tiles.cut(1, &rows, &pairs, 3);
-        // 12 pairs in three tiles of 4: rows 0 (2 pairs), 1, 2 | 3, 4, 5, 6 | 7..11.
-        assert_eq!(tiles.particles, vec![0, 3, 7, 12]);
-        assert_eq!(tiles.pairs, vec![0, 4, 8, 12]);
-        let heads: Vec<usize> = (0..n).filter(|&i| tiles.is_head(i)).collect();
-        // 3 and 7 are reached from the tile before; 11 from the first tile.
-        assert_eq!(heads, vec![3, 7, 11]);
-        // The gather's shares cost the same, each within one head of a third.
-        let cost = |i: usize| {
-            if tiles.is_head(i) {
-                HEAD_GATHER_COST
-            } else {
-                1.0
-            }
-        };
-        let total: f64 = (0..n).map(cost).sum();
-        let bounds = tiles.gather_bounds();
-        assert_eq!((bounds.len(), bounds[0], bounds[3]), (4, 0, n));
-        for w in bounds.windows(2) {
-            let share: f64 = (w[0]..w[1]).map(cost).sum();
-            assert!(
-                (share - total / 3.0).abs() < HEAD_GATHER_COST,
-                "{bounds:?}: share {share} of {total}"
-            );
-        }
-        // One tile: no heads.
         tiles.cut(1, &rows, &pairs, 1);
-        assert!((0..n).all(|i| !tiles.is_head(i)));
-        assert_eq!(tiles.particles, vec![0, 12]);
+        assert_eq!(
+            tiles.block_particles,
+            vec![0, n],
+            "{n} particles: one block"
+        );
+        // The same cut with `blocks` blocks.
+        let total = pairs.len();
+        tiles.block_particles = (0..blocks)
+            .map(|b| rows.partition_point(|&s| s as usize * blocks < total * b))
+            .chain([n])
+            .collect();
+        let rows_u: Vec<usize> = rows.iter().map(|&r| r as usize).collect();
+        tiles.block_pairs = tiles.block_particles.iter().map(|&i| rows_u[i]).collect();
+        tiles.find_partials(&pairs);
+        (pairs, tiles)
     }
 
     #[test]
-    fn a_sink_adds_non_heads_in_place_and_buffers_pairs_that_touch_a_head() {
-        let mut tiles = Tiles::default();
-        let pairs = [[0u32, 1], [1, 2], [2, 3]];
-        let rows = rows_of(&pairs, 4);
-        tiles.cut(7, &rows, &pairs, 2);
-        // Tiles [0, 2) and [2, 4): particle 2 is reached from the first tile.
-        assert_eq!(tiles.particles, vec![0, 2, 4]);
-        let mut history = [(); 3];
-        let mut buffer = [PairForce::default(); 3];
-        let mut sums = [Accumulated::default(); 4];
-        let f = |x: f64| PairForce {
-            force_on_first: Vec3::new(x, 0.0, 0.0),
-            torque: [Vec3::new(0.0, x, 0.0), Vec3::new(0.0, 0.0, x)],
+    fn a_particle_gets_a_partial_for_each_earlier_block_that_reaches_it() {
+        // 12 pairs in three blocks of 4: rows 0 (2 pairs), 1, 2 | 3..6 | 7..11.
+        let mut tiles = chain_in_blocks(12, 3).1;
+        assert_eq!(tiles.block_particles, vec![0, 3, 7, 12]);
+        // 11 is reached by block 0 (the wrap) and block 2 is its own; 3 by
+        // block 0; 7 by block 1.
+        let reached: Vec<(usize, Vec<usize>)> = (0..12)
+            .map(|i| (i, tiles.partials_of(i).collect::<Vec<_>>()))
+            .filter(|(_, p)| !p.is_empty())
+            .collect();
+        assert_eq!(reached, vec![(3, vec![1]), (7, vec![2]), (11, vec![0])]);
+        // Partials are laid out by the block whose rows they sum: block 0
+        // reaches 11 (pair 0-11 comes before 2-3) then 3.
+        assert_eq!(tiles.block_partials, vec![0, 2, 3, 3]);
+        assert_eq!(tiles.partial(11, 0), 0);
+        assert_eq!(tiles.partial(3, 0), 1);
+        assert_eq!(tiles.partial(7, 1), 2);
+        // Two tiles of three blocks: the boundary nearest half the pairs.
+        tiles.group_tiles(2);
+        assert_eq!(tiles.tile_blocks.len(), 3);
+        assert!(tiles.tile_blocks[1] == 1 || tiles.tile_blocks[1] == 2);
+        assert_eq!(tiles.shares(), &[0, 6, 12]);
+        // Four tiles of three blocks: one stays empty.
+        tiles.group_tiles(4);
+        let sizes: Vec<usize> = tiles.tile_blocks.windows(2).map(|w| w[1] - w[0]).collect();
+        assert_eq!((sizes.iter().sum::<usize>(), sizes.contains(&0)), (3, true));
+    }
+
+    #[test]
+    fn sums_do_not_depend_on_how_blocks_are_grouped_into_tiles() {
+        let (pairs, mut tiles) = chain_in_blocks(12, 3);
+        let f = |k: usize| PairForce {
+            force_on_first: Vec3::new(1.0 + k as f64 * 0.1, 0.0, 0.0),
+            torque: [Vec3::new(0.0, k as f64, 0.0), Vec3::new(0.0, 0.0, k as f64)],
         };
-        let mut jobs = tiles.jobs(&pairs, &mut history, &mut buffer, &mut sums);
-        jobs[0].sink.put(0, 0, 1, &f(1.0));
-        jobs[0].sink.put(1, 1, 2, &f(2.0));
-        jobs[1].sink.put(2, 2, 3, &f(4.0));
-        drop(jobs);
-        assert_eq!(sums[0].force.x, 1.0);
-        assert_eq!(sums[1].force.x, -1.0 + 2.0);
-        assert_eq!(sums[1].torque, Vec3::new(0.0, 2.0, 1.0));
-        assert_eq!(sums[3].force.x, -4.0);
-        assert_eq!(sums[2].force.x, 0.0, "a head's sum is not used");
-        assert_eq!(buffer[0].force_on_first.x, 0.0, "no head: not buffered");
-        assert_eq!(buffer[1].force_on_first.x, 2.0);
-        assert_eq!(buffer[2].force_on_first.x, 4.0);
+        let mut results = Vec::new();
+        for count in [1, 2, 3] {
+            tiles.group_tiles(count);
+            let mut history = vec![(); pairs.len()];
+            let mut partials = vec![Accumulated::default(); tiles.partial_count()];
+            let mut sums = vec![Accumulated::default(); 12];
+            for job in tiles.jobs(&pairs, &mut history, &mut partials, &mut sums) {
+                let mut sink = job.sink;
+                let first = sink.first_pair();
+                for (k, &[i, j]) in job.pairs.iter().enumerate() {
+                    sink.put(i as usize, j as usize, &f(first + k));
+                }
+            }
+            let totals: Vec<[f64; 6]> = (0..12)
+                .map(|i| {
+                    let mut a = sums[i];
+                    for k in tiles.partials_of(i) {
+                        a.force += partials[k].force;
+                        a.torque += partials[k].torque;
+                    }
+                    let (f, t) = (a.force, a.torque);
+                    [f.x, f.y, f.z, t.x, t.y, t.z]
+                })
+                .collect();
+            results.push(totals);
+        }
+        assert_eq!(results[0], results[1]);
+        assert_eq!(results[0], results[2]);
+        // Particle 11: −(pair 0-11) from its partial, −(pair 10-11) own.
+        assert_eq!(results[0][11][0], -(1.0 + 0.1) - (1.0 + 1.1));
     }
 }
