@@ -10,9 +10,8 @@
 //!     apply_permutation(&perm, &mut x); ... every per-particle array, ids included ...
 //!     nl.rebuild(&x, &r, &ids, &domain)?;   // mandatory after a permutation
 //! }
-//! // per pair k (parallel, no atomics): f[k] = force on pairs[k][0] from pairs[k][1],
-//! //                                    history[k] updated in place
-//! // per particle p (parallel):           F[p] = Σ_{e in incident(p)} e.sign() * f[e.pair()]
+//! // per pair k, row by row (pairs[row_offsets()[i]..row_offsets()[i + 1]] are row i):
+//! //     the force between pairs[k][0] and pairs[k][1] from history[k], updated in place
 //! ```
 //!
 //! # Conventions
@@ -28,15 +27,10 @@
 //!   leaves the list, and loses its history, only once it is beyond its cutoff + skin,
 //!   i.e. when the contact has certainly ended — the fix for contact loss at rebuilds
 //!   (adhesive JKR contacts stretched beyond touching keep their state).
-//! * **Gather**: `incident(p)` lists every pair touching `p` exactly once, in increasing
-//!   pair index (fixed order, so a sequential sum over it is bit-identical on any
-//!   thread count). [`PairRef::sign`] is `+1` when `p` is `pairs[k][0]` and `−1` when it
-//!   is `pairs[k][1]`: with `f[k]` the force on the first particle, `p` receives
-//!   `sign · f[k]`.
 //! * **Permutations**: [`NeighborList::cell_order`] gives `perm` with `perm[new] = old`;
 //!   [`apply_permutation`] gathers an array with it. After permuting the particle arrays
 //!   (ids included) the caller **must** call [`NeighborList::rebuild`] before using the
-//!   list again (pairs and the gather structure are index-based); the history is not lost
+//!   list again (pairs and rows are index-based); the history is not lost
 //!   because it is matched by id. There is no `remap`: re-sorting happens when a rebuild is
 //!   due anyway, and a rebuild costs about as much as a remap would.
 //!
@@ -153,7 +147,7 @@ pub enum NeighborError {
         /// The number of particles given.
         count: usize,
     },
-    /// More pairs than the gather encoding can address (limit 2³¹ − 1).
+    /// More pairs than the row offsets (`u32`) can address (limit 2³² − 1).
     TooManyPairs {
         /// The number of pairs found.
         count: usize,
@@ -196,7 +190,7 @@ impl fmt::Display for NeighborError {
                 write!(f, "neighbor: {count} particles exceed the u32 index limit")
             }
             NeighborError::TooManyPairs { count } => {
-                write!(f, "neighbor: {count} pairs exceed the 2^31 - 1 limit")
+                write!(f, "neighbor: {count} pairs exceed the 2^32 - 1 limit")
             }
             NeighborError::Domain(e) => e.fmt(f),
         }
@@ -215,43 +209,6 @@ impl std::error::Error for NeighborError {
 impl From<DomainError> for NeighborError {
     fn from(e: DomainError) -> Self {
         NeighborError::Domain(e)
-    }
-}
-
-/// One entry of a particle's gather list: a pair index and which side of the pair the
-/// particle is on, packed in a `u32` (`pair << 1 | second`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct PairRef(u32);
-
-impl PairRef {
-    #[inline]
-    fn new(pair: u32, first: bool) -> Self {
-        PairRef(pair << 1 | u32::from(!first))
-    }
-
-    /// Index into [`NeighborList::pairs`] / [`NeighborList::history`] (and the caller's
-    /// per-pair buffers).
-    #[inline]
-    pub fn pair(self) -> usize {
-        (self.0 >> 1) as usize
-    }
-
-    /// True when the particle is `pairs[k][0]` (the lower index), false when it is
-    /// `pairs[k][1]`.
-    #[inline]
-    pub fn is_first(self) -> bool {
-        self.0 & 1 == 0
-    }
-
-    /// `+1.0` for the first particle of the pair, `−1.0` for the second: the factor
-    /// applied to a per-pair force stored as "force on the first particle".
-    #[inline]
-    pub fn sign(self) -> f64 {
-        if self.is_first() {
-            1.0
-        } else {
-            -1.0
-        }
     }
 }
 
@@ -439,7 +396,7 @@ struct Scratch<H> {
     /// sorted by (i, j); `rem_start` is the row start of each i during the counting sort.
     rem_start: Vec<u32>,
     rem: Vec<[u32; 3]>,
-    /// Fill cursors for the gather lists.
+    /// Fill cursors of the pairs' counting sort.
     cursor: Vec<u32>,
 }
 
@@ -465,8 +422,6 @@ pub struct NeighborList<H> {
     history: Vec<H>,
     /// `pairs[row_start[i]..row_start[i+1]]` are the pairs whose first particle is `i`.
     row_start: Vec<u32>,
-    inc_start: Vec<u32>,
-    inc: Vec<PairRef>,
     ref_pos: Vec<Vec3>,
     ids: Vec<u32>,
     scratch: Scratch<H>,
@@ -498,8 +453,6 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
             pairs: Vec::new(),
             history: Vec::new(),
             row_start: Vec::new(),
-            inc_start: Vec::new(),
-            inc: Vec::new(),
             ref_pos: Vec::new(),
             ids: Vec::new(),
             scratch: Scratch {
@@ -625,26 +578,6 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
     #[inline]
     pub fn row_offsets(&self) -> &[u32] {
         &self.row_start
-    }
-
-    /// Every pair involving particle `p`, each once, in increasing pair index (pairs where
-    /// `p` is second come first, since their first particle has a lower index).
-    #[inline]
-    pub fn incident(&self, p: usize) -> &[PairRef] {
-        &self.inc[self.inc_start[p] as usize..self.inc_start[p + 1] as usize]
-    }
-
-    /// CSR offsets of the gather lists: particle `p`'s entries are
-    /// `incident_entries()[offsets[p]..offsets[p + 1]]` (len = particles + 1).
-    #[inline]
-    pub fn incident_offsets(&self) -> &[u32] {
-        &self.inc_start
-    }
-
-    /// CSR entries of the gather lists (2 × number of pairs in total).
-    #[inline]
-    pub fn incident_entries(&self) -> &[PairRef] {
-        &self.inc
     }
 
     /// Marks the list out of date, so [`needs_rebuild`](Self::needs_rebuild) returns true
@@ -891,7 +824,6 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         let identity = self.compute_carry(ids)?;
         self.search(&grid, domain, n)?;
         self.carry_history(identity);
-        self.build_gather(n);
 
         self.ref_pos.clear();
         self.ref_pos.extend_from_slice(positions);
@@ -1025,7 +957,7 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         // Row lengths, overflow check.
         let chunks = &s.chunk_pairs[..n_chunks];
         let total: usize = chunks.iter().map(Vec::len).sum();
-        if total >= (1usize << 31) {
+        if total > u32::MAX as usize {
             return Err(NeighborError::TooManyPairs { count: total });
         }
         offsets_of(
@@ -1156,34 +1088,6 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
             &mut self.history,
         );
     }
-
-    /// Builds the gather CSR (`inc_start`, `inc`): each pair appended to both its
-    /// particles' lists in increasing pair order.
-    fn build_gather(&mut self, n: usize) {
-        self.inc_start.clear();
-        self.inc_start.resize(n + 1, 0);
-        for p in &self.pairs {
-            self.inc_start[p[0] as usize + 1] += 1;
-            self.inc_start[p[1] as usize + 1] += 1;
-        }
-        for i in 0..n {
-            self.inc_start[i + 1] += self.inc_start[i];
-        }
-        let cursor = &mut self.scratch.cursor;
-        cursor.clear();
-        cursor.extend_from_slice(&self.inc_start[..n]);
-        self.inc.clear();
-        self.inc.resize(2 * self.pairs.len(), PairRef(0));
-        for (k, p) in self.pairs.iter().enumerate() {
-            let k = k as u32;
-            let c = &mut cursor[p[0] as usize];
-            self.inc[*c as usize] = PairRef::new(k, true);
-            *c += 1;
-            let c = &mut cursor[p[1] as usize];
-            self.inc[*c as usize] = PairRef::new(k, false);
-            *c += 1;
-        }
-    }
 }
 
 #[inline]
@@ -1273,7 +1177,7 @@ pub fn apply_permutation_into<T: Copy>(perm: &[u32], src: &[T], dst: &mut Vec<T>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::collections::{BTreeMap, BTreeSet};
+    use std::collections::BTreeSet;
 
     /// SplitMix64: a tiny deterministic generator for test data.
     struct Rng(u64);
@@ -1468,8 +1372,7 @@ mod tests {
         nl.rebuild(&[v(0.5, 0.5, 0.5)], &[0.1], &[9], &domain)
             .unwrap();
         assert!(nl.is_empty());
-        assert!(nl.incident(0).is_empty());
-        assert_eq!(nl.incident_offsets(), &[0, 0]);
+        assert_eq!(nl.row_offsets(), &[0, 0]);
     }
 
     #[test]
@@ -1686,44 +1589,6 @@ mod tests {
     }
 
     #[test]
-    fn gather_lists_each_pair_twice_in_pair_order() {
-        let domain = Domain::new(v(0.0, 0.0, 0.0), v(7.0, 7.0, 7.0), [true; 3]).unwrap();
-        let n = 2500;
-        let (x, r) = random_particles(n, 21, &domain);
-        let mut nl = NeighborList::<()>::new(0.1, 0.0).unwrap();
-        nl.rebuild(&x, &r, &ids(n), &domain).unwrap();
-        assert!(nl.len() > 1000);
-        let mut count: BTreeMap<(usize, bool), u32> = BTreeMap::new();
-        for p in 0..n {
-            let inc = nl.incident(p);
-            assert!(inc.windows(2).all(|w| w[0].pair() < w[1].pair()));
-            for e in inc {
-                let pair = nl.pairs()[e.pair()];
-                let side = if e.is_first() { 0 } else { 1 };
-                assert_eq!(pair[side] as usize, p);
-                assert_eq!(e.sign(), if e.is_first() { 1.0 } else { -1.0 });
-                *count.entry((e.pair(), e.is_first())).or_default() += 1;
-            }
-        }
-        assert_eq!(count.len(), 2 * nl.len());
-        assert!(count.values().all(|&c| c == 1));
-        assert_eq!(nl.incident_entries().len(), 2 * nl.len());
-        assert_eq!(nl.incident_offsets().len(), n + 1);
-        // Gathering an antisymmetric per-pair quantity sums to zero (Newton's third law)
-        // up to rounding.
-        let f: Vec<f64> = (0..nl.len()).map(|k| (k as f64).sin()).collect();
-        let total: f64 = (0..n)
-            .map(|p| {
-                nl.incident(p)
-                    .iter()
-                    .map(|e| e.sign() * f[e.pair()])
-                    .sum::<f64>()
-            })
-            .sum();
-        assert!(total.abs() < 1e-9, "{total}");
-    }
-
-    #[test]
     fn zero_sized_history_stores_nothing() {
         #[derive(Clone, Copy, Default)]
         struct NoHistory;
@@ -1776,8 +1641,7 @@ mod tests {
                         perm,
                         nl.pairs().to_vec(),
                         hist,
-                        nl.incident_offsets().to_vec(),
-                        nl.incident_entries().to_vec(),
+                        nl.row_offsets().to_vec(),
                         nl.needs_rebuild(&x2),
                     )
                 })
