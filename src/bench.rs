@@ -296,6 +296,41 @@
 //! (`--n 100`) 7.78 (7.57, 7.85, 7.78) — 128.7 and 128.5 ns per
 //! particle-step, 4.54 contacts per particle at both. Doubling N past the
 //! step the working set takes out of the caches doubles the time.
+//!
+//! # Measured 2026-11-26, 13:35–13:57 (blocks: no heads on any thread count)
+//!
+//! a2cee74: every particle sums its own block's pairs in place and each
+//! earlier block's in a partial (`dem::simulation` `tiles`); the blocks
+//! depend on the particle count alone, so one and two threads do the same
+//! work and nothing is gathered from a per-pair buffer. Five segments per
+//! variant, LIGGGHTS right after repose at each size, one process at a
+//! time; a quiet window at first (two single-thread repose processes side
+//! by side each ran 10.06–10.18 Mps/s at 5,120, against 10.21 alone: two
+//! real cores). Mps/s, median of the segments; speedup = median of the
+//! per-round ratios; "cpu" = Mps/s per CPU-second of the process:
+//!
+//! | N       | repose 1 thr | repose 2 thr (cpu) | speedup | LIGGGHTS | ratio 1 thr |
+//! |---------|--------------|--------------------|---------|----------|-------------|
+//! | 5,120   | 10.24        | 19.08 (9.57)       | 1.87    | 4.58     | 2.24        |
+//! | 20,480  | 8.64         | 15.69 (7.94)       | 1.92    | 4.09     | 2.11        |
+//! | 50,000  | 8.20         | 15.57 (7.90)       | 1.88    | 3.78     | 2.17        |
+//! | 100,820 | 7.62         | 15.07 (7.64)       | 1.97    |          |             |
+//!
+//! Eight more runs at 5,120 in the next 25 minutes gave speedups 1.78,
+//! 1.79, 1.78, 1.47, 1.85, 1.60, 1.87 and 1.87: the runs the host left
+//! alone give 1.85–1.87 (per-round ratios 1.83–1.88; before the blocks,
+//! 1.78–1.86), and a run in which another tenant took CPU time (2-thread
+//! segments dropping to 14–16 Mps/s for seconds, the CPU-time throughput
+//! with them) lower. Stage timers (a temporary build, quiet rounds of the
+//! same run): the pair sweep took 2.266 s on one thread and 1.144 s on two
+//! (1.98×), the per-particle pass 0.714 s and 0.413 s (1.73×: each stage
+//! ends at a barrier, about 2 µs per step on this VM, and the pass is
+//! short, 24 µs per step on one thread). Tried: eight blocks at 5,120 with
+//! four jobs per team member, so that a member whose CPU is taken leaves
+//! untaken jobs to the other: no better in disturbed runs (1.77, 1.65,
+//! 1.83 against 1.85, 1.60, 1.87 alternating) and 3 % slower on two
+//! threads in quiet rounds (18.5 against 19.1–19.4 Mps/s), so one job per
+//! member stays.
 
 use std::io::Write;
 use std::time::Instant;

@@ -56,9 +56,11 @@ unsafe impl Send for TaskRef {}
 /// 2026-11-26 (`repose bench --threads 1,2 --segments 5`, two-thread
 /// speedup per round, 10:58–11:08 on a loaded host) gave 1.61, 1.67, 1.70
 /// at 5,120 and 1.48, 1.65, 1.93 at 50,000 with one job per member, and
-/// 1.48, 1.42, 1.52 and 1.80, 1.76, 1.78 with two. With blocks a second
-/// job per member would cost nothing extra only where there are twice as
-/// many blocks as members, which 5,120 particles (two blocks) do not have.
+/// 1.48, 1.42, 1.52 and 1.80, 1.76, 1.78 with two. With the blocks, more
+/// jobs per member need more blocks: eight blocks at 5,120 particles with
+/// four jobs per member ran 3 % slower on two threads in quiet rounds and
+/// no better in disturbed ones (2026-11-26, 13:54–13:57, alternating;
+/// `src/bench.rs` docs).
 pub(super) const JOBS_PER_MEMBER: usize = 1;
 
 /// Runs `jobs` on `team` (see [`Team::for_each`]), or all of them here in
