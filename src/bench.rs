@@ -301,7 +301,7 @@
 //!
 //! a2cee74: every particle sums its own block's pairs in place and each
 //! earlier block's in a partial (`dem::simulation` `tiles`); the blocks
-//! depend on the particle count alone, so one and two threads do the same
+//! never depend on the thread count, so one and two threads do the same
 //! work and nothing is gathered from a per-pair buffer. Five segments per
 //! variant, LIGGGHTS right after repose at each size, one process at a
 //! time; a quiet window at first (two single-thread repose processes side

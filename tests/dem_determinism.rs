@@ -2,8 +2,9 @@
 //! 3 threads and from run to run. A dense, jittered, periodic bed on a floor
 //! (thousands of contacts, so every parallel stage splits into several tasks,
 //! and enough particles for four blocks of the pair sweep, which one, two and
-//! three threads group into one, two and three tiles) is shaken by random initial velocities and spins and settles under gravity
-//! for a few hundred steps with neighbour rebuilds and re-sorts.
+//! three threads group into one, two and three tiles) is shaken by random
+//! initial velocities and spins and settles under gravity for a few hundred
+//! steps with neighbour rebuilds and re-sorts.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -13,8 +13,10 @@
 //! block of particles and a partial sum for each earlier block whose pairs
 //! reach it (`tiles`), so no pair's forces are ever written to a buffer and
 //! read back (a buffer of every pair's forces, gathered per particle, ran
-//! 12–21 % slower at N = 50,000 on one thread, 2026-11-25). The blocks depend on the particle count alone; on more than
-//! one thread the sweep runs one tile (a run of whole blocks) per thread.
+//! 12–21 % slower at N = 50,000 on one thread, 2026-11-25). How many blocks
+//! there are depends on the particle count alone, where they start on the
+//! neighbour list, neither on the threads; on more than one thread the
+//! sweep runs one tile (a run of whole blocks) per thread.
 //! Until 2026-11-26 the sums followed the tiles instead, and the particles
 //! one tile's pairs reached in another were gathered from a per-pair buffer
 //! on two threads but not on one: at 5,120 particles the second thread then
@@ -49,7 +51,7 @@
 //! - Finishing each particle (walls, kicks, drift) inside its tile's sweep as
 //!   soon as its last pair is done, with the in-place sums (no pair buffer on
 //!   one thread, records updated in place — a particle is never read after
-//!   its own row — and frozen copies of the heads for other tiles): on one
+//!   its own row — and frozen copies of the particles other tiles reach): on one
 //!   thread 4–6 % slower at 5,120 and 15 % slower at 50,000 (2026-11-26, side
 //!   by side with the separate pass). A profile at 5,120 shows the finishing
 //!   itself no cheaper than the separate pass and the pair kernel 4 % dearer:

@@ -54,7 +54,7 @@ impl Kick {
 }
 
 /// The force a pair exerts, handed to a [`PairSink`].
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub(super) struct PairForce {
     pub(super) force_on_first: Vec3,
     /// Torque on the first and on the second particle, N·m.

@@ -1,8 +1,9 @@
 //! The per-particle state a step updates: the stepper's own records
 //! ([`ParticleRecords`]) beside the particles' state, cut into runs of
 //! consecutive particles, one run per job of the team (equal shares of the
-//! particles, `Tiles::shares`; with tiles of about equal pairs a member
-//! mostly finishes the particles whose forces it summed).
+//! particles, `Tiles::shares`; where there are at least as many blocks as
+//! members, a member mostly finishes the particles whose forces it
+//! summed).
 
 use super::pair_kernel::{Kick, Motion, Sphere};
 use super::tiles::Accumulated;

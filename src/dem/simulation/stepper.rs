@@ -279,10 +279,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .rebuild(&p.position, &p.radius, &p.id, &world.domain)
     }
 
-    /// Pair forces into the per-particle sums and partials; then per
-    /// particle: its pair sum, walls, body force, second
-    /// half kick, finiteness check, and with `drift` the next step's first
-    /// half kick and drift. Returns whether that drift moved
+    /// Pair forces into the per-particle sums (started at the body force)
+    /// and partials; then per particle: its pair sum, walls, second half
+    /// kick, finiteness check, and with `drift` the next step's first half
+    /// kick and drift. Returns whether that drift moved
     /// some particle far enough to need a neighbour rebuild.
     fn forces(&mut self, world: &mut World, drift: bool) -> Result<bool, HealthError> {
         let (contacts, worst_pair) = self.pair_forces(world);
