@@ -396,11 +396,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                 let i = run.first + offset;
                 let (xc, r, m) = (sphere.x, sphere.r, motion.m);
                 let (ve, we) = (motion.v, motion.w);
-                let (mut force, mut torque) = (sum.force, sum.torque);
-                for k in tiles.partials_of(i) {
-                    force += partials[k].force;
-                    torque += partials[k].torque;
-                }
+                let Accumulated {
+                    mut force,
+                    mut torque,
+                } = tiles.pair_sum(i, sum, partials);
                 for (k, wall) in placed.iter().enumerate() {
                     let Some(wc) = wall.contact(xc, r, wall_reach[k]) else {
                         // Most particles touch no wall: leave their empty
