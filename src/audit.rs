@@ -5,13 +5,18 @@
 //! ([`crate::store::Lineage`], `<output>.lineage.json`). The audit reads every
 //! record under a path and checks, for each:
 //! - the output it describes still exists;
-//! - every file input still exists and its bytes hash to the recorded sha256
-//!   (relative paths are tried against the store root, the current directory
-//!   and the store root's parent); an input that is a run's
-//!   `<id>/result.json` also has its run checked as below;
-//! - every id input names either a run in the store whose manifest.json hashes
-//!   to that id (and whose result.json, if present, carries the same id), or a
-//!   study.json under the audited path whose content id it is.
+//! - every file input still exists and its bytes hash to the recorded sha256.
+//!   A relative path is looked up in the audited store only (the stages record
+//!   files of the store relative to its root), never in the current directory,
+//!   so an audit gives the same answer wherever it runs; an absolute path (a
+//!   stage records files outside the store that way) is read as it is. An
+//!   input that is a run's `<id>/result.json` also has its run checked as
+//!   below;
+//! - every id input names either a run in the store, or a study.json under the
+//!   audited path whose content id it is. A completed run is checked against
+//!   its seal with every file hashed (manifest.json, result.json, run.mcap:
+//!   [`crate::store::seal`]); a failed or unfinished one must at least have a
+//!   manifest.json that hashes to its id.
 //!
 //! With `rerun > 0` it then re-runs that many of the referenced completed runs
 //! (chosen with a seeded ChaCha stream, so an audit is itself reproducible) in
@@ -27,7 +32,9 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::manifest::{content_id, ContentId, Study};
 use crate::scenes::run_experiment;
-use crate::store::{Lineage, Store, StoreError, MCAP_FILE, RESULT_FILE};
+use crate::store::{
+    Depth, Lineage, RunState, RunStatus, Store, StoreError, MCAP_FILE, RESULT_FILE,
+};
 
 /// Suffix of lineage records.
 const LINEAGE_SUFFIX: &str = ".lineage.json";
@@ -129,7 +136,7 @@ pub fn audit(
     report.runs_checked = runs.len();
     let completed: Vec<ContentId> = runs
         .into_iter()
-        .filter(|id| store.run_dir(id).result_path().is_file())
+        .filter(|id| store.status(id) == RunStatus::Complete)
         .collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut picked: Vec<usize> = (0..completed.len()).collect();
@@ -212,11 +219,19 @@ fn check_record(
     }
 }
 
-/// Checks run `id` exists and its stored manifest and result are consistent.
+/// Checks run `id` exists and is intact: a completed run against its seal
+/// (every file hashed), any other by its manifest's hash.
 fn check_run(store: &Store, id: &ContentId) -> Result<(), String> {
-    let dir = store.run_dir(id);
-    let bytes = std::fs::read(dir.manifest_path())
-        .map_err(|e| format!("no run {} in the store ({e})", id.short(12)))?;
+    match store.check(id, Depth::Full) {
+        RunState::Complete(_) => return Ok(()),
+        RunState::Damaged(problem) => {
+            return Err(format!("run {} is damaged: {problem}", id.short(12)))
+        }
+        RunState::Missing => return Err(format!("no run {} in the store", id.short(12))),
+        RunState::Incomplete | RunState::Failed => {}
+    }
+    let bytes = std::fs::read(store.run_dir(id).manifest_path())
+        .map_err(|e| format!("run {}: manifest.json: {e}", id.short(12)))?;
     let hashed = ContentId::of_bytes(&bytes);
     if &hashed != id {
         return Err(format!(
@@ -224,15 +239,7 @@ fn check_run(store: &Store, id: &ContentId) -> Result<(), String> {
             id.short(12)
         ));
     }
-    match store.load_result(id) {
-        Ok(Some(r)) if &r.id != id => Err(format!(
-            "run {}: result.json names run {}",
-            id.short(12),
-            r.id
-        )),
-        Ok(_) => Ok(()),
-        Err(e) => Err(format!("run {}: {e}", id.short(12))),
-    }
+    Ok(())
 }
 
 /// Re-runs `id` in a scratch store beside the real one and compares outputs.
@@ -335,20 +342,12 @@ fn run_of_result_file(path: &Path) -> Option<ContentId> {
 }
 
 /// An input path as recorded, resolved: absolute as is; relative against the
-/// store root (where the calibration stages record paths from), the current
-/// directory, then the store root's parent.
+/// store root only (where the stages record paths from; see the module docs).
 fn resolve(store: &Store, recorded: &Path) -> Option<PathBuf> {
-    if recorded.is_absolute() {
-        return recorded.exists().then(|| recorded.to_path_buf());
-    }
-    let bases = [
-        Some(store.root()),
-        Some(Path::new(".")),
-        store.root().parent(),
-    ];
-    bases
-        .into_iter()
-        .flatten()
-        .map(|b| b.join(recorded))
-        .find(|c| c.exists())
+    let path = if recorded.is_absolute() {
+        recorded.to_path_buf()
+    } else {
+        store.root().join(recorded)
+    };
+    path.exists().then_some(path)
 }

@@ -5,6 +5,7 @@
 
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use crate::audit::{self, AuditError};
 use crate::bench::{self, BenchError, BenchOptions};
@@ -25,7 +26,8 @@ use crate::manifest::{
 use crate::scenes::protocol::{progress_enabled, set_quiet};
 use crate::scenes::run_experiment;
 use crate::store::{
-    write_atomic, CacheOutcome, InputRef, Lineage, RunError, RunSummary, Store, StoreError,
+    write_atomic, CacheOutcome, Depth, InputRef, Lineage, RunError, RunState, RunStatus,
+    RunSummary, Store, StoreError,
 };
 use crate::tradeoff::plan::{plan, Knob, PlanError};
 use crate::tradeoff::{self as tradeoff_sweep, report};
@@ -115,6 +117,12 @@ pub enum CommandError {
     /// A calibration stage failed or its options are invalid.
     #[error(transparent)]
     Calibrate(#[from] CalibrateError),
+    /// Runs whose files no longer match their seals (each was named above).
+    #[error("{count} damaged run(s); run them again to recompute them")]
+    Damaged {
+        /// How many.
+        count: usize,
+    },
     /// Some runs of a batch failed (each recorded in its error.json; the
     /// table was written with their status).
     #[error("{failed} of {total} run(s) failed; rerun `repose batch` to retry them")]
@@ -142,6 +150,7 @@ impl CommandError {
             CommandError::RunFailed { .. }
             | CommandError::Output(_)
             | CommandError::BatchIncomplete { .. }
+            | CommandError::Damaged { .. }
             | CommandError::AuditFailed { .. } => false,
         };
         if invalid {
@@ -150,6 +159,12 @@ impl CommandError {
             1
         }
     }
+}
+
+/// Opens the store at `root` with its notices (a damaged run being
+/// recomputed, a wait for another process's claim) printed on stderr.
+fn open_store(root: &Path) -> Result<Store, StoreError> {
+    Ok(Store::open(root)?.with_notices(Arc::new(|text: &str| eprintln!("note: {text}"))))
 }
 
 /// A file-prefixed report of a manifest error: `file:line:column: message` for
@@ -225,7 +240,7 @@ pub fn validate(
 /// cache (a complete run with the same id is reused).
 pub fn run(store_root: &Path, manifest: &Path, out: &mut dyn Write) -> Result<(), CommandError> {
     let experiment = read_experiment(manifest).map_err(manifest_error(manifest))?;
-    let store = Store::open(store_root)?;
+    let store = open_store(store_root)?;
     let id = experiment.id();
     let dir = store.run_dir(&id);
     let (result, outcome) = match store.run_cached(&experiment, |e, dir| {
@@ -307,7 +322,7 @@ fn cell(v: Option<f64>) -> String {
 /// particle–particle restitution, friction and surface energy, status, headline
 /// angle).
 pub fn runs_list(store_root: &Path, out: &mut dyn Write) -> Result<(), CommandError> {
-    let store = Store::open(store_root)?;
+    let store = open_store(store_root)?;
     let runs = store.list()?;
     if runs.is_empty() {
         writeln!(out, "no runs in {}", store.root().display())?;
@@ -318,13 +333,18 @@ pub fn runs_list(store_root: &Path, out: &mut dyn Write) -> Result<(), CommandEr
         "{:<12}  {:<11}  {:<7}  {:>7}  {:>7}  {:>9}  {:<10}  {:>9}",
         "ID", "SCENE", "PROFILE", "e_pp", "mu_pp", "Γ_pp J/m²", "STATUS", "ANGLE deg"
     )?;
+    let mut damaged = Vec::new();
     for RunSummary {
         id,
         status,
+        problem,
         experiment,
         result,
     } in &runs
     {
+        if let Some(p) = problem {
+            damaged.push(format!("{}: {p}", id.short(12)));
+        }
         let pp = experiment.as_ref().map(|e| e.contact.particle_particle);
         let scene = experiment.as_ref().map_or("?", |e| e.scene.kind());
         let profile = experiment.as_ref().map_or("?", |e| e.profile.as_str());
@@ -345,17 +365,30 @@ pub fn runs_list(store_root: &Path, out: &mut dyn Write) -> Result<(), CommandEr
             angle.unwrap_or_else(|| "-".to_string()),
         )?;
     }
+    if !damaged.is_empty() {
+        writeln!(out, "damaged (run them again to recompute):")?;
+        for line in &damaged {
+            writeln!(out, "  {line}")?;
+        }
+        return Err(CommandError::Damaged {
+            count: damaged.len(),
+        });
+    }
     Ok(())
 }
 
 /// `repose runs show PREFIX`: the run whose id starts with PREFIX (which must be
 /// unique): status, directory, manifest, and result or error.
 pub fn runs_show(store_root: &Path, prefix: &str, out: &mut dyn Write) -> Result<(), CommandError> {
-    let store = Store::open(store_root)?;
+    let store = open_store(store_root)?;
     let id = store.resolve_prefix(prefix)?;
     let dir = store.run_dir(&id);
+    let state = store.check(&id, Depth::Full);
     writeln!(out, "id:        {id}")?;
-    writeln!(out, "status:    {}", store.status(&id))?;
+    writeln!(out, "status:    {}", state.status())?;
+    if let RunState::Damaged(problem) = &state {
+        writeln!(out, "damage:    {problem}")?;
+    }
     writeln!(out, "directory: {}", dir.path().display())?;
     let manifest = std::fs::read_to_string(dir.manifest_path()).ok();
     if let Some(text) = manifest
@@ -364,10 +397,14 @@ pub fn runs_show(store_root: &Path, prefix: &str, out: &mut dyn Write) -> Result
     {
         writeln!(out, "manifest:\n{}", pretty(&text))?;
     }
-    if let Some(result) = store.load_result(&id)? {
-        writeln!(out, "result:\n{}", pretty(&result))?;
-    } else if let Some(error) = store.load_error(&id)? {
-        writeln!(out, "error:\n{}", pretty(&error))?;
+    match state {
+        RunState::Complete(result) => writeln!(out, "result:\n{}", pretty(&result))?,
+        RunState::Damaged(_) => return Err(CommandError::Damaged { count: 1 }),
+        _ => {
+            if let Some(error) = store.load_error(&id)? {
+                writeln!(out, "error:\n{}", pretty(&error))?;
+            }
+        }
     }
     Ok(())
 }
@@ -393,7 +430,7 @@ pub fn audit(
     seed: u64,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let store = Store::open(store_root)?;
+    let store = open_store(store_root)?;
     let report = audit::audit(&store, path, rerun, seed)?;
     writeln!(
         out,
@@ -454,12 +491,12 @@ pub fn tradeoff(
 ) -> Result<(), CommandError> {
     let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
     let points = plan(&base, &options.knobs, options.replicates)?;
-    let store = Store::open(store_root)?;
+    let store = open_store(store_root)?;
     let total: usize = points.iter().map(|p| p.replicates.len()).sum();
     let done = points
         .iter()
         .flat_map(|p| &p.replicates)
-        .filter(|e| store.run_dir(&e.id()).result_path().is_file())
+        .filter(|e| store.status(&e.id()) == RunStatus::Complete)
         .count();
     eprintln!(
         "tradeoff: {} points x {} replicates = {total} runs ({done} already complete) on {} thread(s)",
@@ -492,7 +529,11 @@ pub fn tradeoff(
             "replicates": options.replicates,
         }),
     )
-    .with_input(InputRef::file("base_manifest", manifest)?);
+    .with_input(InputRef::file(
+        "base_manifest",
+        manifest,
+        Some(store.root()),
+    )?);
     for row in &rows {
         for id in &row.ids {
             lineage = lineage.with_input(InputRef::id(row.label.clone(), id));
@@ -529,7 +570,7 @@ pub fn learning_curve(
         )?;
     }
     batch_leaving_out_failures(store_root, study_path, jobs, out)?;
-    let store = Store::open(store_root)?;
+    let store = open_store(store_root)?;
     let outcome = curve::learning_curve(&dir, &study, &store, sizes)?;
     write!(out, "\n{}", outcome.markdown)?;
     writeln!(out, "\noutputs: {}", outcome.out_dir.display())?;
@@ -692,7 +733,7 @@ fn run_batch_and_report(
     out: &mut dyn Write,
 ) -> Result<(usize, usize), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
-    let store = Store::open(store_root)?;
+    let store = open_store(store_root)?;
     let settings = BatchSettings {
         jobs,
         progress: progress_enabled(),
@@ -842,7 +883,7 @@ pub fn verify(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
-    let store = Store::open(store_root)?;
+    let store = open_store(store_root)?;
     let settings = BatchSettings {
         jobs,
         progress: progress_enabled(),

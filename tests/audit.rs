@@ -32,15 +32,18 @@ fn setup(tmp: &Path) -> (Store, std::path::PathBuf) {
     let table = out.join("table.csv");
     fs::write(&table, "index,angle\n0,30\n").unwrap();
     Lineage::new("batch", serde_json::json!({}))
-        .with_input(InputRef::file("design", &input).unwrap())
+        .with_input(InputRef::file("design", &input, Some(store.root())).unwrap())
         .with_input(InputRef::id("run", &experiment.id()))
         .write_beside(&table)
         .unwrap();
     // A second table names the run by its result file, relative to the store
     // root (as the calibration stages record it).
     let result = store.run_dir(&experiment.id()).result_path();
-    let mut by_file = InputRef::file("run_result", &result).unwrap();
-    by_file.id_or_path = format!("{}/result.json", experiment.id());
+    let by_file = InputRef::file("run_result", &result, Some(store.root())).unwrap();
+    assert_eq!(
+        by_file.id_or_path,
+        format!("{}/result.json", experiment.id())
+    );
     let fit = out.join("fit.csv");
     fs::write(&fit, "x\n").unwrap();
     Lineage::new("train", serde_json::json!({}))

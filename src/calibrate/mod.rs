@@ -84,7 +84,6 @@ use std::path::{Path, PathBuf};
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use sha2::{Digest, Sha256};
 
 use crate::manifest::{canonical_json, ContentId, Study, ValidationErrors};
 use crate::store::{write_atomic, InputRef, Lineage, StoreError};
@@ -290,23 +289,8 @@ impl StudyDir {
     /// An input reference to a file of the store, by its path relative to the
     /// store root and the sha256 of its bytes.
     fn input(&self, role: &str, path: &Path) -> Result<InputRef, CalibrateError> {
-        file_input(role, path, Some(&self.store_root))
+        Ok(InputRef::file(role, path, Some(&self.store_root))?)
     }
-}
-
-/// An input reference to a file: its path (relative to `root` when it lies
-/// inside it) and the sha256 of its bytes.
-fn file_input(role: &str, path: &Path, root: Option<&Path>) -> Result<InputRef, CalibrateError> {
-    let bytes = std::fs::read(path).map_err(|source| StoreError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let shown = root.and_then(|r| path.strip_prefix(r).ok()).unwrap_or(path);
-    Ok(InputRef {
-        role: role.to_string(),
-        id_or_path: shown.display().to_string(),
-        sha256: hex::encode(Sha256::digest(&bytes)),
-    })
 }
 
 fn create_dir(path: &Path) -> Result<(), CalibrateError> {

@@ -24,10 +24,11 @@ use super::surrogate::{sweep, Dataset, Scale, Sweep, TrainSettings};
 use super::svg::{parity_plot, ParityPoint};
 use super::table::{parse_number, Cell, CsvWriter, Table};
 use super::{
-    create_dir, file_input, json_bytes, parameter_names, serde_name, write_output, CalibrateError,
-    Stage, StudyDir,
+    create_dir, json_bytes, parameter_names, serde_name, write_output, CalibrateError, Stage,
+    StudyDir,
 };
 use crate::manifest::Study;
+use crate::store::InputRef;
 use crate::store::Lineage;
 
 /// he2019's split: 80 of 120 samples train.
@@ -215,7 +216,7 @@ pub fn train_table(
             "reference": spec.reference,
         }),
     )
-    .with_input(file_input("table", spec.path, None)?);
+    .with_input(InputRef::file("table", spec.path, None)?);
     run(&data, options, out_dir, &lineage, 0, reference)
 }
 

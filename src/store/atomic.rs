@@ -14,6 +14,13 @@ static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 /// look only at final names, never mistake one for a finished file.
 pub const TEMP_PREFIX: &str = ".tmp-";
 
+/// How many temp names [`create_temp`] tries before giving up. A name is taken
+/// only by a file some other writer left (a killed process whose pid this one
+/// now has: as PID 1 in a container, every process has the same pid), so a
+/// handful of attempts always finds a free one; the bound only turns a
+/// pathological directory into an error instead of a loop.
+const TEMP_ATTEMPTS: u32 = 64;
+
 /// Writes `bytes` to `path` atomically: a temp file in the same directory, fsync,
 /// rename over `path`, fsync of the directory.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
@@ -28,9 +35,8 @@ pub(crate) fn write_atomic_with(
     before_rename: impl FnOnce(&Path) -> io::Result<()>,
 ) -> io::Result<()> {
     let (dir, name) = split(path)?;
-    let temp = temp_path(dir, name);
+    let (mut file, temp) = create_temp(dir, name)?;
     let result = (|| {
-        let mut file = File::create_new(&temp)?;
         file.write_all(bytes)?;
         file.sync_all()?;
         drop(file);
@@ -61,14 +67,51 @@ fn split(path: &Path) -> io::Result<(&Path, &OsStr)> {
     Ok((dir, name))
 }
 
-/// A fresh temp name for `name` in `dir`, unique within and across processes.
-fn temp_path(dir: &Path, name: &OsStr) -> PathBuf {
-    dir.join(format!(
-        "{TEMP_PREFIX}{}-{}-{}",
-        name.to_string_lossy(),
-        std::process::id(),
-        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
-    ))
+/// Creates a fresh temp file for `name` in `dir` and returns it with its path.
+///
+/// Names are `.tmp-<name>-<pid>-<counter>`, unique among this process's
+/// writers. The pid alone does not make them unique across processes: a
+/// killed process's leftovers carry a pid that a later process may get again
+/// (always, as PID 1 in a container). So the file is created with create-new,
+/// and a name some earlier process left behind is skipped for the next one.
+fn create_temp(dir: &Path, name: &OsStr) -> io::Result<(File, PathBuf)> {
+    let mut last = None;
+    for _ in 0..TEMP_ATTEMPTS {
+        let temp = dir.join(format!(
+            "{TEMP_PREFIX}{}-{}-{}",
+            name.to_string_lossy(),
+            std::process::id(),
+            TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+        ));
+        match File::create_new(&temp) {
+            Ok(file) => return Ok((file, temp)),
+            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| io::Error::other("no temp name tried")))
+}
+
+/// Removes every temp file ([`TEMP_PREFIX`]) directly inside `dir` and returns
+/// how many it removed. Only call it while holding the directory's claim (see
+/// [`super::claim`]): then no live writer owns any of them, and they are the
+/// leftovers of killed processes (one can be a whole run log).
+pub fn remove_stale_temps(dir: &Path) -> io::Result<usize> {
+    let mut removed = 0;
+    for entry in fs::read_dir(dir)? {
+        let entry = entry?;
+        let is_temp = entry
+            .file_name()
+            .to_str()
+            .is_some_and(|n| n.starts_with(TEMP_PREFIX));
+        if is_temp && entry.file_type()?.is_file() {
+            match fs::remove_file(entry.path()) {
+                Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
+                _ => removed += 1,
+            }
+        }
+    }
+    Ok(removed)
 }
 
 /// A file written in place of `path` through a temp file in the same directory,
@@ -87,8 +130,7 @@ impl AtomicFile {
     /// directory).
     pub fn create(path: &Path) -> io::Result<AtomicFile> {
         let (dir, name) = split(path)?;
-        let temp = temp_path(dir, name);
-        let file = File::create_new(&temp)?;
+        let (file, temp) = create_temp(dir, name)?;
         Ok(AtomicFile {
             file: Some(file),
             temp,
@@ -163,4 +205,38 @@ fn sync_dir(dir: &Path) -> io::Result<()> {
     #[cfg(not(unix))]
     let _ = dir;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A killed process with this process's pid left temp files under the
+    /// names this process is about to use (the container case: every process
+    /// is PID 1). Writes must still succeed, and leave those files alone.
+    #[test]
+    fn temp_names_left_by_an_earlier_process_with_our_pid_are_skipped() {
+        let dir = tempfile::tempdir().unwrap();
+        let next = TEMP_COUNTER.load(Ordering::Relaxed);
+        // Other tests in this process may take counters meanwhile; leave more
+        // leftovers than they can plausibly use, but fewer than the attempts.
+        let planted: Vec<PathBuf> = (next..next + 40)
+            .map(|c| {
+                let p = dir
+                    .path()
+                    .join(format!("{TEMP_PREFIX}run.mcap-{}-{c}", std::process::id()));
+                fs::write(&p, b"leftover").unwrap();
+                p
+            })
+            .collect();
+        let target = dir.path().join("run.mcap");
+        write_atomic(&target, b"fresh").unwrap();
+        assert_eq!(fs::read(&target).unwrap(), b"fresh");
+        let mut streamed = AtomicFile::create(&dir.path().join("other")).unwrap();
+        streamed.write_all(b"x").unwrap();
+        streamed.commit().unwrap();
+        assert!(planted.iter().all(|p| p.is_file()));
+        assert_eq!(remove_stale_temps(dir.path()).unwrap(), planted.len());
+        assert!(dir.path().join("run.mcap").is_file() && dir.path().join("other").is_file());
+    }
 }

@@ -47,12 +47,24 @@ impl InputRef {
         }
     }
 
-    /// A reference to a file, hashing its current bytes.
-    pub fn file(role: impl Into<String>, path: &Path) -> Result<InputRef, StoreError> {
+    /// A reference to a file, hashing its current bytes. A file inside
+    /// `store_root` is recorded by its path relative to the root, any other by
+    /// its absolute path, so `repose audit` finds every input without guessing
+    /// where the stage ran from (it looks up relative paths in the audited
+    /// store only).
+    pub fn file(
+        role: impl Into<String>,
+        path: &Path,
+        store_root: Option<&Path>,
+    ) -> Result<InputRef, StoreError> {
         let bytes = std::fs::read(path).map_err(StoreError::io(path))?;
+        let shown = match store_root.and_then(|r| path.strip_prefix(r).ok()) {
+            Some(inside) => inside.to_path_buf(),
+            None => std::path::absolute(path).map_err(StoreError::io(path))?,
+        };
         Ok(InputRef {
             role: role.into(),
-            id_or_path: path.display().to_string(),
+            id_or_path: shown.display().to_string(),
             sha256: hex::encode(Sha256::digest(&bytes)),
         })
     }

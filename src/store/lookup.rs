@@ -1,6 +1,6 @@
 //! Finding runs: listing the store and resolving an id prefix.
 
-use super::{RunStatus, Store, StoreError};
+use super::{Depth, RunState, RunStatus, Store, StoreError};
 use crate::manifest::{ContentId, Experiment};
 use crate::store::RunResult;
 
@@ -12,6 +12,8 @@ pub struct RunSummary {
     pub id: ContentId,
     /// Its state.
     pub status: RunStatus,
+    /// What is wrong with a damaged run, naming the file.
+    pub problem: Option<String>,
     /// Its manifest.
     pub experiment: Option<Experiment>,
     /// Its result, when complete.
@@ -36,16 +38,28 @@ impl Store {
         Ok(ids)
     }
 
-    /// A summary of every run, sorted by id.
+    /// A summary of every run, sorted by id. Each run is checked against its
+    /// seal to [`Depth::Sizes`] (the logs' lengths, not their hashes), so a
+    /// listing of large logs stays quick; `runs show` checks fully.
     pub fn list(&self) -> Result<Vec<RunSummary>, StoreError> {
         Ok(self
             .ids()?
             .into_iter()
-            .map(|id| RunSummary {
-                status: self.status(&id),
-                experiment: self.load_manifest(&id).ok(),
-                result: self.load_result(&id).ok().flatten(),
-                id,
+            .map(|id| {
+                let state = self.check(&id, Depth::Sizes);
+                let status = state.status();
+                let (result, problem) = match state {
+                    RunState::Complete(r) => (Some(*r), None),
+                    RunState::Damaged(p) => (None, Some(p)),
+                    _ => (None, None),
+                };
+                RunSummary {
+                    status,
+                    problem,
+                    experiment: self.load_manifest(&id).ok(),
+                    result,
+                    id,
+                }
             })
             .collect())
     }

@@ -4,31 +4,42 @@
 //!
 //! ```text
 //! runs/<id>/manifest.json   the experiment's canonical JSON (sha256 of the file = id)
-//! runs/<id>/result.json     the result; its presence is what makes a run complete
+//! runs/<id>/result.json     the result
 //! runs/<id>/run.mcap        the run's log (written by the engine side)
-//! runs/<id>/error.json      why the run failed (a failed run never has a result)
-//! runs/<id>/timing.json     wall-clock time of the run (non-deterministic, not hashed)
+//! runs/<id>/seal.json       sizes and sha256 of the three files above, written last
+//! runs/<id>/error.json      why the run failed (a failed run never has a seal)
+//! runs/<id>/timing.json     wall-clock time of the run (non-deterministic, not sealed)
+//! runs/<id>/.claim          the lock a computing process holds (see [`claim`])
 //! ```
 //!
 //! Every file is written atomically ([`write_atomic`]), so an interrupted run never
-//! leaves anything that looks complete, and a complete run is a cache hit.
+//! leaves anything that looks complete. A run is complete exactly when its seal
+//! exists and its files still match it ([`seal`]); a complete run is a cache
+//! hit, a run whose files no longer match is *damaged*: reported as such and
+//! recomputed when it is run again, never reused. Only the process holding a
+//! run's claim computes it, so two processes asking for one run simulate it
+//! once.
 
 mod atomic;
+pub mod claim;
 pub mod lineage;
 mod lookup;
 pub mod result;
+pub mod seal;
 
 use std::fmt;
 use std::io;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::de::DeserializeOwned;
 
-pub use atomic::{write_atomic, AtomicFile, TEMP_PREFIX};
+pub use atomic::{remove_stale_temps, write_atomic, AtomicFile, TEMP_PREFIX};
 pub use lineage::{InputRef, Lineage};
 pub use lookup::RunSummary;
 pub use result::{CoarseGrainingReport, ErrorRecord, RunResult, TimingRecord, Trace};
+pub use seal::{Depth, Seal, SEAL_FILE};
 
 use crate::manifest::{
     canonical_json, validate_experiment, ContentId, Experiment, ValidationErrors,
@@ -68,6 +79,15 @@ pub enum StoreError {
         path: PathBuf,
         /// The parse error.
         message: String,
+    },
+    /// A run's files no longer match its seal (edited, truncated or deleted
+    /// outside repose).
+    #[error("run {id} is damaged: {problem} (run it again to recompute it)")]
+    Damaged {
+        /// The run.
+        id: ContentId,
+        /// What does not match, naming the file.
+        problem: String,
     },
     /// A runner returned a result for another experiment.
     #[error("the runner returned a result for {found}, expected {expected}")]
@@ -161,11 +181,13 @@ pub enum CacheOutcome {
 pub enum RunStatus {
     /// No directory for this id.
     Missing,
-    /// A directory without result or error: running, or interrupted.
+    /// A directory without seal or error: running, or interrupted.
     Incomplete,
-    /// error.json and no result.json.
+    /// error.json and no seal.
     Failed,
-    /// result.json exists.
+    /// A seal whose files no longer match it.
+    Damaged,
+    /// A seal that every file matches.
     Complete,
 }
 
@@ -175,6 +197,7 @@ impl fmt::Display for RunStatus {
             RunStatus::Missing => "missing",
             RunStatus::Incomplete => "incomplete",
             RunStatus::Failed => "failed",
+            RunStatus::Damaged => "damaged",
             RunStatus::Complete => "complete",
         })
     }
@@ -216,7 +239,43 @@ impl RunDir {
     pub fn timing_path(&self) -> PathBuf {
         self.path.join(TIMING_FILE)
     }
+    /// `seal.json`.
+    pub fn seal_path(&self) -> PathBuf {
+        self.path.join(SEAL_FILE)
+    }
 }
+
+/// What [`Store::check`] found in a run directory.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RunState {
+    /// No directory for this id.
+    Missing,
+    /// A directory without seal or error: running, or interrupted.
+    Incomplete,
+    /// The run failed (error.json, no seal).
+    Failed,
+    /// The seal does not match the files; the text says how, naming the file.
+    Damaged(String),
+    /// Sealed and intact, with its result.
+    Complete(Box<RunResult>),
+}
+
+impl RunState {
+    /// The state without its data.
+    pub fn status(&self) -> RunStatus {
+        match self {
+            RunState::Missing => RunStatus::Missing,
+            RunState::Incomplete => RunStatus::Incomplete,
+            RunState::Failed => RunStatus::Failed,
+            RunState::Damaged(_) => RunStatus::Damaged,
+            RunState::Complete(_) => RunStatus::Complete,
+        }
+    }
+}
+
+/// Receives the store's notices to the user (a run found damaged, a wait for
+/// another process's claim); the CLI prints them on stderr.
+pub type Notices = Arc<dyn Fn(&str) + Send + Sync>;
 
 /// Test-only fault injection: called between temp write and rename of every file.
 #[cfg(test)]
@@ -225,6 +284,7 @@ type FaultHook = Box<dyn Fn(&Path) -> io::Result<()> + Send + Sync>;
 /// A run store rooted at a directory.
 pub struct Store {
     root: PathBuf,
+    notices: Option<Notices>,
     #[cfg(test)]
     fault: Option<FaultHook>,
 }
@@ -242,9 +302,22 @@ impl Store {
         std::fs::create_dir_all(&root).map_err(StoreError::io(&root))?;
         Ok(Store {
             root,
+            notices: None,
             #[cfg(test)]
             fault: None,
         })
+    }
+
+    /// The same store, sending its notices to `notices`.
+    pub fn with_notices(mut self, notices: Notices) -> Store {
+        self.notices = Some(notices);
+        self
+    }
+
+    fn notice(&self, text: &str) {
+        if let Some(n) = &self.notices {
+            n(text);
+        }
     }
 
     /// The store's root directory.
@@ -260,18 +333,30 @@ impl Store {
         }
     }
 
-    /// The state of run `id`: complete exactly when result.json exists.
-    pub fn status(&self, id: &ContentId) -> RunStatus {
+    /// The state of run `id`, checking its files against its seal to `depth`.
+    pub fn check(&self, id: &ContentId, depth: Depth) -> RunState {
         let dir = self.run_dir(id);
-        if dir.result_path().is_file() {
-            RunStatus::Complete
+        let seal_path = dir.seal_path();
+        if seal_path.is_file() {
+            let checked = Self::read_json::<Seal>(&seal_path)
+                .map_err(|e| e.to_string())
+                .and_then(|s| seal::check(&dir, &s, depth));
+            match checked {
+                Ok(result) => RunState::Complete(Box::new(result)),
+                Err(problem) => RunState::Damaged(problem),
+            }
         } else if dir.error_path().is_file() {
-            RunStatus::Failed
+            RunState::Failed
         } else if dir.path().is_dir() {
-            RunStatus::Incomplete
+            RunState::Incomplete
         } else {
-            RunStatus::Missing
+            RunState::Missing
         }
+    }
+
+    /// The state of run `id`, every sealed file hashed ([`Depth::Full`]).
+    pub fn status(&self, id: &ContentId) -> RunStatus {
+        self.check(id, Depth::Full).status()
     }
 
     /// Writes a file atomically (see [`write_atomic`]).
@@ -313,9 +398,17 @@ impl Store {
         }
     }
 
-    /// The stored result of run `id`, if it is complete.
+    /// The stored result of run `id` if it is complete (its files checked
+    /// against its seal), `None` if it is not; an error if it is damaged.
     pub fn load_result(&self, id: &ContentId) -> Result<Option<RunResult>, StoreError> {
-        Self::read_json_if_present(&self.run_dir(id).result_path())
+        match self.check(id, Depth::Full) {
+            RunState::Complete(result) => Ok(Some(*result)),
+            RunState::Damaged(problem) => Err(StoreError::Damaged {
+                id: id.clone(),
+                problem,
+            }),
+            _ => Ok(None),
+        }
     }
 
     /// The stored manifest of run `id` (parsed, not re-validated: a manifest of an
@@ -331,11 +424,15 @@ impl Store {
 
     /// Runs `experiment` unless a complete run with its id exists.
     ///
-    /// On a cache hit the stored result is returned and `runner` is not called. Else
-    /// the canonical manifest is written, `runner` is called with the run directory
-    /// (where it may write run.mcap), and its result is stored (timing.json first,
-    /// result.json last, both atomic). If the runner fails, error.json records why
-    /// and no result is written. The experiment is validated first.
+    /// On a cache hit (a seal that every file matches) the stored result is
+    /// returned and `runner` is not called. Else the run is claimed (waiting
+    /// while another process holds the claim, then reusing its result if it
+    /// finished), a damaged run's seal is removed with a notice, temp files
+    /// left by killed writers are removed, the canonical manifest is written,
+    /// `runner` is called with the run directory (where it may write
+    /// run.mcap), and its result is stored (timing.json, result.json, then
+    /// seal.json last, all atomic). If the runner fails, error.json records why
+    /// and no seal is written. The experiment is validated first.
     pub fn run_cached<E, F>(
         &self,
         experiment: &Experiment,
@@ -348,10 +445,30 @@ impl Store {
         validate_experiment(experiment).map_err(RunError::Invalid)?;
         let id = experiment.id();
         let dir = self.run_dir(&id);
-        if let Some(result) = self.load_result(&id)? {
-            return Ok((result, CacheOutcome::Hit));
+        if let RunState::Complete(result) = self.check(&id, Depth::Full) {
+            return Ok((*result, CacheOutcome::Hit));
         }
         std::fs::create_dir_all(dir.path()).map_err(StoreError::io(dir.path()))?;
+        let _claim = claim::claim(dir.path(), || {
+            self.notice(&format!(
+                "run {}: another process is computing it; waiting for its result",
+                id.short(12)
+            ))
+        })
+        .map_err(StoreError::io(&dir.path().join(claim::CLAIM_FILE)))?;
+        match self.check(&id, Depth::Full) {
+            RunState::Complete(result) => return Ok((*result, CacheOutcome::Hit)),
+            RunState::Damaged(problem) => {
+                self.notice(&format!(
+                    "run {} is damaged ({problem}); recomputing it",
+                    id.short(12)
+                ));
+                remove_if_present(&dir.seal_path())?;
+                remove_if_present(&dir.result_path())?;
+            }
+            _ => {}
+        }
+        remove_stale_temps(dir.path()).map_err(StoreError::io(dir.path()))?;
         self.write_atomic(&dir.manifest_path(), canonical_json(experiment).as_bytes())?;
         remove_if_present(&dir.error_path())?;
 
@@ -373,6 +490,8 @@ impl Store {
                 }
                 self.write_json(&dir.timing_path(), &TimingRecord { wall_time_s })?;
                 self.write_json(&dir.result_path(), &result)?;
+                let seal = seal::seal_of(&dir).map_err(StoreError::io(dir.path()))?;
+                self.write_json(&dir.seal_path(), &seal)?;
                 Ok((result, CacheOutcome::Computed))
             }
             Err(error) => {
