@@ -105,7 +105,9 @@ fn a_tampered_or_missing_run_and_a_missing_output_are_named() {
         "{problems:?}"
     );
     assert!(
-        problems.iter().any(|p| p.contains("hashes to")),
+        problems
+            .iter()
+            .any(|p| p.contains("damaged") && p.contains("manifest.json")),
         "{problems:?}"
     );
 
@@ -123,4 +125,33 @@ fn a_directory_without_lineage_is_an_error() {
     let store = Store::open(tmp.path().join("runs")).unwrap();
     let err = audit(&store, tmp.path(), 0, 0).unwrap_err();
     assert!(err.to_string().contains("no lineage records"), "{err}");
+}
+
+/// Every file of a run is checked against its seal without `--rerun`: a
+/// deleted log or an edited result is a broken link, named.
+#[test]
+fn a_deleted_log_or_an_edited_result_is_found_without_rerunning() {
+    for (file, damage) in [
+        (
+            "run.mcap",
+            (|p: &Path| fs::remove_file(p).unwrap()) as fn(&Path),
+        ),
+        ("result.json", |p: &Path| {
+            let t = fs::read_to_string(p).unwrap();
+            fs::write(p, t.replacen('1', "2", 1)).unwrap()
+        }),
+    ] {
+        let tmp = tempfile::tempdir().unwrap();
+        let (store, out) = setup(tmp.path());
+        let id = store.ids().unwrap().remove(0);
+        damage(&store.run_dir(&id).path().join(file));
+        let report = audit(&store, &out, 0, 0).unwrap();
+        assert!(
+            report
+                .broken
+                .iter()
+                .any(|b| b.problem.contains("damaged") && b.problem.contains(file)),
+            "{file}: {report:#?}"
+        );
+    }
 }

@@ -442,3 +442,48 @@ fn a_real_drum_design_runs_end_to_end() {
         assert!(store.run_dir(&e.id()).mcap_path().is_file());
     }
 }
+
+/// A run damaged after the batch (an emptied result.json, an edited one) is
+/// recomputed by the next batch, alone, and the new lineage names the
+/// recomputed result's hash, not the tampered one's.
+#[test]
+fn a_damaged_run_is_recomputed_by_the_next_batch_not_trusted() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (s, path) = study(tmp.path(), &[]);
+    let store = Store::open(tmp.path().join("store")).unwrap();
+    let dir = StudyDir::new(store.root(), &s, &path);
+    sample(&dir, &s, &SampleSettings::default()).unwrap();
+    let first = Fake::new(&[]);
+    batch(&dir, &s, &store, &settings(1), |e, d| first.run(e, d)).unwrap();
+    let before = snapshot(dir.path());
+
+    let e3 = repose::manifest::read_experiment(&experiment_path(&dir, 3)).unwrap();
+    let e7 = repose::manifest::read_experiment(&experiment_path(&dir, 7)).unwrap();
+    std::fs::write(store.run_dir(&e3.id()).result_path(), b"").unwrap();
+    let r7 = store.run_dir(&e7.id()).result_path();
+    let text = std::fs::read_to_string(&r7).unwrap();
+    std::fs::write(
+        &r7,
+        text.replacen("\"kernel\": \"fake\"", "\"kernel\": \"fakf\"", 1),
+    )
+    .unwrap();
+    assert_eq!(store.status(&e3.id()), RunStatus::Damaged);
+    assert_eq!(store.status(&e7.id()), RunStatus::Damaged);
+
+    let seen = Mutex::new(Vec::new());
+    let again = Fake::new(&[]);
+    let out = batch(&dir, &s, &store, &settings(2), |e, d| {
+        seen.lock().unwrap().push(e.seeds.sample_index);
+        again.run(e, d)
+    })
+    .unwrap();
+    assert_eq!((out.cached, out.computed), (10, 2));
+    let mut seen = seen.into_inner().unwrap();
+    seen.sort();
+    assert_eq!(seen, [3, 7]);
+    assert_eq!(
+        before,
+        snapshot(dir.path()),
+        "the table and its lineage are as before the damage"
+    );
+}

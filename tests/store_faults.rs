@@ -1,0 +1,239 @@
+//! The run store under faults, through the CLI: a killed run re-runs (also
+//! when the next process has the same pid, as PID 1 in a container does), a
+//! damaged run is reported by `runs list`, `runs show` and `audit` and
+//! recomputed by `run`, and two processes running one experiment simulate it
+//! once.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{repose, root, stderr, stdout};
+
+/// The fast pair experiment (a few milliseconds).
+const PAIR: &str = "experiments/validation/pair_hertz_particle_particle.json";
+/// The tiny drum (152 particles; seconds), for runs that must last a while.
+const DRUM: &str = "experiments/tradeoff/drum_tiny.json";
+
+/// The single run directory of `store`.
+fn run_dir(store: &Path) -> PathBuf {
+    let dirs: Vec<PathBuf> = std::fs::read_dir(store)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .collect();
+    assert_eq!(dirs.len(), 1, "{dirs:?}");
+    dirs.into_iter().next().unwrap()
+}
+
+/// Names of the temp files in `dir` that start with `prefix`.
+fn temps_of(dir: &Path, prefix: &str) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(prefix))
+        .collect()
+}
+
+fn temps(dir: &Path) -> Vec<String> {
+    temps_of(dir, ".tmp-")
+}
+
+#[test]
+fn a_killed_run_runs_again_and_its_temp_files_are_removed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = tmp.path().join("runs");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_repose"))
+        .args(["run", DRUM])
+        .current_dir(root())
+        .env("REPOSE_STORE", &store)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Kill it while it streams its log into a temp file (which lives until
+    // the run ends).
+    let started = Instant::now();
+    let streaming = |p: &Path| p.is_dir() && !temps_of(p, ".tmp-run.mcap-").is_empty();
+    let dir = loop {
+        if let Some(dir) = std::fs::read_dir(&store)
+            .ok()
+            .and_then(|mut d| d.find_map(|e| Some(e.ok()?.path()).filter(|p| streaming(p))))
+        {
+            break dir;
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(120),
+            "no temp file appeared"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!temps(&dir).is_empty());
+    assert!(!dir.join("seal.json").exists() && !dir.join("result.json").exists());
+    // The next process may have the killed one's pid (PID 1 in a container):
+    // that its temp names then skip the leftovers is tested in
+    // src/store/atomic.rs, where the pid is known.
+
+    let again = repose(&store, &["run", DRUM]);
+    assert!(again.status.success(), "{}", stderr(&again));
+    assert!(stdout(&again).contains("(computed)"));
+    assert!(temps(&dir).is_empty(), "{:?}", temps(&dir));
+    assert!(dir.join("seal.json").is_file());
+}
+
+#[test]
+fn two_processes_running_one_experiment_simulate_it_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = tmp.path().join("runs");
+    let spawn = || {
+        Command::new(env!("CARGO_BIN_EXE_repose"))
+            .args(["run", DRUM])
+            .current_dir(root())
+            .env("REPOSE_STORE", &store)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (a, b) = (spawn(), spawn());
+    let (a, b) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+    assert!(
+        a.status.success() && b.status.success(),
+        "{}{}",
+        stderr(&a),
+        stderr(&b)
+    );
+    let mut how: Vec<bool> = [&a, &b]
+        .iter()
+        .map(|o| stdout(o).contains("(computed)"))
+        .collect();
+    how.sort();
+    assert_eq!(how, [false, true], "{}\n{}", stdout(&a), stdout(&b));
+    let waited = if stdout(&a).contains("(cache hit)") {
+        &a
+    } else {
+        &b
+    };
+    assert!(stdout(waited).contains("(cache hit)"));
+}
+
+/// One finished pair run in `store`; returns its directory and the bytes of
+/// result.json and run.mcap.
+fn finished(store: &Path) -> (PathBuf, Vec<u8>, Vec<u8>) {
+    let o = repose(store, &["run", PAIR]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let dir = run_dir(store);
+    let result = std::fs::read(dir.join("result.json")).unwrap();
+    let log = std::fs::read(dir.join("run.mcap")).unwrap();
+    (dir, result, log)
+}
+
+#[test]
+fn a_damaged_run_is_listed_shown_and_recomputed_never_reused() {
+    type Damage = fn(&Path);
+    let cases: [(&str, Damage); 4] = [
+        ("result.json", |d| {
+            let mut b = std::fs::read(d.join("result.json")).unwrap();
+            let at = b.iter().position(u8::is_ascii_digit).unwrap();
+            b[at] = if b[at] == b'9' { b'8' } else { b[at] + 1 };
+            std::fs::write(d.join("result.json"), b).unwrap();
+        }),
+        ("manifest.json", |d| {
+            let t = std::fs::read_to_string(d.join("manifest.json")).unwrap();
+            std::fs::write(d.join("manifest.json"), t.replacen("0.", "1.", 1)).unwrap();
+        }),
+        ("run.mcap", |d| {
+            std::fs::remove_file(d.join("run.mcap")).unwrap()
+        }),
+        ("result.json", |d| {
+            std::fs::write(d.join("result.json"), b"").unwrap()
+        }),
+    ];
+    for (file, damage) in cases {
+        let tmp = tempfile::tempdir().unwrap();
+        let store = tmp.path().join("runs");
+        let (dir, result, log) = finished(&store);
+        damage(&dir);
+        let id = dir.file_name().unwrap().to_string_lossy().into_owned();
+
+        let list = repose(&store, &["runs", "list"]);
+        assert_eq!(list.status.code(), Some(1), "{file}: {}", stdout(&list));
+        assert!(stdout(&list).contains("damaged") && stdout(&list).contains(file));
+
+        let show = repose(&store, &["runs", "show", &id[..12]]);
+        assert_eq!(show.status.code(), Some(1), "{file}");
+        assert!(
+            stdout(&show).contains("status:    damaged") && stdout(&show).contains(file),
+            "{file}: {}",
+            stdout(&show)
+        );
+
+        let run = repose(&store, &["run", PAIR]);
+        assert!(run.status.success(), "{file}: {}", stderr(&run));
+        assert!(stdout(&run).contains("(computed)"), "{file}");
+        assert!(
+            stderr(&run).contains("damaged") && stderr(&run).contains("recomputing"),
+            "{file}: {}",
+            stderr(&run)
+        );
+        assert_eq!(std::fs::read(dir.join("result.json")).unwrap(), result);
+        assert_eq!(std::fs::read(dir.join("run.mcap")).unwrap(), log);
+        let list = repose(&store, &["runs", "list"]);
+        assert!(list.status.success() && stdout(&list).contains("complete"));
+    }
+}
+
+/// `audit` looks up a lineage's relative inputs in the audited store only:
+/// a result.json deleted from the store is broken even when the audit runs
+/// from a folder that happens to hold a file of that relative name.
+#[test]
+fn audit_does_not_find_a_deleted_input_in_the_current_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = tmp.path().join("runs");
+    let (dir, _, _) = finished(&store);
+    let id = dir.file_name().unwrap().to_string_lossy().into_owned();
+    let out = store.join("studies/demo");
+    std::fs::create_dir_all(&out).unwrap();
+    let table = out.join("table.csv");
+    std::fs::write(&table, "x\n").unwrap();
+    let result = dir.join("result.json");
+    let lineage = serde_json::json!({
+        "stage": "batch",
+        "repose_version": "0",
+        "parameters": {},
+        "inputs": [{
+            "role": "result",
+            "id_or_path": format!("{id}/result.json"),
+            "sha256": hex::encode(<sha2::Sha256 as sha2::Digest>::digest(std::fs::read(&result).unwrap())),
+        }],
+    });
+    std::fs::write(out.join("table.csv.lineage.json"), lineage.to_string()).unwrap();
+    let audit = |cwd: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_repose"))
+            .args(["--store"])
+            .arg(&store)
+            .arg("audit")
+            .arg(&out)
+            .current_dir(cwd)
+            .output()
+            .unwrap()
+    };
+    assert!(audit(tmp.path()).status.success());
+
+    // Another store's folder, with a copy of the run under the same id.
+    let other = tmp.path().join("other");
+    std::fs::create_dir_all(&other).unwrap();
+    let copy = other.join(&id);
+    std::fs::create_dir_all(&copy).unwrap();
+    for f in ["manifest.json", "result.json", "run.mcap", "seal.json"] {
+        std::fs::copy(dir.join(f), copy.join(f)).unwrap();
+    }
+    std::fs::remove_file(&result).unwrap();
+    let o = audit(&other);
+    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
+    assert!(stdout(&o).contains("BROKEN"), "{}", stdout(&o));
+}
