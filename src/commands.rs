@@ -258,7 +258,7 @@ pub fn run(store_root: &Path, manifest: &Path, out: &mut dyn Write) -> Result<()
             error,
             record_failure,
         }) => {
-            let mut message = error.to_string();
+            let mut message = crate::errors::chain(&error);
             if let Some(f) = record_failure {
                 message.push_str(&format!(" (and error.json could not be written: {f})"));
             }

@@ -22,6 +22,7 @@ pub mod bench;
 pub mod calibrate;
 pub mod commands;
 pub mod dem;
+pub mod errors;
 #[cfg(target_os = "linux")]
 pub mod huge_pages;
 pub mod log;

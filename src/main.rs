@@ -2,7 +2,7 @@
 //! function per subcommand; prints one error report and exits 2 for invalid input,
 //! 1 for a runtime failure.
 
-use std::io;
+use std::io::{self, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -580,10 +580,14 @@ fn main() -> ExitCode {
     }
     match dispatch(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of our output went away (`repose inspect F | head`):
+        // nothing failed that it wanted to know about.
+        Err(e) if repose::errors::is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             let code = e.exit_code();
-            // `{:#}` prints the error and its causes on one report, never a backtrace.
-            eprintln!("error: {:#}", anyhow::Error::new(e));
+            // The error and its causes on one report, each cause once, never a
+            // backtrace.
+            let _ = writeln!(io::stderr(), "error: {}", repose::errors::chain(&e));
             ExitCode::from(code)
         }
     }

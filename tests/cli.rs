@@ -61,16 +61,91 @@ fn validate_accepts_every_example_and_names_its_kind() {
     assert!(stdout(&out).contains("ok experiment "));
 }
 
+/// A manifest that cannot be read (missing, a directory, not UTF-8) is bad
+/// input for every command that takes one: exit 2, naming the file, the OS
+/// error said once.
 #[test]
-fn a_missing_file_is_a_runtime_failure() {
+fn an_unreadable_input_file_exits_2_from_every_command() {
     let tmp = tempfile::tempdir().unwrap();
-    let out = repose(tmp.path(), &["hash", "no/such/file.json"]);
-    assert_eq!(out.status.code(), Some(1));
-    assert!(
-        stderr(&out).contains("cannot read no/such/file.json"),
-        "{}",
-        stderr(&out)
-    );
+    let latin1 = tmp.path().join("latin1.json");
+    std::fs::write(&latin1, b"{\"name\": \"caf\xe9\"}").unwrap();
+    let dir = tmp.path().to_str().unwrap().to_string();
+    for file in ["no/such/file.json", &dir, latin1.to_str().unwrap()] {
+        for command in [
+            "hash",
+            "validate",
+            "run",
+            "inspect",
+            "tradeoff",
+            "sample",
+            "batch",
+            "calibrate",
+        ] {
+            let out = repose(tmp.path(), &[command, file]);
+            assert_eq!(
+                out.status.code(),
+                Some(2),
+                "{command} {file}: {}",
+                stderr(&out)
+            );
+            let err = stderr(&out);
+            assert!(err.contains(file), "{command} {file}: {err}");
+            assert!(!err.contains("panicked"), "{err}");
+            assert!(err.matches("os error").count() <= 1, "{err}");
+        }
+    }
+}
+
+/// serde_json says only "expected value" at a NaN; the report says why.
+#[test]
+fn a_nan_or_infinity_literal_is_explained() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = common::text("experiments/validation/pair_hertz_particle_particle.json");
+    for literal in ["NaN", "Infinity", "-Infinity"] {
+        let bad = text.replacen("0.5", literal, 1);
+        assert_ne!(bad, text);
+        let path = tmp.path().join("nan.json");
+        std::fs::write(&path, bad).unwrap();
+        for command in ["validate", "run"] {
+            let out = repose(tmp.path(), &[command, path.to_str().unwrap()]);
+            assert_eq!(out.status.code(), Some(2), "{command}");
+            assert!(
+                stderr(&out).contains("JSON has no NaN or Infinity"),
+                "{command} {literal}: {}",
+                stderr(&out)
+            );
+        }
+    }
+}
+
+/// `repose inspect F | head`: the reader goes away; repose stops quietly.
+#[test]
+fn a_closed_output_pipe_is_not_an_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = tmp.path().join("store");
+    let file = "experiments/validation/pair_hertz_particle_particle.json";
+    assert!(repose(&store, &["run", file]).status.success());
+    let id = stdout(&repose(&store, &["hash", file])).trim().to_string();
+    let log = store.join(&id).join("run.mcap");
+    for args in [
+        vec!["inspect", log.to_str().unwrap()],
+        vec!["runs", "list"],
+        vec!["runs", "show", &id[..8]],
+        vec!["run", file],
+    ] {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_repose"))
+            .args(&args)
+            .current_dir(common::root())
+            .env("REPOSE_STORE", &store)
+            .stdout(writer)
+            .stderr(std::process::Stdio::piped())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).is_empty(), "{args:?}: {}", stderr(&out));
+    }
 }
 
 #[test]

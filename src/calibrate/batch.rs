@@ -258,7 +258,7 @@ where
                     store
                         .run_cached(&experiments[i], runner)
                         .map(|_| ())
-                        .map_err(|e| e.to_string())
+                        .map_err(|e| crate::errors::chain(&e))
                 });
                 if sender.send((i, outcome)).is_err() {
                     break;

@@ -65,11 +65,12 @@ pub enum InspectError {
 }
 
 impl InspectError {
-    /// True when the file is at fault (corrupt or mismatched), not the system.
+    /// True when the input is at fault: a corrupt or mismatched file, or one
+    /// that cannot be read (missing, a directory), as for every command.
     pub fn is_invalid_input(&self) -> bool {
         matches!(
             self,
-            InspectError::Corrupt { .. } | InspectError::Manifest { .. }
+            InspectError::Corrupt { .. } | InspectError::Manifest { .. } | InspectError::Io { .. }
         )
     }
 }

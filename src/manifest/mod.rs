@@ -68,9 +68,11 @@ pub enum ManifestError {
 }
 
 impl ManifestError {
-    /// True when the input itself is at fault (as opposed to the file system).
+    /// True when the input is at fault: always, since a manifest the user
+    /// names that cannot be read (missing, a directory, not UTF-8) is bad
+    /// input just as a malformed one is (exit 2 from every command).
     pub fn is_invalid_input(&self) -> bool {
-        !matches!(self, ManifestError::Io { .. })
+        true
     }
 }
 
@@ -147,7 +149,37 @@ impl Study {
 }
 
 fn parse_typed<T: DeserializeOwned>(text: &str) -> Result<T, ManifestError> {
-    Ok(serde_json::from_str(text)?)
+    serde_json::from_str(text).map_err(|e| syntax_error(text, e))
+}
+
+/// A JSON error of `text` as a [`ManifestError`], saying what a bare `NaN` or
+/// `Infinity` at the error's position is (serde_json says only "expected
+/// value"): other JSON writers emit them, and the fix is not obvious.
+fn syntax_error(text: &str, error: serde_json::Error) -> ManifestError {
+    let mut error = ManifestError::from(error);
+    if let ManifestError::Syntax {
+        line,
+        column,
+        message,
+    } = &mut error
+    {
+        let at = text
+            .lines()
+            .nth(line.saturating_sub(1))
+            .and_then(|l| l.get(column.saturating_sub(1)..))
+            .unwrap_or("");
+        let at = at.trim_start_matches('-');
+        if ["NaN", "Infinity", "inf", "nan"]
+            .iter()
+            .any(|w| at.starts_with(w))
+        {
+            message.push_str(
+                ": JSON has no NaN or Infinity; every number must be finite \
+                 (write the value you mean, e.g. 1e30)",
+            );
+        }
+    }
+    error
 }
 
 /// Parses and validates an experiment manifest.
@@ -179,7 +211,7 @@ pub fn parse_document(text: &str, kind: Option<DocumentKind>) -> Result<Document
 }
 
 fn detect_kind(text: &str) -> Result<DocumentKind, ManifestError> {
-    let value: Value = serde_json::from_str(text)?;
+    let value: Value = serde_json::from_str(text).map_err(|e| syntax_error(text, e))?;
     let object = value.as_object().ok_or(ManifestError::UnknownKind)?;
     match (
         object.contains_key("scene"),
