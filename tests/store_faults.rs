@@ -237,3 +237,48 @@ fn audit_does_not_find_a_deleted_input_in_the_current_directory() {
     assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
     assert!(stdout(&o).contains("BROKEN"), "{}", stdout(&o));
 }
+
+/// A full disk while the log is written (a 100 kB tmpfs, mounted in a private
+/// user and mount namespace so no privilege is needed): the run fails with
+/// the root cause named once, error.json records it, and nothing is left that
+/// looks complete or half-written.
+#[test]
+fn a_full_disk_names_its_cause_once_and_leaves_nothing_complete() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = tmp.path().join("small");
+    std::fs::create_dir_all(&store).unwrap();
+    let script = r#"
+        mount -t tmpfs -o size=100k tmpfs "$1" || exit 99
+        "$2" --store "$1" run "$3"
+        echo "exit=$?"
+        ls -a "$1"/*/
+        cat "$1"/*/error.json
+    "#;
+    let out = Command::new("unshare")
+        .args([
+            "--user",
+            "--map-root-user",
+            "--mount",
+            "sh",
+            "-c",
+            script,
+            "sh",
+        ])
+        .arg(&store)
+        .arg(env!("CARGO_BIN_EXE_repose"))
+        .arg(DRUM)
+        .current_dir(root())
+        .output()
+        .expect("unshare (util-linux) runs");
+    let (text, err) = (stdout(&out), stderr(&out));
+    assert_ne!(out.status.code(), Some(99), "cannot mount a tmpfs: {err}");
+    assert!(text.contains("exit=1"), "{text}\n{err}");
+    assert_eq!(err.matches("No space left on device").count(), 1, "{err}");
+    assert!(err.contains("run log"), "{err}");
+    let files: Vec<&str> = text.lines().collect();
+    for absent in ["seal.json", "result.json", "run.mcap"] {
+        assert!(!files.contains(&absent), "{absent} in {files:?}");
+    }
+    assert!(!files.iter().any(|f| f.starts_with(".tmp-")), "{files:?}");
+    assert!(files.contains(&"error.json") && text.contains("No space left on device"));
+}
