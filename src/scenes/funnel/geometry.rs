@@ -282,7 +282,7 @@ mod tests {
     fn spring_out_speed_turns_the_contact_energy_into_kinetic_energy() {
         // E* of the PU sphere (0.35 MPa, ν 0.4) on steel (1 GPa, ν 0.3), r = 3 mm.
         let e_star = 1.0 / ((1.0 - 0.16) / 0.35e6 + (1.0 - 0.09) / 1.0e9);
-        let (r, rho, lambda) = (0.003, 60.0, 0.3);
+        let (r, rho, lambda): (f64, f64, f64) = (0.003, 60.0, 0.3);
         let energy = 8.0 / 15.0 * e_star * r.sqrt() * (lambda * r).powf(2.5);
         let mass = rho * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
         let v = spring_out_speed_m_s(e_star, 1.0, lambda, rho);
