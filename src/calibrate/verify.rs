@@ -234,7 +234,7 @@ where
             r.relative_error.map_or(Cell::Empty, Cell::Number),
             Cell::Number(r.tolerance),
             Cell::Text(if r.passes() { "yes" } else { "no" }.into()),
-            Cell::Text(r.status.reason().unwrap_or_default().to_string()),
+            Cell::Text(csv_word(r.status.reason().unwrap_or_default())),
         ]);
     }
     let markdown = markdown(&rows);
@@ -248,6 +248,21 @@ where
         markdown,
         table: path,
     })
+}
+
+/// `text` as a CSV cell of [`Cell::Text`]: commas become semicolons, quotes
+/// apostrophes and line breaks spaces (an error message such as "has 1 surface
+/// points, at least 3 are needed" would otherwise split its row). The Markdown
+/// table quotes the message as it is.
+fn csv_word(text: &str) -> String {
+    text.chars()
+        .map(|c| match c {
+            ',' => ';',
+            '"' => '\'',
+            '\n' | '\r' => ' ',
+            c => c,
+        })
+        .collect()
 }
 
 fn markdown(rows: &[VerifyRow]) -> String {
