@@ -873,8 +873,9 @@ pub fn search(
 
 /// `repose verify STUDY`: re-simulates the `candidates` largest clusters'
 /// centres in the calibration scene and every verification scene (he2019
-/// Table 3); prints the table. A candidate outside tolerance is a finding,
-/// not an error; a failed run makes the command fail after the table.
+/// Table 3); prints the table. A candidate outside tolerance, or whose scene
+/// cannot measure an angle, is a finding, not an error; any other failed run
+/// makes the command fail after the table.
 pub fn verify(
     store_root: &Path,
     study_path: &Path,
@@ -894,7 +895,16 @@ pub fn verify(
     })?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(out, "  table: {}", outcome.table.display())?;
-    let failed = outcome.rows.iter().filter(|r| r.failure.is_some()).count();
+    let unmeasured = outcome.not_measurable();
+    if unmeasured > 0 {
+        writeln!(
+            out,
+            "note: {unmeasured} of {} verification run(s) could not measure an angle: \
+             those candidates fail those scenes (reasons above)",
+            outcome.rows.len()
+        )?;
+    }
+    let failed = outcome.errors();
     if failed > 0 {
         return Err(CommandError::BatchIncomplete {
             failed,
@@ -915,7 +925,9 @@ pub const DEFAULT_STUDY: &str = include_str!("../experiments/he2019-quick/study.
 /// each stage's defaults; without a study, the embedded default is written to
 /// `<store>/default-study.json` and calibrated. Failed batch runs (e.g. a pile
 /// whose angle is not measurable) are reported and left out of training
-/// rather than stopping the chain; a failed verification run fails the command.
+/// rather than stopping the chain; a verification run whose angle is not
+/// measurable is a failed candidate in the verification table, any other
+/// failed verification run fails the command (after the table is written).
 pub fn calibrate(
     store_root: &Path,
     study_path: Option<&Path>,

@@ -487,3 +487,97 @@ fn a_damaged_run_is_recomputed_by_the_next_batch_not_trusted() {
         "the table and its lineage are as before the damage"
     );
 }
+
+/// he2019-quick's `repose calibrate` (2026-11-26) ended with `error: 2 of 3
+/// run(s) failed` because the candidate's baffle slope and drum surface had
+/// too few surface points to fit. A scene that cannot measure an angle is
+/// the candidate failing that scene, with the reason in the table; another
+/// failure (here an injected one, as an engine error would be) stays an error.
+#[test]
+fn a_verification_scene_that_cannot_measure_an_angle_is_a_failed_candidate() {
+    use repose::calibrate::verify::VerifyStatus;
+    use repose::dem::health::{HealthCause, HealthError};
+    use repose::manifest::Scene;
+    use repose::measure::MeasureError;
+    use repose::scenes::{drum::DrumError, SceneError};
+
+    let tmp = tempfile::tempdir().unwrap();
+    let (s, path) = study(tmp.path(), &[("/design/size", json!(60))]);
+    let store = Store::open(tmp.path().join("store")).unwrap();
+    let dir = StudyDir::new(store.root(), &s, &path);
+    sample(&dir, &s, &SampleSettings::default()).unwrap();
+    let fake = Fake::new(&[]);
+    batch(&dir, &s, &store, &settings(2), |e, d| fake.run(e, d)).unwrap();
+    let options = TrainOptions {
+        settings: TrainSettings::with_seed(7),
+        train_fraction: DEFAULT_TRAIN_FRACTION,
+    };
+    train_study(&dir, &s, &options).unwrap();
+    let found = search(&dir, &s, &SearchSettings::with_seed(7)).unwrap();
+    assert!(!found.clusters.is_empty());
+
+    // The 15 rpm verification drum's surface is too short to fit; the
+    // calibration drum of candidate 2 fails for another reason.
+    let is_drum15 = |e: &Experiment| matches!(&e.scene, Scene::Drum(d) if d.rpm == 15.0);
+    let runner = |e: &Experiment, d: &RunDir| -> Result<RunResult, SceneError> {
+        if is_drum15(e) {
+            return Err(DrumError::Angle(MeasureError::TooFewPoints {
+                what: "drum free surface",
+                found: 2,
+                needed: 3,
+            })
+            .into());
+        }
+        if e.seeds.sample_index == 2 {
+            return Err(DrumError::Health(HealthError {
+                particle_id: 7,
+                step: 100,
+                time_s: 0.01,
+                cause: HealthCause::NonFinite,
+            })
+            .into());
+        }
+        Ok(fake.run(e, d).unwrap())
+    };
+    let checked = verify(&dir, &s, &store, &settings(2), 2, runner).unwrap();
+    let candidates = found.clusters.len().min(2);
+    assert_eq!(checked.rows.len(), 2 * candidates);
+    let reason = "drum: static angle not measurable: not measurable: drum free surface has 2 \
+                  surface points, at least 3 are needed";
+    for row in &checked.rows {
+        match (row.scene.as_str(), row.group) {
+            ("drum15", _) => {
+                assert_eq!(row.status, VerifyStatus::NotMeasurable(reason.into()));
+                assert_eq!((row.simulated_deg, row.relative_error), (None, None));
+                assert!(!row.passes());
+            }
+            (_, 2) => assert!(matches!(row.status, VerifyStatus::Failed(_)), "{row:?}"),
+            _ => assert_eq!(row.status, VerifyStatus::Measured),
+        }
+    }
+    assert_eq!(checked.not_measurable(), candidates);
+    assert_eq!(checked.errors(), candidates - 1);
+    // The Markdown table and the CSV both say why.
+    assert!(
+        checked
+            .markdown
+            .contains("| 1 | drum15 | not measurable | 28.00 | — | no (tolerance 5 %) |"),
+        "{}",
+        checked.markdown
+    );
+    assert!(
+        checked
+            .markdown
+            .contains(&format!("- candidate 1 drum15: {reason}")),
+        "{}",
+        checked.markdown
+    );
+    // The CSV's cells hold no commas: the message's comma is a semicolon, and
+    // the table reads back with every row as wide as its header.
+    let csv = std::fs::read_to_string(&checked.table).unwrap();
+    let drum15 = csv.lines().find(|l| l.starts_with("1,drum15,")).unwrap();
+    let cell = reason.replace(',', ";");
+    assert!(drum15.ends_with(&format!(",no,{cell}")), "{drum15}");
+    let table = repose::calibrate::table::Table::parse(&csv).unwrap();
+    assert!(table.rows.iter().all(|r| r.len() == table.header.len()));
+}

@@ -10,6 +10,16 @@
 //! ([`Study::experiment`]) with `sample_index` = the cluster's group number,
 //! cached by id in the store like every run; a killed verify resumes, and a
 //! failed run is reported in its row without stopping the others.
+//!
+//! A run whose scene could not measure an angle (its error says "not
+//! measurable", as every [`crate::measure::MeasureError`] and every scene's
+//! angle error does: a baffle slope or a drum surface with too few surface
+//! points, a pile too flat) is an outcome of the candidate, not a fault: the
+//! parameter set does not give that test a measurable slope, so it fails that
+//! scene, and the table says why ([`VerifyStatus::NotMeasurable`]). Any other
+//! failure (the engine's health check, I/O) is an error
+//! ([`VerifyStatus::Failed`], [`VerifyOutcome::errors`]) that `repose verify`
+//! and `repose calibrate` exit with after writing the table.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -39,8 +49,8 @@ pub struct VerifyRow {
     pub relative_error: Option<f64>,
     /// The scene's accepted relative error.
     pub tolerance: f64,
-    /// Why the run failed, if it did.
-    pub failure: Option<String>,
+    /// How the run ended.
+    pub status: VerifyStatus,
 }
 
 impl VerifyRow {
@@ -49,6 +59,42 @@ impl VerifyRow {
         self.relative_error.is_some_and(|e| e <= self.tolerance)
     }
 }
+
+/// How a verification run ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum VerifyStatus {
+    /// The scene measured an angle.
+    Measured,
+    /// The run ended, but its scene could not measure an angle; the run's
+    /// error message (which says "not measurable") tells why. The candidate
+    /// fails the scene.
+    NotMeasurable(String),
+    /// The run failed for another reason (the message), or gave no angle.
+    Failed(String),
+}
+
+impl VerifyStatus {
+    /// The status of a run that failed with `message`: not measurable when the
+    /// message says so (see the module docs), failed otherwise.
+    pub fn of_failure(message: &str) -> VerifyStatus {
+        if message.contains(NOT_MEASURABLE) {
+            VerifyStatus::NotMeasurable(message.to_string())
+        } else {
+            VerifyStatus::Failed(message.to_string())
+        }
+    }
+
+    /// The reason a run has no angle (none when it was measured).
+    pub fn reason(&self) -> Option<&str> {
+        match self {
+            VerifyStatus::Measured => None,
+            VerifyStatus::NotMeasurable(m) | VerifyStatus::Failed(m) => Some(m),
+        }
+    }
+}
+
+/// What every "cannot measure" error of the measurements and scenes says.
+const NOT_MEASURABLE: &str = "not measurable";
 
 /// What verify did.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,6 +105,25 @@ pub struct VerifyOutcome {
     pub markdown: String,
     /// verification.csv.
     pub table: PathBuf,
+}
+
+impl VerifyOutcome {
+    /// The rows whose run failed for a reason other than an unmeasurable
+    /// angle: the errors the commands exit with.
+    pub fn errors(&self) -> usize {
+        self.rows
+            .iter()
+            .filter(|r| matches!(r.status, VerifyStatus::Failed(_)))
+            .count()
+    }
+
+    /// The rows whose scene could not measure an angle (failed candidates).
+    pub fn not_measurable(&self) -> usize {
+        self.rows
+            .iter()
+            .filter(|r| matches!(r.status, VerifyStatus::NotMeasurable(_)))
+            .count()
+    }
 }
 
 /// `search/clusters.csv`.
@@ -131,11 +196,11 @@ where
             lineage = lineage.with_input(dir.input("result", &store.run_dir(&id).result_path())?);
         }
         let simulated = result.and_then(|r| r.headline_angle_deg);
-        let failure = failures
-            .iter()
-            .find(|f| f.0 == i)
-            .map(|f| f.1.clone())
-            .or_else(|| simulated.is_none().then(|| "no angle".to_string()));
+        let status = match (failures.iter().find(|f| f.0 == i), simulated) {
+            (Some((_, message)), _) => VerifyStatus::of_failure(message),
+            (None, Some(_)) => VerifyStatus::Measured,
+            (None, None) => VerifyStatus::Failed("no angle".to_string()),
+        };
         rows.push(VerifyRow {
             group: *group,
             scene: target.name.clone(),
@@ -145,7 +210,7 @@ where
             relative_error: simulated
                 .map(|s| (s - target.target_angle_deg).abs() / target.target_angle_deg),
             tolerance: target.tolerance_fraction,
-            failure,
+            status,
         });
     }
     let mut csv = CsvWriter::new(&[
@@ -169,7 +234,7 @@ where
             r.relative_error.map_or(Cell::Empty, Cell::Number),
             Cell::Number(r.tolerance),
             Cell::Text(if r.passes() { "yes" } else { "no" }.into()),
-            Cell::Text(r.failure.clone().unwrap_or_default()),
+            Cell::Text(csv_word(r.status.reason().unwrap_or_default())),
         ]);
     }
     let markdown = markdown(&rows);
@@ -185,19 +250,38 @@ where
     })
 }
 
+/// `text` as a CSV cell of [`Cell::Text`]: commas become semicolons, quotes
+/// apostrophes and line breaks spaces (an error message such as "has 1 surface
+/// points, at least 3 are needed" would otherwise split its row). The Markdown
+/// table quotes the message as it is.
+fn csv_word(text: &str) -> String {
+    text.chars()
+        .map(|c| match c {
+            ',' => ';',
+            '"' => '\'',
+            '\n' | '\r' => ' ',
+            c => c,
+        })
+        .collect()
+}
+
 fn markdown(rows: &[VerifyRow]) -> String {
     let mut out = String::from(
         "| candidate | scene | simulated (°) | measured (°) | relative error | pass |\n\
          |---|---|---|---|---|---|\n",
     );
     for r in rows {
+        let simulated = match (&r.status, r.simulated_deg) {
+            (VerifyStatus::Measured, Some(s)) => format!("{s:.2}"),
+            (VerifyStatus::NotMeasurable(_), _) => "not measurable".to_string(),
+            _ => "failed".to_string(),
+        };
         let _ = writeln!(
             out,
             "| {} | {} | {} | {:.2} | {} | {} |",
             r.group,
             r.scene,
-            r.simulated_deg
-                .map_or_else(|| "failed".to_string(), |s| format!("{s:.2}")),
+            simulated,
             r.measured_deg,
             r.relative_error
                 .map_or_else(|| "—".to_string(), |e| format!("{:.1} %", 100.0 * e)),
@@ -207,6 +291,16 @@ fn markdown(rows: &[VerifyRow]) -> String {
                 format!("no (tolerance {:.0} %)", 100.0 * r.tolerance)
             },
         );
+    }
+    let reasons: Vec<_> = rows
+        .iter()
+        .filter_map(|r| r.status.reason().map(|why| (r, why)))
+        .collect();
+    if !reasons.is_empty() {
+        out.push_str("\nWhy a scene has no angle:\n\n");
+        for (r, why) in reasons {
+            let _ = writeln!(out, "- candidate {} {}: {why}", r.group, r.scene);
+        }
     }
     out
 }

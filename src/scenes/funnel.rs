@@ -55,10 +55,18 @@
 //! sunk [`geometry::REMOVAL_DEPTH_DIAMETERS`] mean diameters below the
 //! platform's face, or left the keep zone sideways, are removed
 //! (`Simulation::retain`): they fell off the platform. The simulation box
-//! extends beyond that zone by what the fastest particle (free fall from the
-//! funnel top plus the brush tip speed) travels in one interval, so a falling
-//! particle is always removed before it can leave the box and trip the health
-//! check. Traces: kinetic energy, contacts, overlap, `discharged` (particles
+//! must hold whatever the scene can throw, because leaving it stops the run
+//! (the health check): it extends beyond that zone by what the fastest
+//! particle travels in one interval, so a particle is removed before it can
+//! leave the box, and above the funnel's rim by the height such a particle
+//! thrown upwards climbs ([`geometry::FunnelGeometry::domain`]). The fastest
+//! particle is bounded by free fall from the funnel top plus the brush tip
+//! speed plus the speed of a particle squirting out of a contact squeezed to
+//! the health check's overlap bound ([`geometry::spring_out_speed_m_s`]): the
+//! kinematic brush wedges particles against those on the cone and throws them
+//! out of the funnel faster than it moves. The box bounds positions only (the
+//! neighbour grid covers the particles), so its size changes no trajectory.
+//! Traces: kinetic energy, contacts, overlap, `discharged` (particles
 //! whose centre is below the tube's lowest point), `removed` (cumulative) and
 //! `angle` (the pile angle when measurable); the MCAP log gets a frame at each
 //! sample.
@@ -94,8 +102,9 @@ use super::protocol::{
 };
 use super::{physics, SceneError};
 use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::material::effective_youngs_modulus;
 use crate::dem::particles::Particles;
-use crate::dem::simulation::{Simulation, SimulationSetup, World};
+use crate::dem::simulation::{ContactSetup, Simulation, SimulationSetup, World};
 use crate::dem::vec3::Vec3;
 use crate::log::{AngleSample, LogError, LogOptions, RunLog, Trace};
 use crate::manifest::scene::FunnelPileScene;
@@ -294,6 +303,22 @@ fn speed_scale(exp: &Experiment, scene: &FunnelPileScene) -> Result<f64, SceneEr
     Ok(FunnelGeometry::new(scene, d_mean).speed_bound_m_s)
 }
 
+/// The fastest a particle can squirt out of its stiffest contact (the
+/// particles' own or a wall material's) at the overlap bound of `health`, m/s
+/// ([`geometry::spring_out_speed_m_s`]).
+fn spring_out_speed(contact: &ContactSetup, rho: f64, health: &HealthLimits) -> f64 {
+    let particle = &contact.particle_material;
+    let pair = (effective_youngs_modulus(particle, particle), 0.5);
+    let walls = contact
+        .wall_materials
+        .iter()
+        .map(|(wall, _)| (effective_youngs_modulus(particle, wall), 1.0));
+    std::iter::once(pair)
+        .chain(walls)
+        .map(|(e_star, c)| geometry::spring_out_speed_m_s(e_star, c, health.max_overlap_ratio, rho))
+        .fold(0.0, f64::max)
+}
+
 /// Every angle with its fit diagnostics; the headline is the mean over all
 /// flanks.
 fn put_angles(result: &mut RunResult, a: &SideViews) {
@@ -370,14 +395,18 @@ pub fn simulate(
     for p in first {
         particles.push(p, rho);
     }
-    let world = World::new(particles, walls, geom.domain().map_err(FunnelError::from)?);
+    let health = HealthLimits::default();
+    let domain = geom
+        .domain(spring_out_speed(&contact, rho, &health))
+        .map_err(FunnelError::from)?;
+    let world = World::new(particles, walls, domain);
     let setup = SimulationSetup {
         contact,
         density_kg_m3: rho,
         gravity_m_s2: Some(Vec3::new(0.0, 0.0, -geometry::G_M_S2)),
         dt_s: dt,
         skin_m: 0.1 * d_mean,
-        health: HealthLimits::default(),
+        health,
     };
     let mut sim = Simulation::new(world, &setup).map_err(FunnelError::from)?;
 

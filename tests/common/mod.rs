@@ -58,7 +58,9 @@ pub fn edit(mut v: Value, pointer: &str, new: Option<Value>) -> Value {
     v
 }
 
-/// Every `*.json` file under `dir`, recursively, sorted.
+/// Every `*.json` file under `dir`, recursively, sorted, except those in
+/// `measured/` folders: they hold measured outputs (e.g.
+/// experiments/he2019-quick/measured/outcome.json), not manifests.
 pub fn json_files(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -66,7 +68,9 @@ pub fn json_files(dir: &Path) -> Vec<PathBuf> {
         for entry in std::fs::read_dir(&d).unwrap() {
             let path = entry.unwrap().path();
             if path.is_dir() {
-                stack.push(path);
+                if path.file_name().is_some_and(|n| n != "measured") {
+                    stack.push(path);
+                }
             } else if path.extension().is_some_and(|e| e == "json") {
                 out.push(path);
             }

@@ -48,8 +48,10 @@ pub struct FunnelGeometry {
     pub platform_radius_m: f64,
     /// Mean particle diameter, m.
     pub d_mean_m: f64,
-    /// Bound on particle speed used to size the safety margins, m/s: free fall
-    /// from the funnel top to the removal depth plus the brush tip speed.
+    /// Free fall from the funnel top to the removal depth plus the brush tip
+    /// speed, m/s: the speed of a particle that falls or is carried by the
+    /// brush, the log's colour scale. A particle squeezed out of a contact can
+    /// be faster ([`FunnelGeometry::domain`] adds that).
     pub speed_bound_m_s: f64,
     /// Particles whose centre is below this height are removed, m.
     pub removal_z_m: f64,
@@ -95,22 +97,27 @@ impl FunnelGeometry {
         }
     }
 
-    /// How far a particle can travel in one sample interval, plus a margin, m:
-    /// the distance between the keep zone and the simulation box, so that a
-    /// particle leaving the keep zone is removed before it leaves the box.
-    fn travel_margin_m(&self) -> f64 {
+    /// The simulation box: the keep zone widened on every side by how far a
+    /// particle at the throw speed bound travels in one sample interval (so a
+    /// particle leaving the keep zone is removed before it leaves the box), and
+    /// reaching up to where such a particle thrown upwards from the funnel's top
+    /// rim turns back, plus that interval's travel. The throw speed bound is
+    /// [`FunnelGeometry::speed_bound_m_s`] plus `spring_out_m_s`, the fastest a
+    /// particle leaves a squeezed contact ([`spring_out_speed_m_s`]).
+    ///
+    /// The box only bounds where particles may be (the neighbour grid covers
+    /// the particles, not the box), so its size changes no trajectory; above
+    /// the funnel nothing removes a thrown particle: it falls back into the
+    /// funnel or past the keep zone's side.
+    pub fn domain(&self, spring_out_m_s: f64) -> Result<Domain, DomainError> {
+        let v = self.speed_bound_m_s + spring_out_m_s;
         let dt = self.sample_interval_s;
-        self.speed_bound_m_s * dt + 0.5 * G_M_S2 * dt * dt + MARGIN_DIAMETERS * self.d_mean_m
-    }
-
-    /// The simulation box: the keep zone widened by one sample interval's travel;
-    /// the top clears the funnel rim by the same amount.
-    pub fn domain(&self) -> Result<Domain, DomainError> {
-        let m = self.travel_margin_m();
+        let m = v * dt + 0.5 * G_M_S2 * dt * dt + MARGIN_DIAMETERS * self.d_mean_m;
         let half = self.keep_half_width_m + m;
+        let rise = v * v / (2.0 * G_M_S2);
         Domain::new(
             Vec3::new(-half, -half, self.removal_z_m - m),
-            Vec3::new(half, half, self.top_z_m + m),
+            Vec3::new(half, half, self.top_z_m + rise + m),
             [false; 3],
         )
     }
@@ -140,6 +147,34 @@ impl FunnelGeometry {
             radius_top_m: self.outlet_radius_m + fill_height_m * self.half_angle_rad.tan(),
         }
     }
+}
+
+/// The fastest a particle can leave a squeezed contact, m/s: the speed its
+/// mass reaches when the elastic (Hertz) energy of one contact at the
+/// `overlap_ratio` bound of the health check turns into its kinetic energy.
+///
+/// `e_star_pa` is the contact's effective Young's modulus, `r_star_ratio` its
+/// effective radius over the particle's radius (1 against a wall, ½ against
+/// an equal particle), `density_kg_m3` the particle's density. With
+/// U = 8/15 E* √R* δ^{5/2}, R* = c r, δ = λ r and m = ρ 4π/3 r³ the radius
+/// cancels: v = √(4 E* √c λ^{5/2} / (5π ρ)).
+///
+/// Why the funnel needs it: the brush's edge is kinematic, so a particle
+/// wedged between it and a particle lying on the cone is pressed into both
+/// until it squirts out, faster than the brush moves (measured on
+/// he2019-quick sample 42: 2.2 m/s with the blade at 0.25 m/s there). It
+/// bounds the energy of one contact at the limit, not every throw: a particle
+/// pressed by several contacts at once could leave faster, and would then
+/// still stop the run with `left the domain`.
+pub fn spring_out_speed_m_s(
+    e_star_pa: f64,
+    r_star_ratio: f64,
+    overlap_ratio: f64,
+    density_kg_m3: f64,
+) -> f64 {
+    (4.0 * e_star_pa * r_star_ratio.sqrt() * overlap_ratio.powf(2.5)
+        / (5.0 * std::f64::consts::PI * density_kg_m3))
+        .sqrt()
 }
 
 /// The walls in order: the cone (0), the outlet tube (1), the platform (2), then
@@ -225,4 +260,54 @@ fn blade(
         0.5 * width,
         FUNNEL_MATERIAL,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::manifest::parse_experiment;
+    use crate::manifest::scene::Scene;
+
+    /// he2019-quick's funnel (`experiments/funnel_pile/quick.json`), 6 mm spheres.
+    fn quick() -> FunnelGeometry {
+        let text = include_str!("../../../experiments/funnel_pile/quick.json");
+        let exp = parse_experiment(text).unwrap();
+        let Scene::FunnelPile(scene) = &exp.scene else {
+            unreachable!()
+        };
+        FunnelGeometry::new(scene, 0.006)
+    }
+
+    #[test]
+    fn spring_out_speed_turns_the_contact_energy_into_kinetic_energy() {
+        // E* of the PU sphere (0.35 MPa, ν 0.4) on steel (1 GPa, ν 0.3), r = 3 mm.
+        let e_star = 1.0 / ((1.0 - 0.16) / 0.35e6 + (1.0 - 0.09) / 1.0e9);
+        let (r, rho, lambda): (f64, f64, f64) = (0.003, 60.0, 0.3);
+        let energy = 8.0 / 15.0 * e_star * r.sqrt() * (lambda * r).powf(2.5);
+        let mass = rho * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+        let v = spring_out_speed_m_s(e_star, 1.0, lambda, rho);
+        assert!((0.5 * mass * v * v / energy - 1.0).abs() < 1e-12);
+        // Against an equal particle, R* = r / 2: a factor 2^{-1/4} in speed.
+        let pair = spring_out_speed_m_s(e_star, 0.5, lambda, rho);
+        assert!((pair / v - 0.5f64.powf(0.25)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_box_holds_a_throw_at_the_bound_from_the_rim() {
+        let g = quick();
+        let spring = 9.3;
+        let b = g.domain(spring).unwrap();
+        let v = g.speed_bound_m_s + spring;
+        // Straight up from the top rim: the apex is inside.
+        let apex = g.top_z_m + v * v / (2.0 * G_M_S2);
+        assert!(b.contains(Vec3::new(0.0, 0.0, apex)));
+        // Sideways: one sample interval's flight beyond the keep zone is inside.
+        let edge = g.keep_half_width_m + v * g.sample_interval_s;
+        assert!(b.contains(Vec3::new(edge, edge, 0.5 * g.top_z_m)));
+        // Where he2019-quick sample 42's thrown particle left the old box.
+        assert!(b.contains(Vec3::new(0.060372, 0.011534, 0.216045)));
+        // Without a squeeze the box ends where free fall and the brush reach.
+        let old = g.domain(0.0).unwrap();
+        assert!(!old.contains(Vec3::new(0.0, 0.0, apex)));
+    }
 }
