@@ -3,13 +3,12 @@
 //!
 //! Checked every step: non-finite state, overlap beyond a bound relative to
 //! the smaller radius, particles leaving the (non-periodic) domain, and
-//! tunnelling. Checked
-//! every [`ENERGY_CHECK_INTERVAL`] steps in a closed, undriven, non-cohesive
-//! system (no moving walls, no insertion or removal since the reference was
-//! taken, no JKR): the mechanical energy (kinetic + gravitational + Hertz
-//! elastic) must not grow by more than [`HealthLimits::energy_growth`]. A
-//! cohesive system is excluded because adhesion legitimately converts surface
-//! energy into kinetic energy.
+//! tunnelling. Checked every [`ENERGY_CHECK_INTERVAL`] steps in a closed,
+//! undriven, non-cohesive system (no moving walls, no insertion or removal
+//! since the reference was taken, no JKR): the mechanical energy (kinetic +
+//! gravitational + Hertz elastic) must not grow by more than
+//! [`HealthLimits::energy_growth`]. A cohesive system is excluded because
+//! adhesion legitimately converts surface energy into kinetic energy.
 //!
 //! Tunnelling: a particle that moves farther in one step than the overlap
 //! bound times its radius ([`HealthLimits::max_overlap_ratio`], the same
@@ -20,7 +19,7 @@
 //! other without a single step in contact. The overlap check alone would
 //! catch the first only when a step happens to land in the overlap, and
 //! never the second: two particles met at 1,000 m/s with a step designed
-//! for 0.5 m/s (4 radii per step) passed through each other and the run
+//! for 0.5 m/s (4.7 radii per step) passed through each other and the run
 //! ended with an unrelated complaint (`the contact did not end`, or a
 //! particle leaving the domain long after). The test is per particle and
 //! per step, inside the drift (a product and a comparison per particle),

@@ -23,7 +23,7 @@
 //! the design speed — is reported, not refused (the run has happened; its
 //! result may still be what the user wanted). Measured why it matters: the
 //! drum smoke with Rayleigh fraction 0.5 and design speed 1e-3 m/s (20 steps
-//! per contact at 1 mm/s, 6–7 at the 0.3 m/s its particles reach) moved the
+//! per contact at 1 mm/s, 5.7 at the 0.52 m/s its particles reach) moved the
 //! dynamic angle from 31.4° to 41.2° and the static one from 35.6° to 11.5°
 //! without a word (issue 24). The stiffest contact and the fastest approach
 //! of any contact are paired, so the check errs on the side of warning (the
