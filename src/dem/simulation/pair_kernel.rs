@@ -183,19 +183,24 @@ impl<B: Boundary> PairKernel<'_, B> {
         sink: &mut S,
     ) -> PairFound {
         let mut acc = PairFound::default();
+        // The fastest approach per lane, reduced across lanes once at the end.
+        let mut fastest = T::splat(0.0);
         for (k, (p, h)) in pairs
             .chunks_exact(T::LANES)
             .zip(history.chunks_exact_mut(T::LANES))
             .enumerate()
         {
-            let found = self.lanes::<N, R, T, S>(first + k * T::LANES, p, h, sink);
+            let (found, approach) = self.lanes::<N, R, T, S>(first + k * T::LANES, p, h, sink);
             acc = acc.merge(found);
+            fastest = T::select(approach.gt(fastest), approach, fastest);
         }
+        acc.approach_m_s = (0..T::LANES).map(|l| fastest.lane(l)).fold(0.0, f64::max);
         acc
     }
 
     /// `T::LANES` listed pairs with indices `first..` at once (each slice
-    /// holds one entry per lane).
+    /// holds one entry per lane); returns what they found (but the approach)
+    /// and each lane's approach speed (0 where not in contact), m/s.
     #[inline(always)]
     fn lanes<N: NormalModel, R: RollingModel, T: Real, S: PairSink>(
         &self,
@@ -203,7 +208,7 @@ impl<B: Boundary> PairKernel<'_, B> {
         pairs: &[[u32; 2]],
         history: &mut [ContactHistory<N, R>],
         sink: &mut S,
-    ) -> PairFound {
+    ) -> (PairFound, T) {
         let at = |l: usize| pairs[l.min(T::LANES - 1)].map(|k| k as usize);
         let si: [&Sphere; MAX_LANES] = std::array::from_fn(|l| &self.spheres[at(l)[0]]);
         let sj: [&Sphere; MAX_LANES] = std::array::from_fn(|l| &self.spheres[at(l)[1]]);
@@ -254,7 +259,6 @@ impl<B: Boundary> PairKernel<'_, B> {
                 let ratio = overlap.lane(l).max(0.0) * mi[l].inv_r.max(mj[l].inv_r);
                 found.contacts += 1;
                 found.worst = worse(found.worst, (ratio, first + l));
-                found.approach_m_s = found.approach_m_s.max(-c.normal_velocity_m_s.lane(l));
                 let force = PairForce {
                     force_on_first: c.force.lane(l),
                     torque: [torque_i.lane(l), torque_j.lane(l)],
@@ -262,7 +266,8 @@ impl<B: Boundary> PairKernel<'_, B> {
                 sink.put(i, j, &force);
             }
         }
-        found
+        let approach = T::select(c.active, -c.normal_velocity_m_s, T::splat(0.0));
+        (found, approach)
     }
 }
 

@@ -182,7 +182,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         let drift = Drift::<B>::new(world.domain, self.dt, &self.neighbors, &self.limits);
         let runs = self.records.runs(&mut world.particles, self.tiles.shares());
         let (left, moved, tunnelled) = run_jobs(self.team.as_ref(), runs, |run| {
-            let mut found = (None, false, None);
+            let mut found = (None, false, false);
             for (k, ((((x, v), w), (f, t)), ((sphere, motion), kick))) in run
                 .position
                 .iter_mut()
@@ -210,28 +210,36 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                 found = (
                     min_option(found.0, left),
                     found.1 || moved,
-                    min_option(found.2, tunnelled),
+                    found.2 | tunnelled,
                 );
             }
             found
         })
         .into_iter()
-        .fold((None, false, None), |a, b| {
-            (min_option(a.0, b.0), a.1 || b.1, min_option(a.2, b.2))
+        .fold((None, false, false), |a, b| {
+            (min_option(a.0, b.0), a.1 || b.1, a.2 | b.2)
         });
         self.tunnelled(world, tunnelled)?;
         self.left_domain(world, left)?;
         Ok(moved)
     }
 
-    /// The error for the lowest-indexed particle that moved too far in the
-    /// drift just made, if any: the drift of step `world.step + 1`, so the
-    /// error names that step and the time at its end.
-    fn tunnelled(&self, world: &World, tunnelled: Option<usize>) -> Result<(), HealthError> {
-        let Some(i) = tunnelled else {
+    /// If the drift just made moved some particle too far (`tunnelled`),
+    /// the error for the lowest-indexed one: the drift of step
+    /// `world.step + 1`, so the error names that step and the time at its
+    /// end. The drift only flags (an `or` per particle); the search repeats
+    /// its test, on the velocity the drift stored, when the flag is up.
+    fn tunnelled(&self, world: &World, tunnelled: bool) -> Result<(), HealthError> {
+        if !tunnelled {
+            return Ok(());
+        }
+        let p = &world.particles;
+        let limit_sq = step_limit_sq(&self.limits);
+        let Some(i) =
+            (0..p.len()).find(|&i| too_far(p.velocity[i] * self.dt, p.radius[i], limit_sq))
+        else {
             return Ok(());
         };
-        let p = &world.particles;
         Err(HealthError {
             particle_id: p.id[i],
             step: world.step + 1,
@@ -488,7 +496,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                         let (left, moved, tunnelled) = drift.apply(i, v1, w1, dv, dw, state);
                         found.left = found.left.or(left);
                         found.moved |= moved;
-                        found.tunnelled = found.tunnelled.or(tunnelled);
+                        found.tunnelled |= tunnelled;
                     }
                     None => {
                         *v = v1;
@@ -615,6 +623,20 @@ fn hertz_energy(e_star: f64, r_star: f64, overlap: f64) -> f64 {
     }
 }
 
+/// The tunnelling bound of `limits` as the drift tests it: the largest
+/// displacement in one step per radius, squared.
+fn step_limit_sq(limits: &HealthLimits) -> f64 {
+    limits.max_overlap_ratio * limits.max_overlap_ratio
+}
+
+/// Whether a particle of radius `r` (m) that moved by `step` (m) in one step
+/// went farther than the tunnelling bound `limit_sq` (see [`step_limit_sq`]).
+/// The drift and the search for the particle evaluate this same expression.
+#[inline(always)]
+fn too_far(step: Vec3, r: f64, limit_sq: f64) -> bool {
+    step.norm_squared() > limit_sq * r * r
+}
+
 /// The first half kick and the drift.
 ///
 /// Also estimates the full-step velocities the contact laws use,
@@ -659,7 +681,7 @@ impl<'a, B: Boundary> Drift<'a, B> {
             dt,
             reference: neighbors.reference_positions(),
             limit_sq: neighbors.rebuild_distance_sq(),
-            step_limit_sq: limits.max_overlap_ratio * limits.max_overlap_ratio,
+            step_limit_sq: step_limit_sq(limits),
             _boundary: std::marker::PhantomData,
         }
     }
@@ -669,8 +691,8 @@ impl<'a, B: Boundary> Drift<'a, B> {
     /// (centre and velocity estimates; radius and mass never change there).
     /// Returns (`Some(i)` if it left the domain, whether it moved more than
     /// half the skin since the last neighbour build — the neighbour list's
-    /// own test, fused into this pass —, `Some(i)` if this step moved it
-    /// farther than the tunnelling bound).
+    /// own test, fused into this pass —, whether this step moved it farther
+    /// than the tunnelling bound).
     ///
     /// Velocities and centre are passed and stored from registers, never
     /// re-read from the stores just made: a load right after a store to the
@@ -685,13 +707,12 @@ impl<'a, B: Boundary> Drift<'a, B> {
         dv: Vec3,
         dw: Vec3,
         p: ParticleMut<'_>,
-    ) -> (Option<usize>, bool, Option<usize>) {
+    ) -> (Option<usize>, bool, bool) {
         let (v, w) = (v + dv, w + dw);
         *p.v = v;
         *p.w = w;
         let step = v * self.dt;
-        let r = p.sphere.r;
-        let tunnelled = (step.norm_squared() > self.step_limit_sq * r * r).then_some(i);
+        let tunnelled = too_far(step, p.sphere.r, self.step_limit_sq);
         let x = B::wrap(&self.domain, *p.x + step);
         *p.x = x;
         p.sphere.x = x;
@@ -722,9 +743,8 @@ struct GatherFound {
     wall_approach_m_s: f64,
     /// Lowest index of a particle that drifted out of the domain.
     left: Option<usize>,
-    /// Lowest index of a particle that drifted farther than the tunnelling
-    /// bound.
-    tunnelled: Option<usize>,
+    /// Some particle drifted farther than the tunnelling bound.
+    tunnelled: bool,
     /// Some particle drifted far enough to need a neighbour rebuild.
     moved: bool,
 }
@@ -737,7 +757,7 @@ impl Default for GatherFound {
             non_finite: None,
             wall_approach_m_s: 0.0,
             left: None,
-            tunnelled: None,
+            tunnelled: false,
             moved: false,
         }
     }
@@ -751,7 +771,7 @@ impl GatherFound {
             non_finite: min_option(self.non_finite, o.non_finite),
             wall_approach_m_s: self.wall_approach_m_s.max(o.wall_approach_m_s),
             left: min_option(self.left, o.left),
-            tunnelled: min_option(self.tunnelled, o.tunnelled),
+            tunnelled: self.tunnelled || o.tunnelled,
             moved: self.moved || o.moved,
         }
     }
