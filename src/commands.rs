@@ -237,8 +237,15 @@ pub fn validate(
 }
 
 /// `repose run MANIFEST`: validates the experiment and runs it through the store
-/// cache (a complete run with the same id is reused).
-pub fn run(store_root: &Path, manifest: &Path, out: &mut dyn Write) -> Result<(), CommandError> {
+/// cache (a complete run with the same id is reused). The summary goes to
+/// `out`; the result's warnings (computed now or stored with a reused run)
+/// go to `err`, one `warning: ...` line each.
+pub fn run(
+    store_root: &Path,
+    manifest: &Path,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<(), CommandError> {
     let experiment = read_experiment(manifest).map_err(manifest_error(manifest))?;
     let store = open_store(store_root)?;
     let id = experiment.id();
@@ -292,6 +299,9 @@ pub fn run(store_root: &Path, manifest: &Path, out: &mut dyn Write) -> Result<()
     }
     for (name, value) in &result.measurements {
         writeln!(out, "  {name} = {value}")?;
+    }
+    for warning in &result.warnings {
+        writeln!(err, "warning: run {id}: {warning}")?;
     }
     Ok(())
 }

@@ -435,7 +435,9 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         Command::Validate { files, kind } => {
             commands::validate(&files, kind, &mut out, &mut io::stderr())
         }
-        Command::Run { manifest } => commands::run(&cli.store, &manifest, &mut out),
+        Command::Run { manifest } => {
+            commands::run(&cli.store, &manifest, &mut out, &mut io::stderr())
+        }
         Command::Inspect { file } => commands::inspect(&cli.store, &file, &mut out),
         Command::Bench(args) => {
             let mut progress: Box<dyn io::Write + Send> = if cli.quiet {

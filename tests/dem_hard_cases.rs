@@ -359,6 +359,50 @@ fn impact_far_beyond_the_design_speed_is_refused_or_survives() {
 }
 
 #[test]
+fn a_step_that_carries_a_sphere_past_its_partner_is_tunnelling() {
+    // The step is designed for 1 m/s (8.9e-6 s); at 200 m/s a sphere moves
+    // 1.8 radii per step: from 0.1 mm above a resting sphere it would land
+    // 1.7 mm deep in it, and a little faster it would pass through it
+    // untouched. The first drift must stop the run and name the mover.
+    let m = material(1e7, 0.3);
+    let c = contact(
+        NormalChoice::Hertz,
+        RollingChoice::None,
+        m,
+        params(0.5, 0.3, 0.0, 0.0),
+    );
+    let dt = auto_dt(&c, R, 2500.0, 1.0);
+    let at = |z: f64, vz: f64| repose::dem::particles::ParticleInit {
+        position: Vec3::new(0.0, 0.0, z),
+        velocity: Vec3::new(0.0, 0.0, vz),
+        angular_velocity: Vec3::zeros(),
+        radius_m: R,
+    };
+    let w = world(
+        &[at(0.0, 0.0), at(2.1 * R, -200.0)],
+        2500.0,
+        vec![],
+        Vec3::new(-0.1, -0.1, -0.1),
+        Vec3::new(0.1, 0.1, 0.1),
+    );
+    let mut sim = Simulation::new(w, &setup(c, 2500.0, false, dt, 0.1 * R)).unwrap();
+    let e = sim.advance(100).unwrap_err();
+    let HealthCause::Tunnelling {
+        displacement_m,
+        radius_m,
+        limit,
+    } = e.cause
+    else {
+        panic!("{e}");
+    };
+    assert_eq!((e.particle_id, e.step), (1, 1), "{e}");
+    assert!((e.time_s / dt - 1.0).abs() < 1e-12, "{e}");
+    assert!((displacement_m / (200.0 * dt) - 1.0).abs() < 1e-12, "{e}");
+    assert_eq!((radius_m, limit), (R, 0.3));
+    assert!(e.to_string().contains("tunnelling: moved"), "{e}");
+}
+
+#[test]
 fn an_unstable_step_is_stopped_with_particle_step_and_cause() {
     // 50× the automatic step in an undamped bed: the health checks must stop
     // the run and name the particle, the step and the time.

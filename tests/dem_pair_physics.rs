@@ -151,6 +151,20 @@ fn hertz_elastic_impact_matches_theory_within_one_percent() {
 }
 
 #[test]
+fn the_engine_measures_the_approach_speed_of_an_impact() {
+    // No force acts before the contact (no gravity), and the contact only
+    // slows the approach: the fastest approach is the initial 0.5 m/s.
+    for partner in PARTNERS {
+        let m = hertz(partner, 0.5);
+        assert!(
+            (m.max_approach_speed_m_s / 0.5 - 1.0).abs() < 1e-12,
+            "{partner:?}: {}",
+            m.max_approach_speed_m_s
+        );
+    }
+}
+
+#[test]
 fn restitution_is_recovered_within_half_a_percent() {
     // The damping ψ(e) of yan2015 Eq. 4 is designed to give restitution e.
     for partner in PARTNERS {

@@ -129,7 +129,7 @@ fn insertion_never_overlaps_and_a_backed_up_funnel_keeps_its_debt() {
     let s = scene(&exp).clone();
     let mut rig = rig(&exp, &s).unwrap();
     let window = s.insertion_interval_s;
-    let steps = (window / rig.dt_s).round() as u64;
+    let steps = (window / rig.plan.dt_s).round() as u64;
     let mut max_pending = 0;
     for _ in 0..100 {
         rig.sim.advance(steps).unwrap();

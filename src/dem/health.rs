@@ -2,13 +2,34 @@
 //! time and cause.
 //!
 //! Checked every step: non-finite state, overlap beyond a bound relative to
-//! the smaller radius, particles leaving the (non-periodic) domain. Checked
-//! every [`ENERGY_CHECK_INTERVAL`] steps in a closed, undriven, non-cohesive
-//! system (no moving walls, no insertion or removal since the reference was
-//! taken, no JKR): the mechanical energy (kinetic + gravitational + Hertz
-//! elastic) must not grow by more than [`HealthLimits::energy_growth`]. A
-//! cohesive system is excluded because adhesion legitimately converts surface
-//! energy into kinetic energy.
+//! the smaller radius, particles leaving the (non-periodic) domain, and
+//! tunnelling. Checked every [`ENERGY_CHECK_INTERVAL`] steps in a closed,
+//! undriven, non-cohesive system (no moving walls, no insertion or removal
+//! since the reference was taken, no JKR): the mechanical energy (kinetic +
+//! gravitational + Hertz elastic) must not grow by more than
+//! [`HealthLimits::energy_growth`]. A cohesive system is excluded because
+//! adhesion legitimately converts surface energy into kinetic energy.
+//!
+//! Tunnelling: a particle that moves farther in one step than the overlap
+//! bound times its radius ([`HealthLimits::max_overlap_ratio`], the same
+//! bound) stops the run. At that speed the step no longer resolves a contact:
+//! a contact entered during the step can start deeper than the overlap bound
+//! (against a wall or a particle at rest), and once the relative displacement
+//! per step exceeds the sum of the diameters the bodies pass through each
+//! other without a single step in contact. The overlap check alone would
+//! catch the first only when a step happens to land in the overlap, and
+//! never the second: two particles met at 1,000 m/s with a step designed
+//! for 0.5 m/s (4.7 radii per step) passed through each other and the run
+//! ended with an unrelated complaint (`the contact did not end`, or a
+//! particle leaving the domain long after). The test is per particle and
+//! per step, inside the drift (a product and a comparison per particle),
+//! not per contact, so a particle in free flight is stopped too: whatever it
+//! meets next would be under-resolved. A healthy run stays far below: a
+//! contact resolved in 10 steps moves each body by about a third of the
+//! largest overlap per step, under 0.1 of a radius at the overlap bound;
+//! so with a step that resolves the speed, the check fires only where a
+//! resolved contact would overlap by more than a radius (the overlap bound
+//! would stop such a run a few steps later), and the message says so.
 
 use crate::dem::vec3::Vec3;
 
@@ -58,6 +79,16 @@ pub enum HealthCause {
     },
     /// The neighbour search failed (e.g. a periodic box too small for the cutoff).
     NeighborSearch(String),
+    /// The particle moved farther in one step than the overlap bound times
+    /// its radius (see the module docs).
+    Tunnelling {
+        /// Its displacement in that step, m.
+        displacement_m: f64,
+        /// Its radius, m.
+        radius_m: f64,
+        /// The bound on displacement / radius.
+        limit: f64,
+    },
     /// Mechanical energy of a closed, undriven system grew.
     EnergyGrowth {
         /// Energy now, J.
@@ -90,6 +121,9 @@ fn describe(c: &HealthCause) -> String {
         HealthCause::LeftDomain { position } => format!(
             "left the domain at ({:.6}, {:.6}, {:.6}) m",
             position.x, position.y, position.z
+        ),
+        HealthCause::Tunnelling { displacement_m, radius_m, limit } => format!(
+            "tunnelling: moved {displacement_m:.4e} m in one step (radius {radius_m:.4e} m, bound {limit} of it), so a contact can be stepped over or entered deeper than the overlap bound — the step is too large for the speed reached: lower the Rayleigh fraction of the time step or raise its design impact speed (if the step already resolves contacts at this speed, the particles are too soft for it)"
         ),
         HealthCause::NeighborSearch(e) => format!("neighbour search failed: {e}"),
         HealthCause::EnergyGrowth { energy_j, reference_j } => format!(

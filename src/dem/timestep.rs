@@ -12,6 +12,24 @@
 //! or fewer than 10 steps per contact at the design speed (the explicit
 //! integrator then misses the force peak and energy is no longer conserved).
 //! The error says which limit failed and what step would be stable.
+//!
+//! The design speed is a promise the run may break: a manifest is free to
+//! design for 1 mm/s and then tumble particles at 0.3 m/s. The engine
+//! measures what it met instead (the largest relative normal approach speed
+//! of any contact, [`StepStats::max_approach_speed_m_s`](crate::dem::simulation::StepStats::max_approach_speed_m_s)),
+//! and [`TimeStepPlan::under_resolved`] holds it against the step after the
+//! run: fewer than [`MIN_STEPS_PER_CONTACT`] steps across the stiffest
+//! contact at that speed — the number a requested step is refused below at
+//! the design speed — is reported, not refused (the run has happened; its
+//! result may still be what the user wanted). Measured why it matters: the
+//! drum smoke with Rayleigh fraction 0.5 and design speed 1e-3 m/s (20 steps
+//! per contact at 1 mm/s, 5.7 at the 0.52 m/s its particles reach) moved the
+//! dynamic angle from 31.4° to 41.2° and the static one from 35.6° to 11.5°
+//! without a word (issue 24). The stiffest contact and the fastest approach
+//! of any contact are paired, so the check errs on the side of warning (the
+//! fastest approach may have been a softer contact's). A step so large that
+//! contacts are skipped altogether stops the run instead (tunnelling, see
+//! [`crate::dem::health`]).
 
 use crate::dem::material::{hertz_contact_time_s, rayleigh_time_s, ElasticMaterial};
 
@@ -23,7 +41,7 @@ pub const AUTO_STEPS_PER_CONTACT: f64 = 20.0;
 pub const MIN_STEPS_PER_CONTACT: f64 = 10.0;
 
 /// The stiffest contact a run can see, for the contact-time limit.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StiffestContact {
     /// Effective modulus E*, Pa.
     pub e_star_pa: f64,
@@ -63,6 +81,59 @@ pub struct TimeStepPlan {
     pub contact_time_s: f64,
     /// Which limit set the step: `rayleigh`, `contact_time` or `requested`.
     pub limited_by: &'static str,
+    /// The design impact speed the step was chosen for, m/s.
+    pub design_speed_m_s: f64,
+    /// The contact whose duration limits the step.
+    pub stiffest: StiffestContact,
+}
+
+impl TimeStepPlan {
+    /// Steps of `dt_s` across a Hertz contact of the stiffest contact at the
+    /// approach speed `speed_m_s` (m/s); infinite at speed 0.
+    pub fn steps_per_contact_at(&self, speed_m_s: f64) -> f64 {
+        self.contact_time_at(speed_m_s) / self.dt_s
+    }
+
+    /// Hertz contact time of the stiffest contact at `speed_m_s` (m/s), s.
+    fn contact_time_at(&self, speed_m_s: f64) -> f64 {
+        let s = &self.stiffest;
+        hertz_contact_time_s(s.m_star_kg, s.r_star_m, s.e_star_pa, speed_m_s)
+    }
+
+    /// The report for a run whose fastest contact approached at `reached_m_s`
+    /// (m/s) if the step resolved such a contact with fewer than
+    /// [`MIN_STEPS_PER_CONTACT`] steps (see the module docs); `None` if it
+    /// resolved it well enough.
+    pub fn under_resolved(&self, reached_m_s: f64) -> Option<UnderResolved> {
+        if !(reached_m_s > 0.0 && reached_m_s.is_finite()) {
+            return None;
+        }
+        let steps = self.steps_per_contact_at(reached_m_s);
+        (steps < MIN_STEPS_PER_CONTACT).then_some(UnderResolved {
+            reached_m_s,
+            design_speed_m_s: self.design_speed_m_s,
+            contact_time_s: self.contact_time_at(reached_m_s),
+            dt_s: self.dt_s,
+            steps_per_contact: steps,
+        })
+    }
+}
+
+/// A run met contacts faster than its step resolves (see
+/// [`TimeStepPlan::under_resolved`]).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("under-resolved contacts: the fastest contact approached at {reached_m_s:.3e} m/s, {factor:.1} times the design impact speed {design_speed_m_s} m/s; a Hertz contact at that speed lasts {contact_time_s:.3e} s, {steps_per_contact:.2} steps of {dt_s:.3e} s, fewer than the {MIN_STEPS_PER_CONTACT} a step must resolve, so the result may depend on the step", factor = reached_m_s / design_speed_m_s)]
+pub struct UnderResolved {
+    /// The fastest approach the run met, m/s.
+    pub reached_m_s: f64,
+    /// The design impact speed, m/s.
+    pub design_speed_m_s: f64,
+    /// Hertz contact time of the stiffest contact at `reached_m_s`, s.
+    pub contact_time_s: f64,
+    /// The step, s.
+    pub dt_s: f64,
+    /// `contact_time_s / dt_s`.
+    pub steps_per_contact: f64,
 }
 
 /// Why a step was refused.
@@ -152,6 +223,8 @@ pub fn choose_time_step(req: &TimeStepRequest) -> Result<TimeStepPlan, TimeStepE
         rayleigh_time_s: t_r,
         contact_time_s: t_c,
         limited_by,
+        design_speed_m_s: req.design_speed_m_s,
+        stiffest: req.stiffest,
     })
 }
 
@@ -194,6 +267,31 @@ mod tests {
         let plan = choose_time_step(&r).unwrap();
         assert_eq!(plan.limited_by, "contact_time");
         assert!((plan.dt_s * AUTO_STEPS_PER_CONTACT - plan.contact_time_s).abs() < 1e-18);
+    }
+
+    #[test]
+    fn speeds_beyond_the_design_speed_are_reported_once_under_resolved() {
+        // The automatic step resolves the design speed with 20 steps; t_c
+        // falls as v^(-1/5), so 10 steps are left at 2^5 = 32 times it.
+        let plan = choose_time_step(&bench_request()).unwrap();
+        assert_eq!(plan.under_resolved(0.0), None);
+        let design = plan.design_speed_m_s;
+        assert!(plan.steps_per_contact_at(design) >= AUTO_STEPS_PER_CONTACT);
+        let mut r = bench_request();
+        r.rayleigh_fraction = 0.5;
+        r.design_speed_m_s = 1e-3;
+        let plan = choose_time_step(&r).unwrap();
+        assert_eq!(plan.limited_by, "contact_time");
+        assert_eq!(plan.under_resolved(31.0e-3), None);
+        let w = plan
+            .under_resolved(33.0e-3)
+            .expect("33 times the design speed");
+        assert!(w.steps_per_contact < MIN_STEPS_PER_CONTACT && w.steps_per_contact > 9.8);
+        let text = w.to_string();
+        assert!(
+            text.contains("under-resolved contacts") && text.contains("3.300e-2 m/s"),
+            "{text}"
+        );
     }
 
     #[test]

@@ -463,12 +463,12 @@ pub fn run(
     let slope = sampler.slope(&w.particles).map_err(BaffleError::from)?;
     let (inside, outside) = census(&w.particles, &geo);
     let removed = sampler.removed;
-    let kernel = sim.kernel_name();
     let (steps, end) = (w.step, w.time_s);
     let traces = std::mem::take(&mut sampler.traces);
     drop(sampler);
 
-    let mut result = finish_result(exp, kernel, traces, log_file).map_err(BaffleError::from)?;
+    let mut result =
+        finish_result(exp, &sim, &plan, traces, log_file).map_err(BaffleError::from)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

@@ -209,12 +209,11 @@ pub fn run(
     let last = drum_surface_angle(&w.particles.position, &w.particles.radius, &sampler.spec)
         .map_err(|e| SceneError::Drum(e.into()))?;
     let dynamic = mean_std(&sampler.dynamic).ok();
-    let kernel = sim.kernel_name();
     let steps = w.step;
     let traces = std::mem::take(&mut sampler.traces);
     drop(sampler);
 
-    let mut result = finish_result(exp, kernel, traces, log_file)?;
+    let mut result = finish_result(exp, &sim, &plan, traces, log_file)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

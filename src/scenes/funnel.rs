@@ -471,7 +471,7 @@ pub fn simulate(
         .count();
     let traces = std::mem::take(&mut sampler.traces);
     // `run` finishes the log, after measuring the pile.
-    let mut result = finish_result(exp, sim.kernel_name(), traces, None)?;
+    let mut result = finish_result(exp, &sim, &plan, traces, None)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

@@ -277,14 +277,13 @@ fn run_hopper(
         }
     })?;
     let census = sampler.census(&sim);
-    let kernel = sim.kernel_name();
     let steps = w.step;
     let removed = sampler.removed();
     let last_discharge = sampler.last_discharge_s();
     let samples = sampler.discharge().to_vec();
     let traces = sampler.into_traces();
 
-    let mut result = finish_result(exp, kernel, traces, log_file)?;
+    let mut result = finish_result(exp, &sim, &plan, traces, log_file)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

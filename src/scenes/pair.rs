@@ -10,6 +10,14 @@
 //! along +x with `tangential_velocity_m_s`. Gravity (−z, 9.81 m/s²) only if
 //! asked. Contact start and end are found by linear interpolation of the
 //! overlap between steps, so the duration is resolved below one step.
+//!
+//! The step comes from the manifest's `time_step` settings, not from the
+//! impact speed: an impact faster than the design speed is simulated with
+//! the step it gets. If that step carries the sphere past its partner the
+//! engine stops the run as tunnelling; if it resolves the contact with too
+//! few steps, result.json carries the warning (see
+//! [`crate::dem::timestep`]). The engine's measured approach speed is
+//! [`PairMeasurements::max_approach_speed_m_s`].
 
 use super::physics::STANDARD_GRAVITY_M_S2;
 use super::{physics, SceneError};
@@ -119,6 +127,9 @@ pub struct PairMeasurements {
     pub steps: u64,
     /// Neighbour-list rebuilds during the run.
     pub rebuilds: u64,
+    /// Largest relative normal approach speed of a contact that the engine
+    /// measured ([`StepStats::max_approach_speed_m_s`](crate::dem::simulation::StepStats::max_approach_speed_m_s)), m/s.
+    pub max_approach_speed_m_s: f64,
 }
 
 /// Why a pair test failed.
@@ -367,6 +378,7 @@ fn measure_impact(
     let end = end.filter(|_| !m.captured).unwrap_or(sim.world().time_s);
     let p = &sim.world().particles;
     m.rebuilds = sim.stats().rebuilds;
+    m.max_approach_speed_m_s = sim.stats().max_approach_speed_m_s;
     let (final_overlap, n, v) = contact_state(p, partner_r, wall);
     m.final_overlap_m = final_overlap;
     m.contact_duration_s = end - start;
@@ -414,6 +426,7 @@ fn measure_separation(
         tension = tension.max(-f);
         if m.steps > 1 && !in_contact(sim) {
             m.rebuilds = sim.stats().rebuilds;
+            m.max_approach_speed_m_s = sim.stats().max_approach_speed_m_s;
             m.pull_off_force_n = Some(tension);
             m.contact_duration_s = sim.world().time_s;
             return Ok(m);
@@ -489,6 +502,7 @@ pub fn run(
         None => run_pair(&test)?,
     };
     let mut result = RunResult::new(exp, kernel);
+    result.warnings = physics::time_step_warnings(&plan, m.max_approach_speed_m_s);
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

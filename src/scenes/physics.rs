@@ -202,6 +202,24 @@ pub fn time_step(
     })
 }
 
+/// The result's warnings about the time step `plan` after a run whose
+/// fastest contact approached at `reached_m_s` (m/s, the engine's
+/// [`StepStats::max_approach_speed_m_s`](crate::dem::simulation::StepStats::max_approach_speed_m_s)):
+/// one if the step resolved that contact with fewer than the minimum steps
+/// (see [`crate::dem::timestep`]), naming the manifest setting that fixes
+/// it; none otherwise.
+pub fn time_step_warnings(plan: &TimeStepPlan, reached_m_s: f64) -> Vec<String> {
+    plan.under_resolved(reached_m_s)
+        .map(|w| {
+            format!(
+                "time_step: {w}; raise time_step.design_impact_speed_m_s to at least {:.3e} m/s",
+                w.reached_m_s
+            )
+        })
+        .into_iter()
+        .collect()
+}
+
 /// The simulated particle size distribution as the packing module's
 /// (diameters; d10/d50/d90 become a truncated log-normal), coarse-grained when
 /// the manifest says so.

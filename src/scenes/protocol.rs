@@ -7,8 +7,10 @@
 //! Everything that reaches results depends on simulated time only; wall-clock
 //! time is used for the progress line and nothing else.
 
+use super::physics;
 use crate::dem::health::HealthError;
 use crate::dem::simulation::Simulation;
+use crate::dem::timestep::TimeStepPlan;
 use crate::log::{LogError, RunLog};
 use crate::manifest::{AtRest, Experiment};
 use crate::store::{RunResult, Trace};
@@ -187,10 +189,12 @@ impl Traces {
     }
 }
 
-/// The end every scene shares once its simulation has succeeded: closes the
-/// run's MCAP log, if it has one (the file appears only now, complete), and
-/// starts the result with the experiment, the kernel that ran and the sampled
-/// traces; the scene then adds its measurements and its headline angle.
+/// The end every scene shares once its simulation `sim` has succeeded:
+/// closes the run's MCAP log, if it has one (the file appears only now,
+/// complete), and starts the result with the experiment, the kernel that ran,
+/// the sampled traces and the warnings about the time step `plan` (contacts
+/// faster than it resolves, see [`physics::time_step_warnings`]); the scene
+/// then adds its measurements and its headline angle.
 ///
 /// Why a helper: every scene ended with these same lines, copied; one place
 /// keeps the log and the result's common fields done the same way in all of
@@ -198,15 +202,17 @@ impl Traces {
 /// measuring the pile), passes `None`.
 pub fn finish_result(
     exp: &Experiment,
-    kernel: String,
+    sim: &Simulation,
+    plan: &TimeStepPlan,
     traces: Traces,
     log: Option<RunLog>,
 ) -> Result<RunResult, LogError> {
     if let Some(log) = log {
         log.finish()?;
     }
-    let mut result = RunResult::new(exp, kernel);
+    let mut result = RunResult::new(exp, sim.kernel_name());
     result.traces = traces.into_map();
+    result.warnings = physics::time_step_warnings(plan, sim.stats().max_approach_speed_m_s);
     Ok(result)
 }
 

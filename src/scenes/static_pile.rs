@@ -119,6 +119,7 @@ use crate::dem::domain::{Domain, DomainError};
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::particles::Particles;
 use crate::dem::simulation::{SetupError, Simulation, SimulationSetup, World};
+use crate::dem::timestep::TimeStepPlan;
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::{Wall, WallError};
 use crate::log::{AngleSample, LogError, LogOptions, RunLog, Trace};
@@ -384,8 +385,8 @@ pub struct Rig {
     pub removal: Removal,
     /// Particle sizes.
     pub diameters: Diameters,
-    /// Time step, s.
-    pub dt_s: f64,
+    /// The time step and the numbers behind it.
+    pub plan: TimeStepPlan,
 }
 
 /// Builds the rig of a `static_pile` experiment (see the module docs).
@@ -424,7 +425,7 @@ pub fn rig(exp: &Experiment, scene: &StaticPileScene) -> Result<Rig, SceneError>
         geometry,
         removal,
         diameters,
-        dt_s: plan.dt_s,
+        plan,
     })
 }
 
@@ -659,8 +660,9 @@ pub fn run(
         geometry,
         removal,
         diameters,
-        dt_s,
+        plan,
     } = rig(exp, scene)?;
+    let dt_s = plan.dt_s;
     let mut log_file = match log {
         Some(path) => Some(RunLog::create(
             path,
@@ -724,13 +726,12 @@ pub fn run(
         },
     )?;
     let rest_ratio = mean_kinetic_energy_j(&sim) / (mass * STANDARD_GRAVITY_M_S2 * d50);
-    let kernel = sim.kernel_name();
     let (steps, end_s) = (w.step, w.time_s);
     let traces = std::mem::take(&mut sampler.traces);
     let removed = sampler.removed;
     drop(sampler);
 
-    let mut result = finish_result(exp, kernel, traces, log_file)?;
+    let mut result = finish_result(exp, &sim, &plan, traces, log_file)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

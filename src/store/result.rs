@@ -30,6 +30,13 @@ pub struct RunResult {
     /// Real and simulated particle when the experiment coarse-grains.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coarse_graining: Option<CoarseGrainingReport>,
+    /// What the run met that its settings did not foresee and that may have
+    /// changed the answer (e.g. contacts faster than the time step resolves,
+    /// see [`crate::dem::timestep::TimeStepPlan::under_resolved`]), one
+    /// sentence each. Absent from result.json when empty, so a run without a
+    /// warning writes the same bytes as before warnings existed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// What coarse graining did to the particle (he2019 Eq. 1–3, cai2024 §1.2):
@@ -88,6 +95,7 @@ impl RunResult {
             traces: BTreeMap::new(),
             headline_angle_deg: None,
             coarse_graining: None,
+            warnings: Vec::new(),
         }
     }
 

@@ -233,6 +233,9 @@ pub struct ContactResponse {
     pub rolling_torque: Vec3,
     /// Signed normal force magnitude along `normal`, N (positive repulsive).
     pub normal_force_n: f64,
+    /// Relative normal velocity of *i* along `normal`, m/s (negative while
+    /// the bodies approach).
+    pub normal_velocity_m_s: f64,
 }
 
 /// What a normal model reports for a contact that is active this step.
@@ -423,6 +426,9 @@ pub struct ResponseLanes<T: Real> {
     pub rolling_torque: Vec3L<T>,
     /// Signed normal force along the normal, N (positive repulsive).
     pub normal_force_n: T,
+    /// Relative normal velocity along the normal, m/s (negative while the
+    /// bodies approach).
+    pub normal_velocity_m_s: T,
 }
 
 /// Evaluates the composed law `N + damping + Mindlin + R` for `T::LANES`
@@ -501,6 +507,7 @@ pub fn evaluate_lanes<N: NormalModel, R: RollingModel, T: Real>(
         tangential_force: f_t,
         rolling_torque: m_r,
         normal_force_n: f_n,
+        normal_velocity_m_s: v_n,
     }
 }
 
@@ -538,6 +545,7 @@ pub fn evaluate<N: NormalModel, R: RollingModel>(
         tangential_force: r.tangential_force.lane(0),
         rolling_torque: r.rolling_torque.lane(0),
         normal_force_n: r.normal_force_n,
+        normal_velocity_m_s: r.normal_velocity_m_s,
     })
 }
 

@@ -224,7 +224,7 @@ pub enum SetupError {
     Health(HealthError),
 }
 
-/// Per-step statistics of the last force evaluation.
+/// Statistics of the last force evaluation (and two running totals).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StepStats {
     /// Particle–particle contacts carrying force.
@@ -235,6 +235,12 @@ pub struct StepStats {
     pub max_overlap_ratio: f64,
     /// Neighbour-list rebuilds so far.
     pub rebuilds: u64,
+    /// Largest relative normal approach speed of any force-carrying contact
+    /// (particle pairs and walls) in every force evaluation so far, m/s; for
+    /// an impact that is its speed at contact onset (the contact then slows
+    /// the approach). What a run's time step must resolve: see
+    /// [`crate::dem::timestep::TimeStepPlan::under_resolved`].
+    pub max_approach_speed_m_s: f64,
 }
 
 /// The monomorphised kernel behind a [`Simulation`].

@@ -68,6 +68,41 @@ pub(super) trait PairSink {
     fn put(&mut self, i: usize, j: usize, force: &PairForce);
 }
 
+/// What the pair kernel found over a run of pairs (reductions exact and
+/// order-independent, so merging per-tile findings in any order gives the
+/// same result).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct PairFound {
+    /// Force-carrying contacts.
+    pub(super) contacts: usize,
+    /// Worst (overlap ratio, pair index).
+    pub(super) worst: (f64, usize),
+    /// Largest relative normal approach speed of a force-carrying contact,
+    /// m/s (0 if none approaches).
+    pub(super) approach_m_s: f64,
+}
+
+impl Default for PairFound {
+    fn default() -> Self {
+        Self {
+            contacts: 0,
+            worst: (0.0, usize::MAX),
+            approach_m_s: 0.0,
+        }
+    }
+}
+
+impl PairFound {
+    /// Both findings together.
+    pub(super) fn merge(self, o: Self) -> Self {
+        Self {
+            contacts: self.contacts + o.contacts,
+            worst: worse(self.worst, o.worst),
+            approach_m_s: self.approach_m_s.max(o.approach_m_s),
+        }
+    }
+}
+
 /// Contacts evaluated side by side in the pair kernel (one AVX2 register of
 /// f64, two SSE2 registers).
 pub(super) const PAIR_LANES: usize = 4;
@@ -87,8 +122,8 @@ pub(super) struct PairKernel<'a, B: Boundary> {
 impl<B: Boundary> PairKernel<'_, B> {
     /// Evaluates a run of listed pairs whose first pair has index `first`,
     /// handing each pair's forces to `sink` in pair order, four at a time and a
-    /// short tail one at a time; returns the force-carrying contacts and the
-    /// worst (overlap ratio, pair index). Runs the AVX-512 copy of the loop
+    /// short tail one at a time; returns the force-carrying contacts, the
+    /// worst (overlap ratio, pair index) and the fastest approach. Runs the AVX-512 copy of the loop
     /// where the processor has it.
     pub(super) fn run<N: NormalModel, R: RollingModel, S: PairSink>(
         &self,
@@ -96,7 +131,7 @@ impl<B: Boundary> PairKernel<'_, B> {
         pairs: &[[u32; 2]],
         history: &mut [ContactHistory<N, R>],
         sink: &mut S,
-    ) -> (usize, (f64, usize)) {
+    ) -> PairFound {
         #[cfg(target_arch = "x86_64")]
         if crate::dem::lanes::has_avx512() {
             // SAFETY: `has_avx512` found every feature `run_avx512` enables.
@@ -118,7 +153,7 @@ impl<B: Boundary> PairKernel<'_, B> {
         pairs: &[[u32; 2]],
         history: &mut [ContactHistory<N, R>],
         sink: &mut S,
-    ) -> (usize, (f64, usize)) {
+    ) -> PairFound {
         self.run_inline(first, pairs, history, sink)
     }
 
@@ -130,12 +165,12 @@ impl<B: Boundary> PairKernel<'_, B> {
         pairs: &[[u32; 2]],
         history: &mut [ContactHistory<N, R>],
         sink: &mut S,
-    ) -> (usize, (f64, usize)) {
+    ) -> PairFound {
         let whole = pairs.len() / PAIR_LANES * PAIR_LANES;
         let (history, history_tail) = history.split_at_mut(whole);
         let a = self.run_lanes::<N, R, F64x4, S>(first, &pairs[..whole], history, sink);
         let b = self.run_lanes::<N, R, f64, S>(first + whole, &pairs[whole..], history_tail, sink);
-        (a.0 + b.0, worse(a.1, b.1))
+        a.merge(b)
     }
 
     /// [`run`](Self::run) for a number of pairs that `T::LANES` divides.
@@ -146,21 +181,26 @@ impl<B: Boundary> PairKernel<'_, B> {
         pairs: &[[u32; 2]],
         history: &mut [ContactHistory<N, R>],
         sink: &mut S,
-    ) -> (usize, (f64, usize)) {
-        let mut acc = (0, (0.0, usize::MAX));
+    ) -> PairFound {
+        let mut acc = PairFound::default();
+        // The fastest approach per lane, reduced across lanes once at the end.
+        let mut fastest = T::splat(0.0);
         for (k, (p, h)) in pairs
             .chunks_exact(T::LANES)
             .zip(history.chunks_exact_mut(T::LANES))
             .enumerate()
         {
-            let found = self.lanes::<N, R, T, S>(first + k * T::LANES, p, h, sink);
-            acc = (acc.0 + found.0, worse(acc.1, found.1));
+            let (found, approach) = self.lanes::<N, R, T, S>(first + k * T::LANES, p, h, sink);
+            acc = acc.merge(found);
+            fastest = T::select(approach.gt(fastest), approach, fastest);
         }
+        acc.approach_m_s = (0..T::LANES).map(|l| fastest.lane(l)).fold(0.0, f64::max);
         acc
     }
 
     /// `T::LANES` listed pairs with indices `first..` at once (each slice
-    /// holds one entry per lane).
+    /// holds one entry per lane); returns what they found (but the approach)
+    /// and each lane's approach speed (0 where not in contact), m/s.
     #[inline(always)]
     fn lanes<N: NormalModel, R: RollingModel, T: Real, S: PairSink>(
         &self,
@@ -168,7 +208,7 @@ impl<B: Boundary> PairKernel<'_, B> {
         pairs: &[[u32; 2]],
         history: &mut [ContactHistory<N, R>],
         sink: &mut S,
-    ) -> (usize, (f64, usize)) {
+    ) -> (PairFound, T) {
         let at = |l: usize| pairs[l.min(T::LANES - 1)].map(|k| k as usize);
         let si: [&Sphere; MAX_LANES] = std::array::from_fn(|l| &self.spheres[at(l)[0]]);
         let sj: [&Sphere; MAX_LANES] = std::array::from_fn(|l| &self.spheres[at(l)[1]]);
@@ -212,12 +252,13 @@ impl<B: Boundary> PairKernel<'_, B> {
         let lever = n.cross(&c.tangential_force);
         let torque_i = c.rolling_torque - lever.scale(arm_i);
         let torque_j = -c.rolling_torque - lever.scale(arm_j);
-        let mut found = (0, (0.0, usize::MAX));
+        let mut found = PairFound::default();
         for l in 0..T::LANES {
             let [i, j] = at(l);
             if T::flag(c.active, l) {
                 let ratio = overlap.lane(l).max(0.0) * mi[l].inv_r.max(mj[l].inv_r);
-                found = (found.0 + 1, worse(found.1, (ratio, first + l)));
+                found.contacts += 1;
+                found.worst = worse(found.worst, (ratio, first + l));
                 let force = PairForce {
                     force_on_first: c.force.lane(l),
                     torque: [torque_i.lane(l), torque_j.lane(l)],
@@ -225,7 +266,8 @@ impl<B: Boundary> PairKernel<'_, B> {
                 sink.put(i, j, &force);
             }
         }
-        found
+        let approach = T::select(c.active, -c.normal_velocity_m_s, T::splat(0.0));
+        (found, approach)
     }
 }
 
@@ -310,9 +352,13 @@ mod tests {
             let (mut a, mut b) = (Recorder::default(), Recorder::default());
             let found_a = kernel.run_inline(0, &pairs, &mut portable, &mut a);
             let found_b = kernel.run(0, &pairs, &mut dispatched, &mut b);
-            assert_eq!(found_a.0, found_b.0);
-            assert_eq!(found_a.1 .0.to_bits(), found_b.1 .0.to_bits());
-            assert_eq!(found_a.1 .1, found_b.1 .1);
+            assert_eq!(found_a.contacts, found_b.contacts);
+            assert_eq!(found_a.worst.0.to_bits(), found_b.worst.0.to_bits());
+            assert_eq!(found_a.worst.1, found_b.worst.1);
+            assert_eq!(
+                found_a.approach_m_s.to_bits(),
+                found_b.approach_m_s.to_bits()
+            );
             assert_eq!(a, b);
             // Debug prints each f64 so that it round-trips: equal text, equal bits.
             let text = |h: &[ContactHistory<N, R>]| -> Vec<String> {
@@ -321,7 +367,7 @@ mod tests {
                     .collect()
             };
             assert_eq!(text(&portable), text(&dispatched));
-            touching = found_a.0;
+            touching = found_a.contacts;
         }
         assert!(
             touching > 50 && touching < pairs.len() / 4,

@@ -1,7 +1,7 @@
 //! One monomorphised kernel: the state and stages of a simulation with fixed
 //! effects.
 
-use super::pair_kernel::{Motion, PairKernel, Sphere};
+use super::pair_kernel::{Motion, PairFound, PairKernel, Sphere};
 use super::particle_runs::ParticleRecords;
 use super::team::{run_jobs, Team, JOBS_PER_MEMBER};
 use super::tiles::{Accumulated, Tiles};
@@ -179,10 +179,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     /// particle moved far enough to need a neighbour rebuild.
     fn kick_and_drift(&mut self, world: &mut World) -> Result<bool, HealthError> {
         self.cut_tiles();
-        let drift = Drift::<B>::new(world.domain, self.dt, &self.neighbors);
+        let drift = Drift::<B>::new(world.domain, self.dt, &self.neighbors, &self.limits);
         let runs = self.records.runs(&mut world.particles, self.tiles.shares());
-        let (left, moved) = run_jobs(self.team.as_ref(), runs, |run| {
-            let mut found = (None, false);
+        let (left, moved, tunnelled) = run_jobs(self.team.as_ref(), runs, |run| {
+            let mut found = (None, false, false);
             for (k, ((((x, v), w), (f, t)), ((sphere, motion), kick))) in run
                 .position
                 .iter_mut()
@@ -205,16 +205,51 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                     motion,
                 };
                 let (v0, w0) = (*state.v, *state.w);
-                let (left, moved) =
+                let (left, moved, tunnelled) =
                     drift.apply(run.first + k, v0, w0, f * kick.v, t * kick.w, state);
-                found = (min_option(found.0, left), found.1 || moved);
+                found = (
+                    min_option(found.0, left),
+                    found.1 || moved,
+                    found.2 | tunnelled,
+                );
             }
             found
         })
         .into_iter()
-        .fold((None, false), |a, b| (min_option(a.0, b.0), a.1 || b.1));
+        .fold((None, false, false), |a, b| {
+            (min_option(a.0, b.0), a.1 || b.1, a.2 | b.2)
+        });
+        self.tunnelled(world, tunnelled)?;
         self.left_domain(world, left)?;
         Ok(moved)
+    }
+
+    /// If the drift just made moved some particle too far (`tunnelled`),
+    /// the error for the lowest-indexed one: the drift of step
+    /// `world.step + 1`, so the error names that step and the time at its
+    /// end. The drift only flags (an `or` per particle); the search repeats
+    /// its test, on the velocity the drift stored, when the flag is up.
+    fn tunnelled(&self, world: &World, tunnelled: bool) -> Result<(), HealthError> {
+        if !tunnelled {
+            return Ok(());
+        }
+        let p = &world.particles;
+        let limit_sq = step_limit_sq(&self.limits);
+        let Some(i) =
+            (0..p.len()).find(|&i| too_far(p.velocity[i] * self.dt, p.radius[i], limit_sq))
+        else {
+            return Ok(());
+        };
+        Err(HealthError {
+            particle_id: p.id[i],
+            step: world.step + 1,
+            time_s: world.time_s + self.dt,
+            cause: HealthCause::Tunnelling {
+                displacement_m: p.velocity[i].norm() * self.dt,
+                radius_m: p.radius[i],
+                limit: self.limits.max_overlap_ratio,
+            },
+        })
     }
 
     /// The error for the lowest-indexed particle that left the domain, if any.
@@ -285,14 +320,19 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     /// kick and drift. Returns whether that drift moved
     /// some particle far enough to need a neighbour rebuild.
     fn forces(&mut self, world: &mut World, drift: bool) -> Result<bool, HealthError> {
-        let (contacts, worst_pair) = self.pair_forces(world);
+        let pairs = self.pair_forces(world);
         let found = self.gather(world, drift);
-        let worst_wall = found.worst_wall;
+        let (worst_pair, worst_wall) = (pairs.worst, found.worst_wall);
         self.stats = StepStats {
-            contacts,
+            contacts: pairs.contacts,
             wall_contacts: found.wall_contacts,
             max_overlap_ratio: worst_pair.0.max(worst_wall.0),
             rebuilds: self.neighbors.rebuild_count(),
+            max_approach_speed_m_s: self
+                .stats
+                .max_approach_speed_m_s
+                .max(pairs.approach_m_s)
+                .max(found.wall_approach_m_s),
         };
         if let Some(i) = found.non_finite {
             return Err(self.health(world, i, HealthCause::NonFinite));
@@ -322,17 +362,19 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                 },
             ));
         }
+        self.tunnelled(world, found.tunnelled)?;
         self.left_domain(world, found.left)?;
         Ok(found.moved)
     }
 
-    /// Returns the number of force-carrying contacts and (worst overlap ratio, pair index).
+    /// Returns the number of force-carrying contacts, (worst overlap ratio,
+    /// pair index) and the fastest approach.
     ///
     /// Evaluates the listed pairs tile by tile (see [`super::tiles`]),
     /// [`PAIR_LANES`](super::pair_kernel::PAIR_LANES) at a time
     /// ([`evaluate_lanes`](crate::dem::contact::evaluate_lanes); a short tail
     /// one at a time), each lane bit-identical to evaluating its pair alone.
-    fn pair_forces(&mut self, world: &World) -> (usize, (f64, usize)) {
+    fn pair_forces(&mut self, world: &World) -> PairFound {
         self.cut_tiles();
         let kernel = PairKernel::<B> {
             spheres: &self.records.spheres,
@@ -356,7 +398,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             kernel.run::<N, R, _>(first_pair, job.pairs, job.history, &mut job.sink)
         })
         .into_iter()
-        .fold((0, (0.0, usize::MAX)), |a, b| (a.0 + b.0, worse(a.1, b.1)))
+        .fold(PairFound::default(), PairFound::merge)
     }
 
     /// Per particle: its pair sum (own sum plus partials), walls,
@@ -377,7 +419,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         let partials = &self.partials;
         let tiles = &self.tiles;
         let neighbors = &self.neighbors;
-        let drift = drift.then(|| Drift::<B>::new(world.domain, dt, neighbors));
+        let limits = &self.limits;
+        let drift = drift.then(|| Drift::<B>::new(world.domain, dt, neighbors, limits));
         let runs = self.records.runs(&mut world.particles, tiles.shares());
         run_jobs(self.team.as_ref(), runs, |run| {
             let mut found = GatherFound::default();
@@ -427,6 +470,8 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                         force += c.force;
                         torque += c.rolling_torque - n.cross(&c.tangential_force) * arm;
                         found.wall_contacts += 1;
+                        found.wall_approach_m_s =
+                            found.wall_approach_m_s.max(-c.normal_velocity_m_s);
                         found.worst_wall =
                             worse(found.worst_wall, (wc.overlap_m.max(0.0) / r, i * slots + k));
                     }
@@ -448,9 +493,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                             sphere,
                             motion,
                         };
-                        let (left, moved) = drift.apply(i, v1, w1, dv, dw, state);
+                        let (left, moved, tunnelled) = drift.apply(i, v1, w1, dv, dw, state);
                         found.left = found.left.or(left);
                         found.moved |= moved;
+                        found.tunnelled |= tunnelled;
                     }
                     None => {
                         *v = v1;
@@ -577,6 +623,20 @@ fn hertz_energy(e_star: f64, r_star: f64, overlap: f64) -> f64 {
     }
 }
 
+/// The tunnelling bound of `limits` as the drift tests it: the largest
+/// displacement in one step per radius, squared.
+fn step_limit_sq(limits: &HealthLimits) -> f64 {
+    limits.max_overlap_ratio * limits.max_overlap_ratio
+}
+
+/// Whether a particle of radius `r` (m) that moved by `step` (m) in one step
+/// went farther than the tunnelling bound `limit_sq` (see [`step_limit_sq`]).
+/// The drift and the search for the particle evaluate this same expression.
+#[inline(always)]
+fn too_far(step: Vec3, r: f64, limit_sq: f64) -> bool {
+    step.norm_squared() > limit_sq * r * r
+}
+
 /// The first half kick and the drift.
 ///
 /// Also estimates the full-step velocities the contact laws use,
@@ -591,6 +651,9 @@ struct Drift<'a, B: Boundary> {
     reference: &'a [Vec3],
     /// Squared displacement that asks for a rebuild, m².
     limit_sq: f64,
+    /// Squared largest displacement in one step per squared radius (the
+    /// tunnelling bound, see [`crate::dem::health`]).
+    step_limit_sq: f64,
     _boundary: std::marker::PhantomData<B>,
 }
 
@@ -605,17 +668,20 @@ struct ParticleMut<'a> {
 
 impl<'a, B: Boundary> Drift<'a, B> {
     /// The drift of a step of `dt` (s) in `domain`, testing displacements
-    /// against the last build of `neighbors`.
+    /// against the last build of `neighbors` and, per step, against the
+    /// tunnelling bound of `limits`.
     fn new<H: Copy + Default + Send + Sync>(
         domain: Domain,
         dt: f64,
         neighbors: &'a NeighborList<H>,
+        limits: &HealthLimits,
     ) -> Self {
         Self {
             domain,
             dt,
             reference: neighbors.reference_positions(),
             limit_sq: neighbors.rebuild_distance_sq(),
+            step_limit_sq: step_limit_sq(limits),
             _boundary: std::marker::PhantomData,
         }
     }
@@ -625,7 +691,8 @@ impl<'a, B: Boundary> Drift<'a, B> {
     /// (centre and velocity estimates; radius and mass never change there).
     /// Returns (`Some(i)` if it left the domain, whether it moved more than
     /// half the skin since the last neighbour build — the neighbour list's
-    /// own test, fused into this pass).
+    /// own test, fused into this pass —, whether this step moved it farther
+    /// than the tunnelling bound).
     ///
     /// Velocities and centre are passed and stored from registers, never
     /// re-read from the stores just made: a load right after a store to the
@@ -640,11 +707,13 @@ impl<'a, B: Boundary> Drift<'a, B> {
         dv: Vec3,
         dw: Vec3,
         p: ParticleMut<'_>,
-    ) -> (Option<usize>, bool) {
+    ) -> (Option<usize>, bool, bool) {
         let (v, w) = (v + dv, w + dw);
         *p.v = v;
         *p.w = w;
-        let x = B::wrap(&self.domain, *p.x + v * self.dt);
+        let step = v * self.dt;
+        let tunnelled = too_far(step, p.sphere.r, self.step_limit_sq);
+        let x = B::wrap(&self.domain, *p.x + step);
         *p.x = x;
         p.sphere.x = x;
         p.motion.v = v + dv;
@@ -657,7 +726,7 @@ impl<'a, B: Boundary> Drift<'a, B> {
             }
             None => true,
         };
-        ((!self.domain.contains(x)).then_some(i), moved)
+        ((!self.domain.contains(x)).then_some(i), moved, tunnelled)
     }
 }
 
@@ -670,8 +739,12 @@ struct GatherFound {
     worst_wall: (f64, usize),
     /// Lowest index of a particle with non-finite state.
     non_finite: Option<usize>,
+    /// Largest relative normal approach speed of a wall contact, m/s.
+    wall_approach_m_s: f64,
     /// Lowest index of a particle that drifted out of the domain.
     left: Option<usize>,
+    /// Some particle drifted farther than the tunnelling bound.
+    tunnelled: bool,
     /// Some particle drifted far enough to need a neighbour rebuild.
     moved: bool,
 }
@@ -682,7 +755,9 @@ impl Default for GatherFound {
             wall_contacts: 0,
             worst_wall: (0.0, usize::MAX),
             non_finite: None,
+            wall_approach_m_s: 0.0,
             left: None,
+            tunnelled: false,
             moved: false,
         }
     }
@@ -694,7 +769,9 @@ impl GatherFound {
             wall_contacts: self.wall_contacts + o.wall_contacts,
             worst_wall: worse(self.worst_wall, o.worst_wall),
             non_finite: min_option(self.non_finite, o.non_finite),
+            wall_approach_m_s: self.wall_approach_m_s.max(o.wall_approach_m_s),
             left: min_option(self.left, o.left),
+            tunnelled: self.tunnelled || o.tunnelled,
             moved: self.moved || o.moved,
         }
     }
