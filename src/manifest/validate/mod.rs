@@ -10,6 +10,7 @@ mod study;
 use std::fmt;
 
 pub use checker::FieldError;
+pub(crate) use checker::number;
 pub use scene::PACKING_LIMIT;
 
 use super::experiment::Experiment;
