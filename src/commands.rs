@@ -23,8 +23,8 @@ use crate::manifest::{
     read_document, read_experiment, ContentId, Document, DocumentKind, Experiment, ManifestError,
     Study,
 };
-use crate::scenes::protocol::{progress_enabled, set_quiet};
 use crate::scenes::plan::{plan as plan_run, Limits, OverLimit, RunPlan};
+use crate::scenes::protocol::{progress_enabled, set_quiet};
 use crate::scenes::run_experiment;
 use crate::store::{
     write_atomic, CacheOutcome, InputRef, Lineage, RunError, RunStatus, RunSummary, Store,
@@ -308,10 +308,11 @@ pub fn run(
     let id = experiment.id();
     // A complete run is served from the cache whatever it cost.
     if store.status(&id) != RunStatus::Complete {
-        plan.check(limits).map_err(|error| CommandError::OverLimit {
-            path: manifest.to_path_buf(),
-            error,
-        })?;
+        plan.check(limits)
+            .map_err(|error| CommandError::OverLimit {
+                path: manifest.to_path_buf(),
+                error,
+            })?;
     }
     let dir = store.run_dir(&id);
     let (result, outcome) = match store.run_cached(&experiment, |e, dir| {

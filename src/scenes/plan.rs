@@ -248,7 +248,7 @@ impl RunPlan {
         ]
         .into_iter()
         // NaN never passes.
-        .filter(|&(_, estimate, limit, _)| !(estimate <= limit as f64))
+        .filter(|&(_, estimate, limit, _)| estimate.is_nan() || estimate > limit as f64)
         .map(|(quantity, estimate, limit, flag)| Excess {
             quantity,
             estimate,
@@ -335,11 +335,7 @@ fn diameters(exp: &Experiment, errors: &mut Vec<FieldError>) -> Option<Diameters
         .and_then(|(min, mean)| Ok((min, mean, sizes.sampler()?.max_diameter())));
     let (path, value) = largest_size_field(exp);
     match bounds {
-        Ok((min, mean, max))
-            if [min, mean, max]
-                .iter()
-                .all(|d| d.is_finite() && *d > 0.0) =>
-        {
+        Ok((min, mean, max)) if [min, mean, max].iter().all(|d| d.is_finite() && *d > 0.0) => {
             Some(Diameters { min, mean, max })
         }
         Ok((min, _, max)) => {
@@ -441,7 +437,7 @@ fn check_periodic(
 ) {
     let Some(slice) = slice else { return };
     let need = periodic_minimum(exp, d);
-    if !(slice >= need) {
+    if need.is_nan() || slice < need {
         fail(
             errors,
             path,
@@ -465,7 +461,7 @@ fn check_fits(
     errors: &mut Vec<FieldError>,
 ) {
     let need = d.max + 2.0 * CLEARANCE_DIAMETERS * d.mean;
-    if room.is_finite() && !(need < room) {
+    if room.is_finite() && (need.is_nan() || need >= room) {
         let (path, value) = largest_size_field(exp);
         fail(
             errors,
@@ -482,14 +478,8 @@ fn check_fits(
 
 /// Requires a count of at least one particle and at most the engine's limit,
 /// naming `path` (the field that sets the amount).
-fn check_count(
-    count: f64,
-    path: &str,
-    value: String,
-    how: &str,
-    errors: &mut Vec<FieldError>,
-) {
-    if !(count >= 0.5) {
+fn check_count(count: f64, path: &str, value: String, how: &str, errors: &mut Vec<FieldError>) {
+    if count.is_nan() || count < 0.5 {
         fail(
             errors,
             path,
@@ -499,7 +489,7 @@ fn check_count(
                 sci(count.round())
             ),
         );
-    } else if !(count <= ENGINE_MAX_PARTICLES) {
+    } else if count > ENGINE_MAX_PARTICLES {
         fail(
             errors,
             path,
@@ -587,13 +577,18 @@ fn pair(s: &PairScene) -> Shape {
     }
 }
 
-fn drum(exp: &Experiment, s: &DrumScene, d: &Diameters, errors: &mut Vec<FieldError>) -> Option<Shape> {
+fn drum(
+    exp: &Experiment,
+    s: &DrumScene,
+    d: &Diameters,
+    errors: &mut Vec<FieldError>,
+) -> Option<Shape> {
     let r = 0.5 * s.inner_diameter_m;
     let length = s.periodic_slice_m.unwrap_or(s.length_m);
     // The scene's own count (scenes::drum::build_world).
     let volume = PI * r * r * length;
-    let count = (s.fill_fraction * volume * super::drum::BULK_SOLID_FRACTION / d.mean_volume())
-        .round();
+    let count =
+        (s.fill_fraction * volume * super::drum::BULK_SOLID_FRACTION / d.mean_volume()).round();
     let how = format!(
         "scene.fill_fraction of the simulated drum volume {} m3 at bulk solid fraction {}, particles of simulated diameter {} m",
         approx(volume),
@@ -601,9 +596,21 @@ fn drum(exp: &Experiment, s: &DrumScene, d: &Diameters, errors: &mut Vec<FieldEr
         approx(d.mean)
     );
     if count > ENGINE_MAX_PARTICLES {
-        check_count(count, "scene.inner_diameter_m", number(s.inner_diameter_m), &how, errors);
+        check_count(
+            count,
+            "scene.inner_diameter_m",
+            number(s.inner_diameter_m),
+            &how,
+            errors,
+        );
     } else {
-        check_count(count, "scene.fill_fraction", number(s.fill_fraction), &how, errors);
+        check_count(
+            count,
+            "scene.fill_fraction",
+            number(s.fill_fraction),
+            &how,
+            errors,
+        );
     }
     // Particles are placed in the square inscribed in the cross-section.
     check_fits(
@@ -648,7 +655,13 @@ fn funnel(
             errors,
         );
     } else {
-        check_count(count, "scene.fill_fraction", number(s.fill_fraction), &how, errors);
+        check_count(
+            count,
+            "scene.fill_fraction",
+            number(s.fill_fraction),
+            &how,
+            errors,
+        );
     }
     check_fits(
         exp,
@@ -679,7 +692,13 @@ fn baffle(
         approx(mass),
         approx(d.mean)
     );
-    check_count(count, "scene.powder_mass_kg", number(s.powder_mass_kg), &how, errors);
+    check_count(
+        count,
+        "scene.powder_mass_kg",
+        number(s.powder_mass_kg),
+        &how,
+        errors,
+    );
     check_fits(exp, d, s.box_length_m, "scene.box_length_m", errors);
     check_fits(exp, d, s.box_height_m, "scene.box_height_m", errors);
     match s.periodic_slice_m {
@@ -710,9 +729,21 @@ fn hopper(
         approx(d.mean)
     );
     if count > ENGINE_MAX_PARTICLES {
-        check_count(count, "scene.diameter_m", number(s.diameter_m), &how, errors);
+        check_count(
+            count,
+            "scene.diameter_m",
+            number(s.diameter_m),
+            &how,
+            errors,
+        );
     } else {
-        check_count(count, "scene.packing_fraction", number(s.packing_fraction), &how, errors);
+        check_count(
+            count,
+            "scene.packing_fraction",
+            number(s.packing_fraction),
+            &how,
+            errors,
+        );
     }
     check_fits(
         exp,

@@ -9,8 +9,8 @@ mod study;
 
 use std::fmt;
 
-pub use checker::FieldError;
 pub(crate) use checker::number;
+pub use checker::FieldError;
 pub use scene::PACKING_LIMIT;
 
 use super::experiment::Experiment;
