@@ -16,6 +16,9 @@
 //!   flow through (funnel outlet, hopper orifice, static-pile outlet), and a
 //!   periodic slice must be at least twice the engine's neighbour-search
 //!   cutoff (2 r_max + JKR reach + skin), as [`crate::dem::domain`] demands;
+//! - a lab scene's `sample_interval_s` must be at least the time step
+//!   (samples and log frames are taken between steps; 1e-300 would otherwise
+//!   write a frame at every step);
 //! - the estimated particle count must be finite and at most
 //!   [`ENGINE_MAX_PARTICLES`], the most the engine's 32-bit particle ids can
 //!   address (a drum of diameter 1e308 would otherwise try to allocate an
@@ -46,7 +49,9 @@
 //! [`Limits`] caps particles, particle-steps and log bytes. `repose run`,
 //! `batch`, `verify`, `calibrate` and `learning-curve` refuse, before anything
 //! runs, an experiment whose estimate exceeds a limit, with the estimate and the
-//! flag that raises it in the message (exit 2). The defaults
+//! flag that raises it in the message (exit 2); a run already complete in
+//! the store is served from the cache whatever the limits, and `repose plan`
+//! reports an excess without failing. The defaults
 //! ([`Limits::default`]) sit well above every committed profile (the largest,
 //! the he2019 funnel at the paper profile, is about 6.3 × 10¹² particle-steps)
 //! and well below what exhausts a workstation. The limits are command-line
