@@ -21,15 +21,17 @@ use crate::calibrate::verify::verify as run_verify;
 use crate::calibrate::{CalibrateError, StudyDir};
 use crate::log::{inspect, InspectError};
 use crate::manifest::{
-    read_document, read_experiment, ContentId, Document, DocumentKind, ManifestError, Study,
+    read_document, read_experiment, ContentId, Document, DocumentKind, Experiment, ManifestError,
+    Study,
 };
+use crate::scenes::plan::{plan as plan_run, Limits, OverLimit, RunPlan};
 use crate::scenes::protocol::{progress_enabled, set_quiet};
 use crate::scenes::run_experiment;
 use crate::store::{
     write_atomic, CacheOutcome, Depth, InputRef, Lineage, RunError, RunState, RunStatus,
     RunSummary, Store, StoreError,
 };
-use crate::tradeoff::plan::{plan, Knob, PlanError};
+use crate::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
 use crate::tradeoff::{self as tradeoff_sweep, report};
 
 /// Which kind of manifest a file holds, as chosen on the command line.
@@ -77,6 +79,14 @@ pub enum CommandError {
     /// The run store failed, or a prefix did not resolve.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// An experiment's estimated cost exceeds the limits (nothing was run).
+    #[error("{}: refused: {error}", path.display())]
+    OverLimit {
+        /// The manifest.
+        path: PathBuf,
+        /// The estimates above their limits.
+        error: OverLimit,
+    },
     /// The run itself failed; its error.json says why.
     #[error("run {id} failed: {message}\n(recorded in {})", error_path.display())]
     RunFailed {
@@ -143,7 +153,9 @@ impl CommandError {
             CommandError::Store(e) => e.is_invalid_input(),
             CommandError::Inspect(e) => e.is_invalid_input(),
             CommandError::Bench(e) => e.is_invalid_input(),
-            CommandError::TradeoffPlan(_) | CommandError::Usage(_) => true,
+            CommandError::TradeoffPlan(_)
+            | CommandError::Usage(_)
+            | CommandError::OverLimit { .. } => true,
             CommandError::Audit(AuditError::Path { .. } | AuditError::NothingToAudit(_)) => true,
             CommandError::Audit(AuditError::Store(e)) => e.is_invalid_input(),
             CommandError::Calibrate(e) => e.is_invalid_input(),
@@ -196,9 +208,27 @@ fn manifest_error(path: &Path) -> impl FnOnce(ManifestError) -> CommandError + '
     }
 }
 
+/// Reads and validates a manifest; an experiment must also make a run plan
+/// (the scene-and-physics rules of [`crate::scenes::plan`]).
+fn read_checked(path: &Path, kind: KindArg) -> Result<Document, ManifestError> {
+    let doc = read_document(path, kind.kind())?;
+    if let Document::Experiment(e) = &doc {
+        plan_run(e).map_err(ManifestError::Invalid)?;
+    }
+    Ok(doc)
+}
+
+/// Reads and validates an experiment and makes its run plan.
+fn read_planned(path: &Path) -> Result<(Experiment, RunPlan), CommandError> {
+    let experiment = read_experiment(path).map_err(manifest_error(path))?;
+    let plan = plan_run(&experiment)
+        .map_err(|errors| manifest_error(path)(ManifestError::Invalid(errors)))?;
+    Ok((experiment, plan))
+}
+
 /// `repose hash FILE`: prints the content id of a valid manifest.
 pub fn hash(path: &Path, kind: KindArg, out: &mut dyn Write) -> Result<(), CommandError> {
-    let doc = read_document(path, kind.kind()).map_err(manifest_error(path))?;
+    let doc = read_checked(path, kind).map_err(manifest_error(path))?;
     writeln!(out, "{}", doc.id())?;
     Ok(())
 }
@@ -213,7 +243,7 @@ pub fn validate(
 ) -> Result<(), CommandError> {
     let mut failed = 0;
     for path in paths {
-        match read_document(path, kind.kind()) {
+        match read_checked(path, kind) {
             Ok(doc) => {
                 let kind = match doc.kind() {
                     DocumentKind::Experiment => "experiment",
@@ -236,19 +266,71 @@ pub fn validate(
     Ok(())
 }
 
-/// `repose run MANIFEST`: validates the experiment and runs it through the store
-/// cache (a complete run with the same id is reused). The summary goes to
-/// `out`; the result's warnings (computed now or stored with a reused run)
-/// go to `err`, one `warning: ...` line each.
+/// `repose plan MANIFEST` (and `repose run --dry-run`): validates the
+/// experiment and prints its run plan — particles, time step, steps,
+/// particle-steps, log size — and whether it is within `limits`, as text or
+/// (with `json`) one JSON object. Nothing is run; an estimate above a limit is
+/// reported, not an error.
+pub fn plan(
+    manifest: &Path,
+    limits: &Limits,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (experiment, plan) = read_planned(manifest)?;
+    let verdict = plan.check(limits);
+    if json {
+        let excess = verdict.as_ref().err().map_or(&[][..], |e| &e.0[..]);
+        let report = serde_json::json!({
+            "manifest": manifest.display().to_string(),
+            "id": experiment.id().to_string(),
+            "plan": plan,
+            "limits": limits,
+            "within_limits": verdict.is_ok(),
+            "excess": excess,
+        });
+        writeln!(out, "{}", pretty(&report))?;
+        return Ok(());
+    }
+    writeln!(out, "plan {} ({})", experiment.id(), manifest.display())?;
+    for line in plan.to_string().lines() {
+        writeln!(out, "  {line}")?;
+    }
+    writeln!(
+        out,
+        "  limits: particles {}, particle_steps {}, log_bytes {}",
+        limits.max_particles, limits.max_particle_steps, limits.max_log_bytes
+    )?;
+    match verdict {
+        Ok(()) => writeln!(out, "  within limits: yes")?,
+        Err(e) => writeln!(out, "  within limits: no: {e}")?,
+    }
+    Ok(())
+}
+
+/// `repose run MANIFEST`: validates the experiment, refuses it when it is not
+/// complete in the store and its plan exceeds `limits`, and runs it through
+/// the store cache (a complete run with the same id is reused). The summary
+/// goes to `out`; the result's warnings (computed now or stored with a reused
+/// run) go to `err`, one `warning: ...` line each.
 pub fn run(
     store_root: &Path,
     manifest: &Path,
+    limits: &Limits,
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let experiment = read_experiment(manifest).map_err(manifest_error(manifest))?;
+    let (experiment, plan) = read_planned(manifest)?;
     let store = open_store(store_root)?;
     let id = experiment.id();
+    // A complete run is served from the cache whatever it cost.
+    if store.status(&id) != RunStatus::Complete {
+        plan.check(limits)
+            .map_err(|error| CommandError::OverLimit {
+                path: manifest.to_path_buf(),
+                error,
+            })?;
+    }
     let dir = store.run_dir(&id);
     let (result, outcome) = match store.run_cached(&experiment, |e, dir| {
         run_experiment(e, Some(&dir.mcap_path()))
@@ -500,7 +582,7 @@ pub fn tradeoff(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
-    let points = plan(&base, &options.knobs, options.replicates)?;
+    let points = plan_sweep(&base, &options.knobs, options.replicates)?;
     let store = open_store(store_root)?;
     let total: usize = points.iter().map(|p| p.replicates.len()).sum();
     let done = points
@@ -567,6 +649,7 @@ pub fn learning_curve(
     study_path: &Path,
     sizes: Option<&[usize]>,
     jobs: usize,
+    limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
@@ -579,7 +662,7 @@ pub fn learning_curve(
             &mut io::stderr(),
         )?;
     }
-    batch_leaving_out_failures(store_root, study_path, jobs, out)?;
+    batch_leaving_out_failures(store_root, study_path, jobs, limits, out)?;
     let store = open_store(store_root)?;
     let outcome = curve::learning_curve(&dir, &study, &store, sizes)?;
     write!(out, "\n{}", outcome.markdown)?;
@@ -704,9 +787,10 @@ pub fn batch(
     store_root: &Path,
     study_path: &Path,
     jobs: usize,
+    limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (failed, total) = run_batch_and_report(store_root, study_path, jobs, out)?;
+    let (failed, total) = run_batch_and_report(store_root, study_path, jobs, limits, out)?;
     if failed > 0 {
         return Err(CommandError::BatchIncomplete { failed, total });
     }
@@ -721,9 +805,10 @@ fn batch_leaving_out_failures(
     store_root: &Path,
     study_path: &Path,
     jobs: usize,
+    limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (failed, total) = run_batch_and_report(store_root, study_path, jobs, out)?;
+    let (failed, total) = run_batch_and_report(store_root, study_path, jobs, limits, out)?;
     if failed > 0 {
         writeln!(
             out,
@@ -740,6 +825,7 @@ fn run_batch_and_report(
     store_root: &Path,
     study_path: &Path,
     jobs: usize,
+    limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(usize, usize), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
@@ -747,6 +833,7 @@ fn run_batch_and_report(
     let settings = BatchSettings {
         jobs,
         progress: progress_enabled(),
+        limits: *limits,
     };
     set_quiet(true);
     let outcome = run_batch(&dir, &study, &store, &settings, |e, run_dir| {
@@ -891,6 +978,7 @@ pub fn verify(
     study_path: &Path,
     jobs: usize,
     candidates: usize,
+    limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
@@ -898,6 +986,7 @@ pub fn verify(
     let settings = BatchSettings {
         jobs,
         progress: progress_enabled(),
+        limits: *limits,
     };
     set_quiet(true);
     let outcome = run_verify(&dir, &study, &store, &settings, candidates, |e, run_dir| {
@@ -943,6 +1032,7 @@ pub fn calibrate(
     study_path: Option<&Path>,
     jobs: usize,
     candidates: usize,
+    limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let path = match study_path {
@@ -964,7 +1054,7 @@ pub fn calibrate(
     writeln!(out, "\n== 1/5 sample")?;
     sample(store_root, &path, &SampleSettings::default(), out, &mut err)?;
     writeln!(out, "\n== 2/5 batch ({jobs} at a time)")?;
-    batch_leaving_out_failures(store_root, &path, jobs, out)?;
+    batch_leaving_out_failures(store_root, &path, jobs, limits, out)?;
     writeln!(out, "\n== 3/5 train")?;
     let options = TrainOptions {
         settings: TrainSettings::with_seed(study.design.seed),
@@ -980,5 +1070,5 @@ pub fn calibrate(
         out,
     )?;
     writeln!(out, "\n== 5/5 verify ({candidates} candidate(s))")?;
-    verify(store_root, &path, jobs, candidates, out)
+    verify(store_root, &path, jobs, candidates, limits, out)
 }

@@ -4,7 +4,8 @@
 //! Module map (dependencies point downward only):
 //! - [`commands`]: one function per CLI subcommand (the binary only parses arguments).
 //! - [`mod@bench`]: the engine throughput benchmark (`repose bench`).
-//! - [`scenes`]: runs an experiment's scene and produces its result.
+//! - [`scenes`]: runs an experiment's scene and produces its result; its
+//!   [`scenes::plan`] checks and prices a run before it starts.
 //! - [`log`]: MCAP run logs for Foxglove (writing, and `repose inspect`).
 //! - [`store`]: the content-addressed run store (`runs/<id>/`), atomic writes,
 //!   caching, lineage records.

@@ -18,6 +18,7 @@ use repose::calibrate::surrogate::TrainSettings;
 use repose::calibrate::train::{TableSpec, TrainOptions, DEFAULT_TRAIN_FRACTION};
 use repose::commands::{self, CommandError, KindArg, TradeoffOptions};
 use repose::dem::simulation::{NormalChoice, RollingChoice};
+use repose::scenes::plan::Limits;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
 use repose::tradeoff::plan::{Knob, KNOB_NAMES};
 
@@ -36,6 +37,15 @@ struct Cli {
     /// No progress reports on stderr (they are also off when stderr is not a terminal).
     #[arg(long, global = true)]
     quiet: bool,
+    /// Refuse a run whose estimated particle count exceeds this (see `repose plan`).
+    #[arg(long, global = true, value_name = "N", default_value_t = Limits::DEFAULT_MAX_PARTICLES)]
+    max_particles: u64,
+    /// Refuse a run whose estimated particles x steps exceed this.
+    #[arg(long, global = true, value_name = "N", default_value_t = Limits::DEFAULT_MAX_PARTICLE_STEPS)]
+    max_particle_steps: u64,
+    /// Refuse a run whose estimated log (run.mcap) exceeds this many bytes.
+    #[arg(long, global = true, value_name = "N", default_value_t = Limits::DEFAULT_MAX_LOG_BYTES)]
+    max_log_bytes: u64,
     #[command(subcommand)]
     command: Command,
 }
@@ -59,10 +69,27 @@ enum Command {
         #[arg(long, value_enum, default_value_t)]
         kind: KindArg,
     },
-    /// Run an experiment (or reuse its cached result).
+    /// Run an experiment (or reuse its cached result); refused when its
+    /// estimated cost exceeds the limits (--max-particles, --max-particle-steps,
+    /// --max-log-bytes).
     Run {
         /// Experiment manifest.
         manifest: PathBuf,
+        /// Print the run plan (as `repose plan` does) instead of running.
+        #[arg(long)]
+        dry_run: bool,
+        /// With --dry-run: print the plan as JSON.
+        #[arg(long, requires = "dry_run")]
+        json: bool,
+    },
+    /// Print what a run would cost without running it: particles, time step,
+    /// steps, particle-steps, log size, and whether it is within the limits.
+    Plan {
+        /// Experiment manifest.
+        manifest: PathBuf,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Check a run log (run.mcap) and list its channels, counts, times and manifest.
     Inspect {
@@ -430,13 +457,24 @@ enum RunsCommand {
 fn dispatch(cli: Cli) -> Result<(), CommandError> {
     repose::scenes::protocol::set_quiet(cli.quiet);
     let mut out = io::stdout().lock();
+    let limits = Limits {
+        max_particles: cli.max_particles,
+        max_particle_steps: cli.max_particle_steps,
+        max_log_bytes: cli.max_log_bytes,
+    };
     match cli.command {
         Command::Hash { file, kind } => commands::hash(&file, kind, &mut out),
         Command::Validate { files, kind } => {
             commands::validate(&files, kind, &mut out, &mut io::stderr())
         }
-        Command::Run { manifest } => {
-            commands::run(&cli.store, &manifest, &mut out, &mut io::stderr())
+        Command::Run {
+            manifest,
+            dry_run: true,
+            json,
+        }
+        | Command::Plan { manifest, json } => commands::plan(&manifest, &limits, json, &mut out),
+        Command::Run { manifest, .. } => {
+            commands::run(&cli.store, &manifest, &limits, &mut out, &mut io::stderr())
         }
         Command::Inspect { file } => commands::inspect(&cli.store, &file, &mut out),
         Command::Bench(args) => {
@@ -451,7 +489,14 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             study,
             jobs,
             candidates,
-        } => commands::verify(&cli.store, &study, default_jobs(jobs), candidates, &mut out),
+        } => commands::verify(
+            &cli.store,
+            &study,
+            default_jobs(jobs),
+            candidates,
+            &limits,
+            &mut out,
+        ),
         Command::Calibrate {
             study,
             jobs,
@@ -461,6 +506,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             study.as_deref(),
             default_jobs(jobs),
             candidates,
+            &limits,
             &mut out,
         ),
         Command::Tradeoff(args) => {
@@ -472,6 +518,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             &study,
             sizes.as_deref(),
             default_jobs(jobs),
+            &limits,
             &mut out,
         ),
         Command::Audit { path, rerun, seed } => {
@@ -485,7 +532,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         } => commands::runs_show(&cli.store, &prefix, &mut out),
         Command::Sample(args) => sample(&cli.store, args, &mut out),
         Command::Batch { study, jobs } => {
-            commands::batch(&cli.store, &study, default_jobs(jobs), &mut out)
+            commands::batch(&cli.store, &study, default_jobs(jobs), &limits, &mut out)
         }
         Command::Train(args) => train(&cli.store, args, &mut out),
         Command::Search(args) => {

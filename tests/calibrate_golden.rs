@@ -20,6 +20,7 @@ use repose::calibrate::table::Table;
 use repose::calibrate::{Stage, StudyDir};
 use repose::commands::calibrate;
 use repose::manifest::parse_study;
+use repose::scenes::plan::Limits;
 use repose::store::TIMING_FILE;
 
 const STUDY: &str = "experiments/calibrate-smoke/study.json";
@@ -83,8 +84,15 @@ fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
 fn chain(store: &Path, jobs: usize) -> StudyDir {
     let path = common::root().join(STUDY);
     let mut out = Vec::new();
-    calibrate(store, Some(&path), jobs, CANDIDATES, &mut out)
-        .unwrap_or_else(|e| panic!("calibrate failed: {e}\n{}", String::from_utf8_lossy(&out)));
+    calibrate(
+        store,
+        Some(&path),
+        jobs,
+        CANDIDATES,
+        &Limits::default(),
+        &mut out,
+    )
+    .unwrap_or_else(|e| panic!("calibrate failed: {e}\n{}", String::from_utf8_lossy(&out)));
     eprintln!("{}", String::from_utf8_lossy(&out));
     let study = parse_study(&std::fs::read_to_string(&path).unwrap()).unwrap();
     StudyDir::new(store, &study, &path)

@@ -74,6 +74,7 @@ fn settings(jobs: usize) -> BatchSettings {
     BatchSettings {
         jobs,
         progress: false,
+        limits: Default::default(),
     }
 }
 

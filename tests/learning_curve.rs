@@ -53,6 +53,7 @@ fn prepared(tmp: &Path) -> (Study, StudyDir, Store) {
     let settings = BatchSettings {
         jobs: 2,
         progress: false,
+        limits: Default::default(),
     };
     let out = batch(&dir, &s, &store, &settings, fake).unwrap();
     assert_eq!((out.total, out.failures.len()), (36, 1));

@@ -1,12 +1,13 @@
 //! Bad input never panics: random bytes, random JSON values, and valid manifests
-//! with random leaves replaced all go through parsing and validation to an `Ok` or
-//! an error.
+//! with random leaves replaced all go through parsing, validation and the run
+//! plan (with its limits) to an `Ok` or an error.
 
 mod common;
 
 use common::{edit, json_files, root};
 use proptest::prelude::*;
 use repose::manifest::{parse_document, parse_experiment, parse_study, DocumentKind};
+use repose::scenes::plan::{plan, Limits};
 use serde_json::{json, Value};
 
 fn any_json() -> impl Strategy<Value = Value> {
@@ -62,6 +63,10 @@ fn exercise(text: &str) {
     let _ = parse_document(text, Some(DocumentKind::Study));
     if let Ok(e) = parse_experiment(text) {
         let _ = e.id();
+        if let Ok(p) = plan(&e) {
+            let _ = p.check(&Limits::default());
+            let _ = p.to_string();
+        }
     }
     if let Ok(s) = parse_study(text) {
         let _ = s.id();
@@ -113,4 +118,52 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
     assert!(parse_document(&text, None).is_err());
     let text = format!("{{\"scene\":{}", "{\"a\":".repeat(100_000));
     assert!(parse_document(&text, None).is_err());
+}
+
+/// Issue 24 item 2: manifests that validated and then panicked (capacity
+/// overflow), allocated without limit or would run for ever are refused by the
+/// plan or its default limits, without panicking.
+#[test]
+fn manifests_that_crashed_the_runner_are_refused_by_the_plan() {
+    let drum = common::example("drum/smoke.json");
+    let pair = common::pair_wall();
+    let cases = [
+        (drum.clone(), "/scene/inner_diameter_m", json!(1e308)),
+        (
+            drum.clone(),
+            "/material/particle/size/radius_m",
+            json!(1e-5),
+        ),
+        (
+            drum.clone(),
+            "/material/particle/size/radius_m",
+            json!(1e308),
+        ),
+        (
+            drum.clone(),
+            "/material/particle/youngs_modulus_pa",
+            json!(1e30),
+        ),
+        (
+            drum.clone(),
+            "/material/particle/youngs_modulus_pa",
+            json!(1e308),
+        ),
+        (drum.clone(), "/scene/rotation_time_s", json!(1e308)),
+        (drum.clone(), "/scene/sample_interval_s", json!(1e-300)),
+        (drum, "/scene/standing_time_s", json!(1e308)),
+        (
+            pair.clone(),
+            "/time_step/design_impact_speed_m_s",
+            json!(1e308),
+        ),
+        (pair, "/scene/max_time_s", json!(1e308)),
+    ];
+    for (doc, pointer, value) in cases {
+        let text = edit(doc, pointer, Some(value)).to_string();
+        exercise(&text);
+        let e = parse_experiment(&text).expect("passes the field rules");
+        let refused = plan(&e).map(|p| p.check(&Limits::default()));
+        assert!(!matches!(refused, Ok(Ok(()))), "{pointer}: {refused:?}");
+    }
 }

@@ -12,6 +12,12 @@
 //! its `error.json` by the store, reported at the end, and does not stop the
 //! others; the next batch tries it again.
 //!
+//! Before any run starts, every pending experiment's run plan is made
+//! ([`crate::scenes::plan`]): one whose scene and physics are inconsistent, or
+//! whose estimated cost exceeds [`BatchSettings::limits`], refuses the whole
+//! stage ([`CalibrateError::Refused`], invalid input), so a study never starts
+//! a run that cannot finish or would exhaust the machine.
+//!
 //! The runner is a parameter so tests can inject a fast fake; the command
 //! passes [`crate::scenes::run_experiment`] with the run's MCAP log, as
 //! `repose run` does.
@@ -28,6 +34,7 @@ use super::sample::{design_path, experiment_path};
 use super::table::{parse_number, Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
+use crate::scenes::plan::{plan, Limits};
 use crate::store::{RunDir, RunResult, RunStatus, Store};
 
 /// Options of the batch stage.
@@ -37,6 +44,9 @@ pub struct BatchSettings {
     pub jobs: usize,
     /// Draw the progress bar on stderr.
     pub progress: bool,
+    /// Resource limits every pending run's plan must stay within; a run beyond
+    /// them refuses the whole stage before anything runs.
+    pub limits: Limits,
 }
 
 /// One row of design.csv.
@@ -211,6 +221,16 @@ where
     let pending: Vec<usize> = (0..experiments.len())
         .filter(|&i| store.status(&experiments[i].id()) != RunStatus::Complete)
         .collect();
+    for &i in &pending {
+        let refuse = |reason: String| CalibrateError::Refused {
+            id: experiments[i].id(),
+            reason,
+        };
+        plan(&experiments[i])
+            .map_err(|errors| refuse(errors.to_string()))?
+            .check(&settings.limits)
+            .map_err(|excess| refuse(excess.to_string()))?;
+    }
     let cached = experiments.len() - pending.len();
     let mut progress = BatchProgress::new(settings.progress, experiments.len(), cached);
     let failures = run_pending(

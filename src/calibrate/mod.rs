@@ -168,6 +168,16 @@ pub enum CalibrateError {
         /// What is wrong.
         errors: ValidationErrors,
     },
+    /// A pending run would not run: its scene and physics are inconsistent or
+    /// its estimated cost exceeds the limits (see [`crate::scenes::plan`]);
+    /// refused before any run of the stage starts.
+    #[error("run {id}: refused: {reason}")]
+    Refused {
+        /// The experiment id.
+        id: ContentId,
+        /// The rules it breaks, or the estimates above their limits.
+        reason: String,
+    },
     /// A stage file is inconsistent with the others (changed outside repose).
     #[error("{}: {message}", path.display())]
     Inconsistent {
@@ -198,6 +208,7 @@ impl CalibrateError {
             | CalibrateError::Settings(_)
             | CalibrateError::Unsupported(_)
             | CalibrateError::InvalidPoint { .. }
+            | CalibrateError::Refused { .. }
             | CalibrateError::Train(_) => true,
             CalibrateError::Table(e) => !matches!(e, TableError::Io { .. }),
             CalibrateError::Store(e) => e.is_invalid_input(),

@@ -2,6 +2,8 @@
 //!
 //! [`run_experiment`] is the runner `repose run` hands to
 //! [`crate::store::Store::run_cached`].
+//! [`plan::plan`] checks an experiment's scene against its particles and
+//! physics and estimates the run's cost before anything runs.
 
 pub mod baffle;
 pub mod drum;
@@ -9,6 +11,7 @@ pub mod funnel;
 pub mod hopper;
 pub mod pair;
 pub mod physics;
+pub mod plan;
 pub mod protocol;
 pub mod static_pile;
 

@@ -9,6 +9,7 @@ mod study;
 
 use std::fmt;
 
+pub(crate) use checker::number;
 pub use checker::FieldError;
 pub use scene::PACKING_LIMIT;
 
