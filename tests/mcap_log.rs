@@ -455,8 +455,9 @@ fn truncated_and_bit_flipped_logs_are_reported_corrupt() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("CRC mismatch"), "{err}");
 
+    // A file that cannot be read is bad input, as for every command (exit 2).
     let out = repose(tmp.path(), &["inspect", "no/such/file.mcap"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
 }
 
 #[test]
