@@ -9,9 +9,9 @@
 //! never a silent cache hit. The seal itself is deterministic: identical
 //! manifests give byte-identical seals.
 //!
-//! Checking costs one read of each sealed file: sha256 runs at about 2 GB/s
-//! with the processor's SHA extensions, far below the cost of the simulation
-//! that wrote the files. A listing of many runs ([`Depth::Sizes`]) hashes the
+//! Checking costs one read and hash of each sealed file, far below the cost
+//! of the simulation that wrote them (measured: `docs/performance.md`). A
+//! listing of many runs ([`Depth::Sizes`]) hashes the
 //! small JSON files and only compares the log's length, so it stays quick for
 //! stores of large logs; a cache hit, `runs show` and `audit` hash everything
 //! ([`Depth::Full`]).
