@@ -481,10 +481,22 @@ fn check_fits(
     }
 }
 
-/// Requires a count of at least one particle and at most the engine's limit,
-/// naming `path` (the field that sets the amount).
-fn check_count(count: f64, path: &str, value: String, how: &str, errors: &mut Vec<FieldError>) {
+/// A manifest field and its value as the error shows it.
+type Named<'a> = (&'a str, String);
+
+/// Requires a count of at least one particle and at most the engine's limit.
+/// Too few names `amount` (the field that sets how much is filled); too many
+/// names `size` when given (the geometry that holds them: a drum of diameter
+/// 1e308 is wrong, not its fill fraction), else `amount`.
+fn check_count(
+    count: f64,
+    amount: Named<'_>,
+    size: Option<Named<'_>>,
+    how: &str,
+    errors: &mut Vec<FieldError>,
+) {
     if count.is_nan() || count < 0.5 {
+        let (path, value) = amount;
         fail(
             errors,
             path,
@@ -495,6 +507,7 @@ fn check_count(count: f64, path: &str, value: String, how: &str, errors: &mut Ve
             ),
         );
     } else if count > ENGINE_MAX_PARTICLES {
+        let (path, value) = size.unwrap_or(amount);
         fail(
             errors,
             path,
@@ -600,23 +613,13 @@ fn drum(
         super::drum::BULK_SOLID_FRACTION,
         approx(d.mean)
     );
-    if count > ENGINE_MAX_PARTICLES {
-        check_count(
-            count,
-            "scene.inner_diameter_m",
-            number(s.inner_diameter_m),
-            &how,
-            errors,
-        );
-    } else {
-        check_count(
-            count,
-            "scene.fill_fraction",
-            number(s.fill_fraction),
-            &how,
-            errors,
-        );
-    }
+    check_count(
+        count,
+        ("scene.fill_fraction", number(s.fill_fraction)),
+        Some(("scene.inner_diameter_m", number(s.inner_diameter_m))),
+        &how,
+        errors,
+    );
     // Particles are placed in the square inscribed in the cross-section.
     check_fits(
         exp,
@@ -651,23 +654,16 @@ fn funnel(
         approx(volume),
         approx(d.mean)
     );
-    if count > ENGINE_MAX_PARTICLES {
-        check_count(
-            count,
+    check_count(
+        count,
+        ("scene.fill_fraction", number(s.fill_fraction)),
+        Some((
             "scene.funnel_top_diameter_m",
             number(s.funnel_top_diameter_m),
-            &how,
-            errors,
-        );
-    } else {
-        check_count(
-            count,
-            "scene.fill_fraction",
-            number(s.fill_fraction),
-            &how,
-            errors,
-        );
-    }
+        )),
+        &how,
+        errors,
+    );
     check_fits(
         exp,
         d,
@@ -699,8 +695,8 @@ fn baffle(
     );
     check_count(
         count,
-        "scene.powder_mass_kg",
-        number(s.powder_mass_kg),
+        ("scene.powder_mass_kg", number(s.powder_mass_kg)),
+        None,
         &how,
         errors,
     );
@@ -733,23 +729,13 @@ fn hopper(
         approx(volume),
         approx(d.mean)
     );
-    if count > ENGINE_MAX_PARTICLES {
-        check_count(
-            count,
-            "scene.diameter_m",
-            number(s.diameter_m),
-            &how,
-            errors,
-        );
-    } else {
-        check_count(
-            count,
-            "scene.packing_fraction",
-            number(s.packing_fraction),
-            &how,
-            errors,
-        );
-    }
+    check_count(
+        count,
+        ("scene.packing_fraction", number(s.packing_fraction)),
+        Some(("scene.diameter_m", number(s.diameter_m))),
+        &how,
+        errors,
+    );
     check_fits(
         exp,
         d,
@@ -774,8 +760,8 @@ fn static_pile(
     let count = s.particle_count as f64;
     check_count(
         count,
-        "scene.particle_count",
-        s.particle_count.to_string(),
+        ("scene.particle_count", s.particle_count.to_string()),
+        None,
         "as stated",
         errors,
     );
