@@ -543,7 +543,7 @@ fn a_verification_scene_that_cannot_measure_an_angle_is_a_failed_candidate() {
     let checked = verify(&dir, &s, &store, &settings(2), 2, runner).unwrap();
     let candidates = found.clusters.len().min(2);
     assert_eq!(checked.rows.len(), 2 * candidates);
-    let reason = "drum: static angle not measurable: not measurable: drum free surface has 2 \
+    let reason = "drum: static angle: not measurable: drum free surface has 2 \
                   surface points, at least 3 are needed";
     for row in &checked.rows {
         match (row.scene.as_str(), row.group) {

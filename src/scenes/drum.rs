@@ -68,7 +68,7 @@ pub enum DrumError {
     #[error("drum domain: {0}")]
     Domain(#[from] crate::dem::domain::DomainError),
     /// No angle could be measured at the end of standing.
-    #[error("drum: static angle not measurable: {0}")]
+    #[error("drum: static angle: {0}")]
     Angle(#[from] crate::measure::MeasureError),
 }
 

@@ -151,7 +151,7 @@ pub enum FunnelError {
     #[error("funnel_pile domain: {0}")]
     Domain(#[from] crate::dem::domain::DomainError),
     /// No angle could be measured at the end.
-    #[error("funnel_pile: pile angle not measurable: {0}")]
+    #[error("funnel_pile: pile angle: {0}")]
     Angle(#[from] MeasureError),
     /// The run log could not be written.
     #[error(transparent)]
