@@ -23,7 +23,7 @@
 //! a scratch store and checks result.json and run.mcap are byte-identical to
 //! the stored ones: the determinism promise, checked on the user's own data.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use rand::seq::SliceRandom;
@@ -32,9 +32,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::manifest::{content_id, ContentId, Study};
 use crate::scenes::run_experiment;
-use crate::store::{
-    Depth, Lineage, RunState, RunStatus, Store, StoreError, MCAP_FILE, RESULT_FILE,
-};
+use crate::store::{Depth, Lineage, RunState, Store, StoreError, MCAP_FILE, RESULT_FILE};
 
 /// Suffix of lineage records.
 const LINEAGE_SUFFIX: &str = ".lineage.json";
@@ -128,15 +126,15 @@ pub fn audit(
     }
     let studies = study_ids(path)?;
     let mut report = AuditReport::default();
-    let mut runs = BTreeSet::new();
+    let mut runs = RunChecks::new();
     for record in &records {
         report.records += 1;
         check_record(store, record, &studies, &mut runs, &mut report);
     }
-    report.runs_checked = runs.len();
+    report.runs_checked = runs.values().filter(|v| v.is_ok()).count();
     let completed: Vec<ContentId> = runs
         .into_iter()
-        .filter(|id| store.status(id) == RunStatus::Complete)
+        .filter_map(|(id, v)| (v == Ok(true)).then_some(id))
         .collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut picked: Vec<usize> = (0..completed.len()).collect();
@@ -153,7 +151,7 @@ fn check_record(
     store: &Store,
     record: &Path,
     studies: &BTreeSet<String>,
-    runs: &mut BTreeSet<ContentId>,
+    runs: &mut RunChecks,
     report: &mut AuditReport,
 ) {
     let mut broken = |problem: String| {
@@ -184,20 +182,14 @@ fn check_record(
             if studies.contains(id.as_str()) {
                 continue;
             }
-            match check_run(store, &id) {
-                Ok(()) => {
-                    runs.insert(id);
-                }
-                Err(problem) => broken(format!("{label}: {problem}")),
+            if let Err(problem) = checked(store, runs, &id) {
+                broken(format!("{label}: {problem}"));
             }
         } else {
             report.files_checked += 1;
             if let Some(id) = run_of_result_file(Path::new(&input.id_or_path)) {
-                match check_run(store, &id) {
-                    Ok(()) => {
-                        runs.insert(id);
-                    }
-                    Err(problem) => broken(format!("{label}: {problem}")),
+                if let Err(problem) = checked(store, runs, &id) {
+                    broken(format!("{label}: {problem}"));
                 }
             }
             match resolve(store, Path::new(&input.id_or_path)) {
@@ -219,11 +211,22 @@ fn check_record(
     }
 }
 
+/// Each named run's check (complete or not, or what is wrong), made once
+/// however many records name the run: a check hashes every file of the run.
+type RunChecks = BTreeMap<ContentId, Result<bool, String>>;
+
+/// The check of run `id`, from `runs` or made now and kept there.
+fn checked(store: &Store, runs: &mut RunChecks, id: &ContentId) -> Result<bool, String> {
+    runs.entry(id.clone())
+        .or_insert_with(|| check_run(store, id))
+        .clone()
+}
+
 /// Checks run `id` exists and is intact: a completed run against its seal
-/// (every file hashed), any other by its manifest's hash.
-fn check_run(store: &Store, id: &ContentId) -> Result<(), String> {
+/// (every file hashed), any other by its manifest's hash. True when complete.
+fn check_run(store: &Store, id: &ContentId) -> Result<bool, String> {
     match store.check(id, Depth::Full) {
-        RunState::Complete(_) => return Ok(()),
+        RunState::Complete(_) => return Ok(true),
         RunState::Damaged(problem) => {
             return Err(format!("run {} is damaged: {problem}", id.short(12)))
         }
@@ -239,7 +242,7 @@ fn check_run(store: &Store, id: &ContentId) -> Result<(), String> {
             id.short(12)
         ));
     }
-    Ok(())
+    Ok(false)
 }
 
 /// Re-runs `id` in a scratch store beside the real one and compares outputs.

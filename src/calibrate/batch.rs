@@ -35,7 +35,7 @@ use super::table::{parse_number, Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
 use crate::scenes::plan::{plan, Limits};
-use crate::store::{RunDir, RunResult, RunStatus, Store};
+use crate::store::{Depth, RunDir, RunResult, RunState, RunStatus, Store};
 
 /// Options of the batch stage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -322,18 +322,20 @@ fn write_angles(
         .with_input(dir.input("design", &design_path(dir))?);
     for row in design {
         let failed_now = failures.iter().any(|f| f.index == row.index);
-        let status = match store.status(&row.id) {
-            _ if failed_now => RunStatus::Failed,
-            s => s,
-        };
-        let angle = if status == RunStatus::Complete {
-            let result_file = store.run_dir(&row.id).result_path();
-            lineage = lineage.with_input(dir.input("result", &result_file)?);
-            store
-                .load_result(&row.id)?
-                .and_then(|r| r.headline_angle_deg)
+        // One check per run (it hashes the run's files, the log included).
+        let state = store.check(&row.id, Depth::Full);
+        let status = if failed_now {
+            RunStatus::Failed
         } else {
-            None
+            state.status()
+        };
+        let angle = match state {
+            RunState::Complete(result) if !failed_now => {
+                let result_file = store.run_dir(&row.id).result_path();
+                lineage = lineage.with_input(dir.input("result", &result_file)?);
+                result.headline_angle_deg
+            }
+            _ => None,
         };
         let mut cells = vec![Cell::Integer(row.index as u64)];
         cells.extend(row.point.iter().map(|v| Cell::Number(*v)));
