@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use crate::audit::{self, AuditError};
 use crate::bench::{self, BenchError, BenchOptions};
-use crate::calibrate::batch::{batch as run_batch, BatchSettings};
+use crate::calibrate::batch::batch as run_batch;
 use crate::calibrate::curve;
 use crate::calibrate::diagnostics::Diagnostics;
 use crate::calibrate::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
@@ -31,6 +31,7 @@ use crate::store::{
     write_atomic, CacheOutcome, Depth, InputRef, Lineage, RunError, RunState, RunStatus,
     RunSummary, Store, StoreError,
 };
+use crate::study::executor::LocalPool;
 use crate::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
 use crate::tradeoff::{self as tradeoff_sweep, report};
 
@@ -127,6 +128,9 @@ pub enum CommandError {
     /// A calibration stage failed or its options are invalid.
     #[error(transparent)]
     Calibrate(#[from] CalibrateError),
+    /// The executor refused the runs (inconsistent plans or over the limits).
+    #[error(transparent)]
+    Exec(#[from] crate::study::executor::ExecError),
     /// Runs whose files no longer match their seals (each was named above).
     #[error("{count} damaged run(s); run them again to recompute them")]
     Damaged {
@@ -159,6 +163,7 @@ impl CommandError {
             CommandError::Audit(AuditError::Path { .. } | AuditError::NothingToAudit(_)) => true,
             CommandError::Audit(AuditError::Store(e)) => e.is_invalid_input(),
             CommandError::Calibrate(e) => e.is_invalid_input(),
+            CommandError::Exec(_) => true,
             CommandError::RunFailed { .. }
             | CommandError::Output(_)
             | CommandError::BatchIncomplete { .. }
@@ -579,6 +584,7 @@ pub fn tradeoff(
     store_root: &Path,
     manifest: &Path,
     options: &TradeoffOptions,
+    limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
@@ -596,7 +602,12 @@ pub fn tradeoff(
         options.replicates,
         options.threads
     );
-    let outcomes = tradeoff_sweep::run(&store, &points, options.threads);
+    let pool = LocalPool {
+        jobs: options.threads,
+        progress: progress_enabled(),
+        limits: *limits,
+    };
+    let outcomes = tradeoff_sweep::run(&store, &points, &pool)?;
     let rows = tradeoff_sweep::summarise(&points, &outcomes);
     let dir = options
         .out_dir
@@ -830,7 +841,7 @@ fn run_batch_and_report(
 ) -> Result<(usize, usize), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
     let store = open_store(store_root)?;
-    let settings = BatchSettings {
+    let settings = LocalPool {
         jobs,
         progress: progress_enabled(),
         limits: *limits,
@@ -983,7 +994,7 @@ pub fn verify(
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
     let store = open_store(store_root)?;
-    let settings = BatchSettings {
+    let settings = LocalPool {
         jobs,
         progress: progress_enabled(),
         limits: *limits,

@@ -32,4 +32,5 @@ pub mod measure;
 pub mod packing;
 pub mod scenes;
 pub mod store;
+pub mod study;
 pub mod tradeoff;

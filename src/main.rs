@@ -511,7 +511,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         ),
         Command::Tradeoff(args) => {
             let options = args.options().map_err(CommandError::Usage)?;
-            commands::tradeoff(&cli.store, &args.manifest, &options, &mut out)
+            commands::tradeoff(&cli.store, &args.manifest, &options, &limits, &mut out)
         }
         Command::LearningCurve { study, sizes, jobs } => commands::learning_curve(
             &cli.store,

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use repose::calibrate::batch::{angles_path, batch, read_angles, BatchSettings};
+use repose::calibrate::batch::{angles_path, batch, read_angles};
 use repose::calibrate::sample::{design_path, experiment_path, sample, SampleSettings};
 use repose::calibrate::search::{search, SearchSettings};
 use repose::calibrate::surrogate::TrainSettings;
@@ -20,6 +20,7 @@ use repose::calibrate::{CalibrateError, Stage, StudyDir};
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::scenes::run_experiment;
 use repose::store::{Lineage, RunDir, RunResult, RunStatus, Store};
+use repose::study::executor::LocalPool;
 use serde_json::{json, Value};
 use sha2::{Digest, Sha256};
 
@@ -70,8 +71,8 @@ impl Fake {
     }
 }
 
-fn settings(jobs: usize) -> BatchSettings {
-    BatchSettings {
+fn settings(jobs: usize) -> LocalPool {
+    LocalPool {
         jobs,
         progress: false,
         limits: Default::default(),

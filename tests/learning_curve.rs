@@ -8,12 +8,13 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use repose::calibrate::batch::{batch, read_design, BatchSettings};
+use repose::calibrate::batch::{batch, read_design};
 use repose::calibrate::curve::{csv_header, learning_curve};
 use repose::calibrate::sample::{sample, SampleSettings};
 use repose::calibrate::{parameter_names, CalibrateError, Stage, StudyDir};
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
+use repose::study::executor::LocalPool;
 use serde_json::json;
 
 /// The smoke study with a 36-point design: 24 training rows, 12 validation.
@@ -50,7 +51,7 @@ fn prepared(tmp: &Path) -> (Study, StudyDir, Store) {
     let store = Store::open(tmp.join("store")).unwrap();
     let dir = StudyDir::new(store.root(), &s, &path);
     sample(&dir, &s, &SampleSettings::default()).unwrap();
-    let settings = BatchSettings {
+    let settings = LocalPool {
         jobs: 2,
         progress: false,
         limits: Default::default(),

@@ -10,13 +10,14 @@ use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use common::{edit, example, repose, stderr, stdout};
-use repose::calibrate::batch::{batch, BatchSettings};
+use repose::calibrate::batch::batch;
 use repose::calibrate::sample::{sample, SampleSettings};
 use repose::calibrate::{CalibrateError, StudyDir};
 use repose::manifest::{parse_experiment, parse_study, Experiment};
 use repose::scenes::plan::{plan, Limits, ENGINE_MAX_PARTICLES};
 use repose::scenes::run_experiment;
 use repose::store::{RunDir, RunResult, Store};
+use repose::study::executor::{ExecError, LocalPool};
 use serde_json::{json, Value};
 
 /// `base` (an example under experiments/) with the edits applied.
@@ -345,7 +346,7 @@ fn batch_refuses_over_limit_runs_before_running_any() {
         calls.fetch_add(1, Ordering::SeqCst);
         Ok(RunResult::new(e, "fake"))
     };
-    let settings = BatchSettings {
+    let settings = LocalPool {
         jobs: 1,
         progress: false,
         limits: Limits {
@@ -354,7 +355,10 @@ fn batch_refuses_over_limit_runs_before_running_any() {
         },
     };
     let err = batch(&dir, &s, &store, &settings, runner).unwrap_err();
-    assert!(matches!(err, CalibrateError::Refused { .. }), "{err}");
+    assert!(
+        matches!(err, CalibrateError::Exec(ExecError::Refused { .. })),
+        "{err}"
+    );
     assert!(err.is_invalid_input());
     assert!(
         err.to_string().contains("particles exceed the limit 10"),

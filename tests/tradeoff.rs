@@ -12,6 +12,14 @@ use repose::tradeoff::{report, run, summarise};
 
 const GOLDEN: &str = "golden/tradeoff_drum_tiny.csv";
 
+fn pool(jobs: usize) -> repose::study::executor::LocalPool {
+    repose::study::executor::LocalPool {
+        jobs,
+        progress: false,
+        limits: repose::scenes::plan::Limits::default(),
+    }
+}
+
 fn base() -> repose::manifest::Experiment {
     read_experiment(&common::root().join("experiments/tradeoff/drum_tiny.json")).unwrap()
 }
@@ -127,7 +135,7 @@ fn sweep_of_the_step_fraction_on_a_tiny_drum() {
             "rayleigh_fraction=0.2"
         ]
     );
-    let outcomes = run(&store, &points, 2);
+    let outcomes = run(&store, &points, &pool(2)).unwrap();
     let rows = summarise(&points, &outcomes);
     for r in &rows {
         assert_eq!((r.replicates, r.healthy), (2, 2), "{r:?}");
@@ -151,7 +159,7 @@ fn sweep_of_the_step_fraction_on_a_tiny_drum() {
     assert!(rows.iter().any(|r| r.pareto));
 
     // Re-running the sweep computes nothing new (cached by id).
-    let again = summarise(&points, &run(&store, &points, 1));
+    let again = summarise(&points, &run(&store, &points, &pool(1)).unwrap());
     for (a, b) in rows.iter().zip(&again) {
         assert_eq!(a.ids, b.ids);
         assert_eq!(a.wall_time_s, b.wall_time_s, "a cached run kept its timing");

@@ -1,53 +1,22 @@
 //! `repose batch STUDY`: runs every sampled experiment that is not complete
 //! and writes the simulated-angle table (the equivalent of he2019's Table A1).
 //!
-//! Runs go through [`Store::run_cached`], so a complete run is never repeated
-//! and a batch killed midway resumes where it stopped: finished runs are
-//! complete in the store (written atomically), interrupted ones are simply run
-//! again. `jobs` worker threads take runs from a shared queue; each runs its
-//! experiment inside its own one-thread rayon pool, so a run is single-threaded
-//! inside (the engine's results do not depend on its thread count anyway) and
-//! never steals another run's work — an outer rayon pool would let a worker
-//! waiting on an inner pool pick up further runs. A failed run is recorded in
-//! its `error.json` by the store, reported at the end, and does not stop the
-//! others; the next batch tries it again.
-//!
-//! Before any run starts, every pending experiment's run plan is made
-//! ([`crate::scenes::plan`]): one whose scene and physics are inconsistent, or
-//! whose estimated cost exceeds [`BatchSettings::limits`], refuses the whole
-//! stage ([`CalibrateError::Refused`], invalid input), so a study never starts
-//! a run that cannot finish or would exhaust the machine.
-//!
-//! The runner is a parameter so tests can inject a fast fake; the command
-//! passes [`crate::scenes::run_experiment`] with the run's MCAP log, as
-//! `repose run` does.
+//! The runs are handed to the one executor ([`crate::study::executor`]): a
+//! complete run is never repeated, a batch killed midway resumes where it
+//! stopped, and a run whose plan is inconsistent or over the limits refuses
+//! the stage before anything runs. A failed run is reported at the end and
+//! does not stop the others; the next batch tries it again.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::mpsc::{self, RecvTimeoutError};
-use std::time::Duration;
 
 use serde_json::json;
 
-use super::progress::BatchProgress;
 use super::sample::{design_path, experiment_path};
 use super::table::{parse_number, Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
-use crate::scenes::plan::{plan, Limits};
 use crate::store::{Depth, RunDir, RunResult, RunState, RunStatus, Store};
-
-/// Options of the batch stage.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct BatchSettings {
-    /// Runs simulated at once (≥ 1).
-    pub jobs: usize,
-    /// Draw the progress bar on stderr.
-    pub progress: bool,
-    /// Resource limits every pending run's plan must stay within; a run beyond
-    /// them refuses the whole stage before anything runs.
-    pub limits: Limits,
-}
+use crate::study::executor::{run_incomplete, LocalPool, Ran};
 
 /// One row of design.csv.
 #[derive(Debug, Clone, PartialEq)]
@@ -160,18 +129,13 @@ pub fn batch<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
-    settings: &BatchSettings,
+    settings: &LocalPool,
     runner: F,
 ) -> Result<BatchOutcome, CalibrateError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    if settings.jobs == 0 {
-        return Err(CalibrateError::Settings(
-            "--jobs = 0: must be >= 1".to_string(),
-        ));
-    }
     let design = read_design(dir, study)?;
     let experiments = design
         .iter()
@@ -194,114 +158,6 @@ where
         failures,
         table,
     })
-}
-
-/// What [`run_incomplete`] did.
-pub(crate) struct Ran {
-    /// Experiments the store already held complete (not run again).
-    pub cached: usize,
-    /// The runs that failed: (position in the experiments, message), sorted.
-    pub failures: Vec<(usize, String)>,
-}
-
-/// Runs every one of `experiments` the store does not hold complete, on
-/// `settings.jobs` workers with the progress bar (when `settings.progress`)
-/// counting the cached ones as done. Batch and verify both run their
-/// experiments this way; each then reads the results from the store.
-pub(crate) fn run_incomplete<E, F>(
-    experiments: &[Experiment],
-    store: &Store,
-    settings: &BatchSettings,
-    runner: &F,
-) -> Result<Ran, CalibrateError>
-where
-    E: std::error::Error + 'static,
-    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
-{
-    let pending: Vec<usize> = (0..experiments.len())
-        .filter(|&i| store.status(&experiments[i].id()) != RunStatus::Complete)
-        .collect();
-    for &i in &pending {
-        let refuse = |reason: String| CalibrateError::Refused {
-            id: experiments[i].id(),
-            reason,
-        };
-        plan(&experiments[i])
-            .map_err(|errors| refuse(errors.to_string()))?
-            .check(&settings.limits)
-            .map_err(|excess| refuse(excess.to_string()))?;
-    }
-    let cached = experiments.len() - pending.len();
-    let mut progress = BatchProgress::new(settings.progress, experiments.len(), cached);
-    let failures = run_pending(
-        &pending,
-        experiments,
-        store,
-        settings.jobs,
-        runner,
-        &mut progress,
-    )?;
-    progress.finish();
-    Ok(Ran { cached, failures })
-}
-
-/// Runs the pending experiments on `jobs` workers; returns the failures as
-/// (position in the experiments, message), sorted.
-fn run_pending<E, F>(
-    pending: &[usize],
-    experiments: &[Experiment],
-    store: &Store,
-    jobs: usize,
-    runner: &F,
-    progress: &mut BatchProgress,
-) -> Result<Vec<(usize, String)>, CalibrateError>
-where
-    E: std::error::Error + 'static,
-    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
-{
-    let next = AtomicUsize::new(0);
-    let (sender, receiver) = mpsc::channel::<(usize, Result<(), String>)>();
-    let mut failures = Vec::new();
-    std::thread::scope(|scope| -> Result<(), CalibrateError> {
-        let mut workers = Vec::new();
-        for _ in 0..jobs.min(pending.len()) {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(1)
-                .build()
-                .map_err(|e| CalibrateError::Settings(format!("cannot start a worker: {e}")))?;
-            let sender = sender.clone();
-            let next = &next;
-            workers.push(scope.spawn(move || loop {
-                let k = next.fetch_add(1, Ordering::Relaxed);
-                let Some(&i) = pending.get(k) else { break };
-                let outcome = pool.install(|| {
-                    store
-                        .run_cached(&experiments[i], runner)
-                        .map(|_| ())
-                        .map_err(|e| crate::errors::chain(&e))
-                });
-                if sender.send((i, outcome)).is_err() {
-                    break;
-                }
-            }));
-        }
-        drop(sender);
-        loop {
-            match receiver.recv_timeout(Duration::from_millis(500)) {
-                Ok((i, outcome)) => {
-                    progress.finished_one(outcome.is_err());
-                    if let Err(message) = outcome {
-                        failures.push((i, message));
-                    }
-                }
-                Err(RecvTimeoutError::Timeout) => progress.tick(),
-                Err(RecvTimeoutError::Disconnected) => break,
-            }
-        }
-        Ok(())
-    })?;
-    failures.sort();
-    Ok(failures)
 }
 
 /// Writes angles.csv from the store's state of every design row.

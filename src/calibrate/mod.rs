@@ -71,7 +71,6 @@ pub mod meanshift;
 pub mod metrics;
 pub mod network;
 pub mod objective;
-pub mod progress;
 pub mod sample;
 pub mod search;
 pub mod surrogate;
@@ -168,16 +167,6 @@ pub enum CalibrateError {
         /// What is wrong.
         errors: ValidationErrors,
     },
-    /// A pending run would not run: its scene and physics are inconsistent or
-    /// its estimated cost exceeds the limits (see [`crate::scenes::plan`]);
-    /// refused before any run of the stage starts.
-    #[error("run {id}: refused: {reason}")]
-    Refused {
-        /// The experiment id.
-        id: ContentId,
-        /// The rules it breaks, or the estimates above their limits.
-        reason: String,
-    },
     /// A stage file is inconsistent with the others (changed outside repose).
     #[error("{}: {message}", path.display())]
     Inconsistent {
@@ -192,6 +181,9 @@ pub enum CalibrateError {
     /// The store failed.
     #[error(transparent)]
     Store(#[from] StoreError),
+    /// The executor refused the runs.
+    #[error(transparent)]
+    Exec(#[from] crate::study::executor::ExecError),
     /// Training could not run.
     #[error(transparent)]
     Train(#[from] surrogate::TrainError),
@@ -208,10 +200,10 @@ impl CalibrateError {
             | CalibrateError::Settings(_)
             | CalibrateError::Unsupported(_)
             | CalibrateError::InvalidPoint { .. }
-            | CalibrateError::Refused { .. }
             | CalibrateError::Train(_) => true,
             CalibrateError::Table(e) => !matches!(e, TableError::Io { .. }),
             CalibrateError::Store(e) => e.is_invalid_input(),
+            CalibrateError::Exec(_) => true,
             CalibrateError::Inconsistent { .. } | CalibrateError::NothingKept(_) => false,
         }
     }

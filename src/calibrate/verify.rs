@@ -26,11 +26,11 @@ use std::path::PathBuf;
 
 use serde_json::json;
 
-use super::batch::{run_incomplete, BatchSettings, Ran};
 use super::table::{Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{ContentId, Experiment, Study};
 use crate::store::{RunDir, RunResult, Store};
+use crate::study::executor::{run_incomplete, LocalPool, Ran};
 
 /// One row of the Table 3 equivalent.
 #[derive(Debug, Clone, PartialEq)]
@@ -141,7 +141,7 @@ pub fn verify<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
-    settings: &BatchSettings,
+    settings: &LocalPool,
     candidates: usize,
     runner: F,
 ) -> Result<VerifyOutcome, CalibrateError>

@@ -13,11 +13,10 @@ pub mod plan;
 pub mod report;
 pub mod stats;
 
-use rayon::prelude::*;
-
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::run_experiment;
-use crate::store::{RunResult, Store, TimingRecord};
+use crate::store::{RunDir, RunResult, Store, TimingRecord};
+use crate::study::executor::{run_incomplete, ExecError, LocalPool, Ran};
 use plan::Point;
 use stats::{difference_ci, mean_ci, pareto_front, MeanCi};
 
@@ -34,51 +33,66 @@ pub struct Outcome {
     pub wall_time_s: Option<f64>,
 }
 
-/// Runs every replicate of every point (cached by id; already complete runs
-/// are not repeated), in parallel over runs on `threads` threads, each run
-/// on one thread of its own (in the outer pool a simulation would start a
-/// team of `threads` and compete with the other runs for the cores);
-/// outcomes in plan order.
-pub fn run(store: &Store, points: &[Point], threads: usize) -> Vec<Vec<Outcome>> {
-    let all: Vec<&Experiment> = points.iter().flat_map(|p| &p.replicates).collect();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.max(1))
-        .build()
-        .expect("a thread pool can be built");
-    let mut flat: Vec<Outcome> = pool.install(|| {
-        all.par_iter()
-            .map(|e| {
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(1)
-                    .build()
-                    .expect("a thread pool can be built")
-                    .install(|| run_one(store, e))
-            })
-            .collect::<Vec<_>>()
-    });
+/// Runs every replicate of every point through the one executor
+/// ([`crate::study::executor`]: cached by id, already complete runs are not
+/// repeated, each run on one thread of its own, `pool.jobs` at once) and
+/// reads the outcomes back from the store, in plan order. Refused before
+/// anything runs when a replicate's plan is inconsistent or over the pool's
+/// limits.
+pub fn run(
+    store: &Store,
+    points: &[Point],
+    pool: &LocalPool,
+) -> Result<Vec<Vec<Outcome>>, ExecError> {
+    let all: Vec<Experiment> = points
+        .iter()
+        .flat_map(|p| p.replicates.iter().cloned())
+        .collect();
+    let runner = |e: &Experiment, dir: &RunDir| run_experiment(e, Some(&dir.mcap_path()));
+    let Ran { failures, .. } = run_incomplete(&all, store, pool, &runner)?;
+    let mut flat: Vec<Outcome> = all
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            let failed = failures
+                .iter()
+                .find(|(k, _)| *k == i)
+                .map(|(_, m)| m.clone());
+            outcome(store, e, failed)
+        })
+        .collect();
     let mut out = Vec::new();
     for p in points {
         let rest = flat.split_off(p.replicates.len());
         out.push(std::mem::replace(&mut flat, rest));
     }
-    out
+    Ok(out)
 }
 
-fn run_one(store: &Store, e: &Experiment) -> Outcome {
+/// The outcome of `e` as the store holds it (`failed`: the executor's message
+/// when the run failed just now).
+fn outcome(store: &Store, e: &Experiment, failed: Option<String>) -> Outcome {
     let id = e.id();
-    let outcome = store.run_cached(e, |e, dir| run_experiment(e, Some(&dir.mcap_path())));
     let timing: Option<TimingRecord> = Store::read_json(&store.run_dir(&id).timing_path()).ok();
-    match outcome {
-        Ok((result, _)) => Outcome {
+    let loaded = match failed {
+        Some(message) => Err(message),
+        None => match store.load_result(&id) {
+            Ok(Some(result)) => Ok(result),
+            Ok(None) => Err("the run is not complete".to_string()),
+            Err(e) => Err(crate::errors::chain(&e)),
+        },
+    };
+    match loaded {
+        Ok(result) => Outcome {
             id,
             result: Some(result),
             failure: None,
             wall_time_s: timing.map(|t| t.wall_time_s),
         },
-        Err(err) => Outcome {
+        Err(message) => Outcome {
             id,
             result: None,
-            failure: Some(err.to_string()),
+            failure: Some(message),
             wall_time_s: None,
         },
     }

@@ -1,0 +1,173 @@
+//! The one executor seam: every stage that runs experiments (the he2019
+//! batch and verify stages, the design studies' screen, rsm and verify
+//! stages, `repose tradeoff`) hands them to [`run_incomplete`], which runs
+//! what the store does not hold complete and leaves the results in the store.
+//!
+//! [`LocalPool`] is the executor of this machine: `jobs` worker threads take
+//! runs from a shared queue; each runs its experiment inside its own
+//! one-thread rayon pool, so a run is single-threaded inside (the engine's
+//! results do not depend on its thread count anyway) and never steals another
+//! run's work — an outer rayon pool would let a worker waiting on an inner
+//! pool pick up further runs. Runs go through [`Store::run_cached`], so a
+//! complete run is never repeated and a batch killed midway resumes where it
+//! stopped. A failed run is recorded in its `error.json` by the store,
+//! reported to the caller, and does not stop the others.
+//!
+//! Before any run starts, every pending experiment's run plan is made
+//! ([`crate::scenes::plan`]): one whose scene and physics are inconsistent, or
+//! whose estimated cost exceeds [`LocalPool::limits`], refuses the whole call
+//! ([`ExecError::Refused`]), so a study never starts a run that cannot finish
+//! or would exhaust the machine.
+//!
+//! The runner is a parameter so tests can inject a fast fake; commands pass
+//! [`crate::scenes::run_experiment`] with the run's MCAP log, as `repose run`
+//! does. A cluster executor is a second implementation of this seam.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::time::Duration;
+
+use super::progress::BatchProgress;
+use crate::manifest::{ContentId, Experiment};
+use crate::scenes::plan::{plan, Limits};
+use crate::store::{RunDir, RunResult, RunStatus, Store};
+
+/// Why experiments could not be handed to the executor.
+#[derive(Debug, thiserror::Error)]
+pub enum ExecError {
+    /// An executor option is invalid.
+    #[error("{0}")]
+    Settings(String),
+    /// A pending run would not run: its scene and physics are inconsistent or
+    /// its estimated cost exceeds the limits (see [`crate::scenes::plan`]);
+    /// refused before any run starts.
+    #[error("run {id}: refused: {reason}")]
+    Refused {
+        /// The experiment id.
+        id: ContentId,
+        /// The rules it breaks, or the estimates above their limits.
+        reason: String,
+    },
+}
+
+/// The local executor: worker threads on this machine (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LocalPool {
+    /// Runs simulated at once (≥ 1).
+    pub jobs: usize,
+    /// Draw the progress bar on stderr.
+    pub progress: bool,
+    /// Resource limits every pending run's plan must stay within; a run beyond
+    /// them refuses the whole call before anything runs.
+    pub limits: Limits,
+}
+
+/// What [`run_incomplete`] did.
+pub struct Ran {
+    /// Experiments the store already held complete (not run again).
+    pub cached: usize,
+    /// The runs that failed: (position in the experiments, message), sorted.
+    pub failures: Vec<(usize, String)>,
+}
+
+/// Runs every one of `experiments` the store does not hold complete, on
+/// `settings.jobs` workers with the progress bar (when `settings.progress`)
+/// counting the cached ones as done. Callers then read the results from the store.
+pub fn run_incomplete<E, F>(
+    experiments: &[Experiment],
+    store: &Store,
+    settings: &LocalPool,
+    runner: &F,
+) -> Result<Ran, ExecError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    if settings.jobs == 0 {
+        return Err(ExecError::Settings("--jobs = 0: must be >= 1".to_string()));
+    }
+    let pending: Vec<usize> = (0..experiments.len())
+        .filter(|&i| store.status(&experiments[i].id()) != RunStatus::Complete)
+        .collect();
+    for &i in &pending {
+        let refuse = |reason: String| ExecError::Refused {
+            id: experiments[i].id(),
+            reason,
+        };
+        plan(&experiments[i])
+            .map_err(|errors| refuse(errors.to_string()))?
+            .check(&settings.limits)
+            .map_err(|excess| refuse(excess.to_string()))?;
+    }
+    let cached = experiments.len() - pending.len();
+    let mut progress = BatchProgress::new(settings.progress, experiments.len(), cached);
+    let failures = run_pending(
+        &pending,
+        experiments,
+        store,
+        settings.jobs,
+        runner,
+        &mut progress,
+    )?;
+    progress.finish();
+    Ok(Ran { cached, failures })
+}
+
+/// Runs the pending experiments on `jobs` workers; returns the failures as
+/// (position in the experiments, message), sorted.
+fn run_pending<E, F>(
+    pending: &[usize],
+    experiments: &[Experiment],
+    store: &Store,
+    jobs: usize,
+    runner: &F,
+    progress: &mut BatchProgress,
+) -> Result<Vec<(usize, String)>, ExecError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let next = AtomicUsize::new(0);
+    let (sender, receiver) = mpsc::channel::<(usize, Result<(), String>)>();
+    let mut failures = Vec::new();
+    std::thread::scope(|scope| -> Result<(), ExecError> {
+        let mut workers = Vec::new();
+        for _ in 0..jobs.min(pending.len()) {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .map_err(|e| ExecError::Settings(format!("cannot start a worker: {e}")))?;
+            let sender = sender.clone();
+            let next = &next;
+            workers.push(scope.spawn(move || loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                let Some(&i) = pending.get(k) else { break };
+                let outcome = pool.install(|| {
+                    store
+                        .run_cached(&experiments[i], runner)
+                        .map(|_| ())
+                        .map_err(|e| crate::errors::chain(&e))
+                });
+                if sender.send((i, outcome)).is_err() {
+                    break;
+                }
+            }));
+        }
+        drop(sender);
+        loop {
+            match receiver.recv_timeout(Duration::from_millis(500)) {
+                Ok((i, outcome)) => {
+                    progress.finished_one(outcome.is_err());
+                    if let Err(message) = outcome {
+                        failures.push((i, message));
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) => progress.tick(),
+                Err(RecvTimeoutError::Disconnected) => break,
+            }
+        }
+        Ok(())
+    })?;
+    failures.sort();
+    Ok(failures)
+}
