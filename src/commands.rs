@@ -28,10 +28,12 @@ use crate::scenes::plan::{plan as plan_run, Limits, OverLimit, RunPlan};
 use crate::scenes::protocol::{progress_enabled, set_quiet};
 use crate::scenes::run_experiment;
 use crate::store::{
-    write_atomic, CacheOutcome, Depth, InputRef, Lineage, RunError, RunState, RunStatus,
+    write_atomic, CacheOutcome, Depth, InputRef, Lineage, RunDir, RunError, RunState, RunStatus,
     RunSummary, Store, StoreError,
 };
 use crate::study::executor::LocalPool;
+use crate::study::spec::{is_design_study, read_design_study, DesignStudy};
+use crate::study::{self, StudyError};
 use crate::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
 use crate::tradeoff::{self as tradeoff_sweep, report};
 
@@ -128,6 +130,9 @@ pub enum CommandError {
     /// A calibration stage failed or its options are invalid.
     #[error(transparent)]
     Calibrate(#[from] CalibrateError),
+    /// A design-study stage failed or its options are invalid.
+    #[error(transparent)]
+    Study(#[from] StudyError),
     /// The executor refused the runs (inconsistent plans or over the limits).
     #[error(transparent)]
     Exec(#[from] crate::study::executor::ExecError),
@@ -164,6 +169,7 @@ impl CommandError {
             CommandError::Audit(AuditError::Store(e)) => e.is_invalid_input(),
             CommandError::Calibrate(e) => e.is_invalid_input(),
             CommandError::Exec(_) => true,
+            CommandError::Study(e) => e.is_invalid_input(),
             CommandError::RunFailed { .. }
             | CommandError::Output(_)
             | CommandError::BatchIncomplete { .. }
@@ -233,6 +239,11 @@ fn read_planned(path: &Path) -> Result<(Experiment, RunPlan), CommandError> {
 
 /// `repose hash FILE`: prints the content id of a valid manifest.
 pub fn hash(path: &Path, kind: KindArg, out: &mut dyn Write) -> Result<(), CommandError> {
+    if kind != KindArg::Experiment && is_design_study_file(path) {
+        let study = read_design_study(path).map_err(manifest_error(path))?;
+        writeln!(out, "{}", study.id())?;
+        return Ok(());
+    }
     let doc = read_checked(path, kind).map_err(manifest_error(path))?;
     writeln!(out, "{}", doc.id())?;
     Ok(())
@@ -248,6 +259,16 @@ pub fn validate(
 ) -> Result<(), CommandError> {
     let mut failed = 0;
     for path in paths {
+        if kind != KindArg::Experiment && is_design_study_file(path) {
+            match read_design_study(path) {
+                Ok(study) => writeln!(out, "ok design-study {} {}", study.id(), path.display())?,
+                Err(error) => {
+                    failed += 1;
+                    writeln!(err, "{}", describe(path, &error))?;
+                }
+            }
+            continue;
+        }
         match read_checked(path, kind) {
             Ok(doc) => {
                 let kind = match doc.kind() {
@@ -992,6 +1013,10 @@ pub fn verify(
     limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
+    if is_design_study_file(study_path) {
+        let pool = study_pool(jobs, limits);
+        return rsm(store_root, study_path, &pool, false, out);
+    }
     let (study, dir) = open_study(store_root, study_path)?;
     let store = open_store(store_root)?;
     let settings = LocalPool {
@@ -1022,6 +1047,96 @@ pub fn verify(
         });
     }
     Ok(())
+}
+
+/// Whether `path` holds a design study (a `factors` object); unreadable
+/// files are not, and fail later with the study reader's error.
+fn is_design_study_file(path: &Path) -> bool {
+    std::fs::read_to_string(path).is_ok_and(|t| is_design_study(&t))
+}
+
+/// The local executor of the design-study commands.
+pub fn study_pool(jobs: usize, limits: &Limits) -> LocalPool {
+    LocalPool {
+        jobs,
+        progress: progress_enabled(),
+        limits: *limits,
+    }
+}
+
+fn open_design_study(store_root: &Path, path: &Path) -> Result<(DesignStudy, Store), CommandError> {
+    let study = read_design_study(path).map_err(manifest_error(path))?;
+    let store = open_store(store_root)?;
+    set_quiet(true);
+    Ok((study, store))
+}
+
+fn print_json<T: serde::Serialize>(value: &T, out: &mut dyn Write) -> Result<(), CommandError> {
+    serde_json::to_writer_pretty(&mut *out, value).map_err(io::Error::from)?;
+    writeln!(out)?;
+    Ok(())
+}
+
+/// `repose rsm STUDY`: the design's runs, the response-surface analysis with
+/// ANOVA, the joint optimum and its verification (see [`crate::study`]);
+/// prints the summary (or the whole analysis as JSON) and fails when a
+/// verification run failed.
+pub fn rsm(
+    store_root: &Path,
+    study_path: &Path,
+    pool: &LocalPool,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, store) = open_design_study(store_root, study_path)?;
+    let report = study::run_rsm(store_root, &study, &store, pool, &|e: &Experiment, dir: &RunDir| {
+        run_experiment(e, Some(&dir.mcap_path()))
+    })?;
+    if json {
+        print_json(&report, out)?;
+    } else {
+        let summary = std::fs::read_to_string(report.rsm.dir.join("rsm.md"))
+            .map_err(StoreError::io(&report.rsm.dir))?;
+        write!(out, "{summary}")?;
+        if let Some(v) = &report.verification {
+            writeln!(out)?;
+            write!(out, "{}", study::verify::markdown(&study, v))?;
+        }
+        writeln!(out, "
+written: {}", report.rsm.dir.parent().unwrap_or(&report.rsm.dir).display())?;
+    }
+    Ok(())
+}
+
+/// `repose rsm --table FILE`: the response-surface analysis of any CSV table.
+pub fn rsm_table(path: &Path, spec: &study::rsm::TableSpec, json: bool, out: &mut dyn Write) -> Result<(), CommandError> {
+    let analysis = study::rsm::analyse_table(path, spec)?;
+    if json {
+        print_json(&analysis, out)
+    } else {
+        write!(out, "{}", study::rsm::table_markdown(path, &analysis))?;
+        Ok(())
+    }
+}
+
+/// `repose screen STUDY`: the one-factor tests (see [`crate::study::screen`]).
+pub fn screen(
+    store_root: &Path,
+    study_path: &Path,
+    pool: &LocalPool,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, store) = open_design_study(store_root, study_path)?;
+    let outcome = study::run_screen(store_root, &study, &store, pool, &|e: &Experiment, dir: &RunDir| {
+        run_experiment(e, Some(&dir.mcap_path()))
+    })?;
+    if json {
+        print_json(&outcome, out)
+    } else {
+        write!(out, "{}", study::screen::markdown(&study, &outcome))?;
+        Ok(())
+    }
 }
 
 /// The study `repose calibrate` runs without an argument: he2019's PU powder,

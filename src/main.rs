@@ -99,8 +99,26 @@ enum Command {
     /// Time the engine on the dense-bed benchmark of ../shared/bench (settle, warm up,
     /// timed segments); progress on stderr.
     Bench(BenchArgs),
+    /// One-factor-at-a-time screening of a design study: response means with
+    /// 95 % CIs per level and a one-way ANOVA per factor (cai2024 §3.1).
+    Screen {
+        /// Design study manifest.
+        study: PathBuf,
+        /// Runs at once, each single-threaded [default: the number of CPUs].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Print the whole screening as JSON on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Response-surface study: the design's runs (replicated), a full
+    /// quadratic model and its ANOVA per response, the joint desirability
+    /// optimum and its verification. With --table, the same analysis of any
+    /// CSV table.
+    Rsm(RsmArgs),
     /// Re-simulate the search's cluster centres in the calibration and
-    /// verification scenes and compare with the measured angles (he2019 Table 3).
+    /// verification scenes and compare with the measured angles (he2019 Table 3);
+    /// for a design study, the optimum and named points (as the end of `rsm`).
     Verify {
         /// Study manifest.
         study: PathBuf,
@@ -295,6 +313,67 @@ struct SearchArgs {
     quantile: f64,
 }
 
+/// Options of `repose rsm`.
+#[derive(clap::Args)]
+struct RsmArgs {
+    /// Design study manifest (absent with --table).
+    #[arg(required_unless_present = "table", conflicts_with = "table")]
+    study: Option<PathBuf>,
+    /// Analyse this CSV table instead of a study's runs.
+    #[arg(long, requires_all = ["factors", "response"])]
+    table: Option<PathBuf>,
+    /// With --table: the factor columns, comma-separated.
+    #[arg(long, value_delimiter = ',')]
+    factors: Vec<String>,
+    /// With --table: the response column.
+    #[arg(long)]
+    response: Option<String>,
+    /// With --table: actual-unit ranges per factor as NAME=LOW:HIGH,...
+    /// (absent: the factor columns are coded, -1..1).
+    #[arg(long, value_delimiter = ',')]
+    ranges: Vec<String>,
+    /// Runs at once, each single-threaded [default: the number of CPUs].
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Print the whole analysis as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+impl RsmArgs {
+    /// The table analysis's columns and ranges.
+    fn table_spec(&self) -> Result<repose::study::rsm::TableSpec, String> {
+        let ranges = if self.ranges.is_empty() {
+            None
+        } else {
+            let mut by_name = std::collections::BTreeMap::new();
+            for spec in &self.ranges {
+                let parsed = spec.split_once('=').and_then(|(name, range)| {
+                    let (lo, hi) = range.split_once(':')?;
+                    Some((name.to_string(), lo.trim().parse::<f64>().ok()?, hi.trim().parse::<f64>().ok()?))
+                });
+                let Some((name, low, high)) = parsed.filter(|(_, lo, hi)| lo < hi) else {
+                    return Err(format!("--ranges `{spec}`: expected NAME=LOW:HIGH with LOW < HIGH"));
+                };
+                by_name.insert(name, repose::doe::Range { low, high });
+            }
+            let mut ranges = Vec::new();
+            for f in &self.factors {
+                ranges.push(by_name.remove(f).ok_or_else(|| format!("--ranges: no range for factor `{f}`"))?);
+            }
+            if let Some(extra) = by_name.keys().next() {
+                return Err(format!("--ranges: `{extra}` is not among --factors"));
+            }
+            Some(ranges)
+        };
+        Ok(repose::study::rsm::TableSpec {
+            factors: self.factors.clone(),
+            response: self.response.clone().unwrap_or_default(),
+            ranges,
+        })
+    }
+}
+
 /// Options of `repose tradeoff`.
 #[derive(clap::Args)]
 struct TradeoffArgs {
@@ -485,6 +564,29 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             };
             commands::bench(&args.options(), args.json, &mut out, &mut progress)
         }
+        Command::Screen { study, jobs, json } => commands::screen(
+            &cli.store,
+            &study,
+            &commands::study_pool(default_jobs(jobs), &limits),
+            json,
+            &mut out,
+        ),
+        Command::Rsm(args) => match (&args.table, &args.study) {
+            (Some(table), _) => {
+                let spec = args.table_spec().map_err(CommandError::Usage)?;
+                commands::rsm_table(table, &spec, args.json, &mut out)
+            }
+            (None, Some(study)) => commands::rsm(
+                &cli.store,
+                study,
+                &commands::study_pool(default_jobs(args.jobs), &limits),
+                args.json,
+                &mut out,
+            ),
+            (None, None) => Err(CommandError::Usage(
+                "rsm: give a study manifest or --table FILE".into(),
+            )),
+        },
         Command::Verify {
             study,
             jobs,

@@ -16,12 +16,10 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use repose::calibrate::table::Table;
 use repose::calibrate::{Stage, StudyDir};
 use repose::commands::calibrate;
 use repose::manifest::parse_study;
 use repose::scenes::plan::Limits;
-use repose::store::TIMING_FILE;
 
 const STUDY: &str = "experiments/calibrate-smoke/study.json";
 const GOLDEN_DIR: &str = "golden/calibrate_smoke";
@@ -55,29 +53,6 @@ fn tables(dir: &StudyDir) -> [(&'static str, PathBuf); 5] {
             dir.stage(Stage::Verify).join("verification.csv"),
         ),
     ]
-}
-
-/// Every file below `dir` (relative path → bytes), sorted, except each run's
-/// wall-clock record ([`TIMING_FILE`], non-deterministic by design and hashed
-/// nowhere).
-fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for entry in std::fs::read_dir(&d).unwrap() {
-            let p = entry.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p.file_name().is_some_and(|n| n != TIMING_FILE) {
-                out.push((
-                    p.strip_prefix(dir).unwrap().to_path_buf(),
-                    std::fs::read(&p).unwrap(),
-                ));
-            }
-        }
-    }
-    out.sort();
-    out
 }
 
 /// Runs `repose calibrate STUDY --jobs <jobs>` into `store`; returns its study directory.
@@ -115,43 +90,6 @@ const EXACT: [&str; 12] = [
     "failure",
 ];
 
-/// Compares one cell of `column`: [`EXACT`] columns and text exactly, other
-/// numbers within [`TOL`].
-fn same_cell(column: &str, pinned: &str, now: &str) -> bool {
-    if EXACT.contains(&column) {
-        return pinned == now;
-    }
-    match (pinned.parse::<f64>(), now.parse::<f64>()) {
-        (Ok(a), Ok(b)) => (a - b).abs() <= TOL * a.abs().max(1.0),
-        _ => pinned == now,
-    }
-}
-
-/// Asserts that `now` matches the golden table `name`.
-fn compare(name: &str, now: &str) {
-    let golden = common::root().join(GOLDEN_DIR).join(name);
-    let hint = "if intended, rerun with REPOSE_BLESS=1 and review the diff";
-    let pinned = std::fs::read_to_string(&golden)
-        .unwrap_or_else(|e| panic!("{}: {e}; {hint}", golden.display()));
-    let pinned = Table::parse(&pinned).unwrap();
-    let now = Table::parse(now).unwrap();
-    assert_eq!(pinned.header, now.header, "{name}: columns; {hint}");
-    assert_eq!(
-        pinned.rows.len(),
-        now.rows.len(),
-        "{name}: row count; {hint}"
-    );
-    for (line, (p, c)) in pinned.rows.iter().zip(&now.rows).enumerate() {
-        for ((column, a), b) in pinned.header.iter().zip(p).zip(c) {
-            assert!(
-                same_cell(column, a, b),
-                "{name} line {}, {column}: {b} vs pinned {a}; {hint}",
-                line + 2
-            );
-        }
-    }
-}
-
 #[test]
 fn the_smoke_chain_is_deterministic_and_matches_the_golden_tables() {
     let tmp = tempfile::tempdir().unwrap();
@@ -161,20 +99,8 @@ fn the_smoke_chain_is_deterministic_and_matches_the_golden_tables() {
     chain(&one, 1);
     // Every file of the two stores — study outputs, lineage, manifests, each
     // run's result.json and MCAP log — is byte-identical.
-    let (a, b) = (snapshot(&one), snapshot(&two));
-    assert_eq!(
-        a.iter().map(|f| &f.0).collect::<Vec<_>>(),
-        b.iter().map(|f| &f.0).collect::<Vec<_>>()
-    );
-    for (x, y) in a.iter().zip(&b) {
-        assert!(
-            x.1 == y.1,
-            "{} differs between 1 and 2 workers",
-            x.0.display()
-        );
-    }
-
-    let bless = std::env::var_os("REPOSE_BLESS").is_some_and(|v| v == "1");
+    common::assert_same_stores(&one, &two);
+    let bless = common::blessing();
     for (name, path) in tables(&dir) {
         let now = std::fs::read_to_string(&path).unwrap();
         if bless {
@@ -182,7 +108,7 @@ fn the_smoke_chain_is_deterministic_and_matches_the_golden_tables() {
             std::fs::create_dir_all(&golden).unwrap();
             std::fs::write(golden.join(name), &now).unwrap();
         } else {
-            compare(name, &now);
+            common::compare_golden(GOLDEN_DIR, name, &now, &EXACT, TOL);
         }
     }
 }

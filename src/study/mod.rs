@@ -2,8 +2,142 @@
 //! executor → a response table → an analysis → reports, each stage cached in
 //! the store and recorded with lineage.
 //!
-//! - [`executor`]: the one seam through which every stage runs experiments.
-//! - [`progress`]: the progress bar of a batch of runs.
+//! - [`spec`]: the design study manifest (factors by address, design,
+//!   replicates, scenes, named responses, targets, screening, verification)
+//!   and the experiments it generates.
+//! - [`executor`]: the one seam through which every stage runs experiments;
+//!   [`progress`] its progress bar.
+//! - [`runs`]: points × replicates × scenes → executor → response table.
+//! - [`screen`], [`rsm`], [`optimum`], [`verify`]: the stages and the joint
+//!   desirability optimum.
+//! - [`dir`]: where a study's outputs live and how they are written.
+//!
+//! The runs stay in the store (`<store>/<id>/`), so a run shared by two
+//! stages or studies is simulated once, and a killed stage resumes.
 
+pub mod dir;
 pub mod executor;
+pub mod optimum;
 pub mod progress;
+pub mod rsm;
+pub mod runs;
+pub mod screen;
+pub mod spec;
+pub mod verify;
+
+use std::path::Path;
+
+use crate::manifest::{Experiment, ValidationErrors};
+use crate::store::{RunDir, RunResult, Store, StoreError};
+use executor::{ExecError, LocalPool};
+use spec::DesignStudy;
+
+/// Why a study stage failed.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    /// A stage option or the study's content does not allow the stage.
+    #[error("{0}")]
+    Settings(String),
+    /// A design point does not make a valid experiment.
+    #[error("design point {point}, scene {scene}: the point makes an invalid experiment:\n{errors}")]
+    InvalidPoint {
+        /// The point's index in its stage.
+        point: u64,
+        /// The scene.
+        scene: String,
+        /// What is wrong.
+        errors: ValidationErrors,
+    },
+    /// The design could not be built.
+    #[error(transparent)]
+    Design(#[from] crate::doe::DesignError),
+    /// A response could not be analysed (too few observations, aliased terms).
+    #[error("response {response}: {message}")]
+    Analysis {
+        /// The response.
+        response: String,
+        /// Why.
+        message: String,
+    },
+    /// A plot could not be drawn.
+    #[error("plot: {0}")]
+    Plot(String),
+    /// A table could not be read.
+    #[error(transparent)]
+    Table(#[from] crate::report::table::TableError),
+    /// The executor refused the runs.
+    #[error(transparent)]
+    Exec(#[from] ExecError),
+    /// The store failed.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+}
+
+impl StudyError {
+    /// True when the user's input (options, study, tables) is at fault.
+    pub fn is_invalid_input(&self) -> bool {
+        match self {
+            StudyError::Settings(_)
+            | StudyError::InvalidPoint { .. }
+            | StudyError::Design(_)
+            | StudyError::Exec(_) => true,
+            StudyError::Analysis { .. } | StudyError::Plot(_) => false,
+            StudyError::Table(e) => !matches!(e, crate::report::table::TableError::Io { .. }),
+            StudyError::Store(e) => e.is_invalid_input(),
+        }
+    }
+}
+
+/// What `repose rsm` (or `repose verify`) did.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct RsmReport {
+    /// The response-surface analysis and optimum.
+    pub rsm: rsm::RsmOutcome,
+    /// The verification, when the study has a verification block.
+    pub verification: Option<verify::Verification>,
+}
+
+/// `repose rsm STUDY`: the design's runs, the analysis, the optimum, and the
+/// verification of the optimum and the named points.
+pub fn run_rsm<E, F>(
+    store_root: &Path,
+    study: &DesignStudy,
+    store: &Store,
+    pool: &LocalPool,
+    runner: &F,
+) -> Result<RsmReport, StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let dir = dir::StudyDir::prepare(store_root, study)?;
+    let announce = |what: &str| {
+        if pool.progress {
+            eprintln!("{}: {what}", study.name);
+        }
+    };
+    announce("design runs");
+    let outcome = rsm::rsm(&dir, study, store, pool, runner)?;
+    announce("verification runs");
+    let verification = verify::verify(&dir, study, &outcome, store, pool, runner)?;
+    Ok(RsmReport {
+        rsm: outcome,
+        verification,
+    })
+}
+
+/// `repose screen STUDY`.
+pub fn run_screen<E, F>(
+    store_root: &Path,
+    study: &DesignStudy,
+    store: &Store,
+    pool: &LocalPool,
+    runner: &F,
+) -> Result<screen::Screen, StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let dir = dir::StudyDir::prepare(store_root, study)?;
+    screen::screen(&dir, study, store, pool, runner)
+}

@@ -124,3 +124,81 @@ pub fn stderr(o: &Output) -> String {
 pub fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
+
+/// Every file below `dir` (relative path → bytes), sorted, except each run's
+/// wall-clock record ([`repose::store::TIMING_FILE`], non-deterministic by
+/// design and hashed nowhere).
+pub fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let p = entry.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p
+                .file_name()
+                .is_some_and(|n| n != repose::store::TIMING_FILE)
+            {
+                out.push((
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                ));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Asserts that two stores hold the same files with the same bytes.
+pub fn assert_same_stores(a: &Path, b: &Path) {
+    let (a, b) = (snapshot(a), snapshot(b));
+    assert_eq!(
+        a.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        b.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    for (x, y) in a.iter().zip(&b) {
+        assert!(x.1 == y.1, "{} differs between the stores", x.0.display());
+    }
+}
+
+/// Compares one cell of `column`: `exact` columns and text exactly, other
+/// numbers within `tol` relative (|pinned − now| ≤ tol · max(|pinned|, 1)).
+fn same_cell(column: &str, pinned: &str, now: &str, exact: &[&str], tol: f64) -> bool {
+    if exact.contains(&column) {
+        return pinned == now;
+    }
+    match (pinned.parse::<f64>(), now.parse::<f64>()) {
+        (Ok(a), Ok(b)) => (a - b).abs() <= tol * a.abs().max(1.0),
+        _ => pinned == now,
+    }
+}
+
+/// Asserts that the CSV text `now` matches the golden table `golden_dir/name`
+/// (see [`same_cell`]).
+pub fn compare_golden(golden_dir: &str, name: &str, now: &str, exact: &[&str], tol: f64) {
+    use repose::report::table::Table;
+    let golden = root().join(golden_dir).join(name);
+    let hint = "if intended, rerun with REPOSE_BLESS=1 and review the diff";
+    let pinned = std::fs::read_to_string(&golden)
+        .unwrap_or_else(|e| panic!("{}: {e}; {hint}", golden.display()));
+    let pinned = Table::parse(&pinned).unwrap();
+    let now = Table::parse(now).unwrap();
+    assert_eq!(pinned.header, now.header, "{name}: columns; {hint}");
+    assert_eq!(pinned.rows.len(), now.rows.len(), "{name}: row count; {hint}");
+    for (line, (p, c)) in pinned.rows.iter().zip(&now.rows).enumerate() {
+        for ((column, a), b) in pinned.header.iter().zip(p).zip(c) {
+            assert!(
+                same_cell(column, a, b, exact, tol),
+                "{name} line {}, {column}: {b} vs pinned {a}; {hint}",
+                line + 2
+            );
+        }
+    }
+}
+
+/// True when golden files are to be rewritten (`REPOSE_BLESS=1`).
+pub fn blessing() -> bool {
+    std::env::var_os("REPOSE_BLESS").is_some_and(|v| v == "1")
+}

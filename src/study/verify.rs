@@ -1,0 +1,220 @@
+//! `repose verify STUDY` (and the last step of `repose rsm`): the
+//! desirability optimum and the study's named points re-simulated in every
+//! scene with `verification.replicates` packing seeds each.
+//!
+//! Per point and response: the simulated mean ± 95 % CI (Student t, n − 1
+//! df), the model's prediction there, the measured target, the relative
+//! error of the mean, and pass/fail against the target's tolerance
+//! (|mean − target| / target ≤ tolerance). A point passes when every
+//! response with a target passes. The verification runs draw their own
+//! packing seeds (stage `verify`), never those of the design.
+
+use serde::Serialize;
+
+use super::dir::{write_output, StudyDir};
+use super::rsm::RsmOutcome;
+use super::runs::{run_points, write_table, Point};
+use super::spec::{DesignStudy, SeedStage};
+use super::StudyError;
+use crate::manifest::Experiment;
+use crate::report::table::{Cell, CsvWriter};
+use crate::stats::summary::mean_ci;
+use crate::store::{RunDir, RunResult, Store};
+use crate::study::executor::LocalPool;
+
+/// One response at one verified point.
+#[derive(Debug, Clone, Serialize)]
+pub struct Check {
+    /// Point name (`optimum` or a key of `verification.points`).
+    pub point: String,
+    /// Response name.
+    pub response: String,
+    /// Replicates that measured it.
+    pub n: usize,
+    /// Simulated mean.
+    pub mean: Option<f64>,
+    /// 95 % CI half-width of the mean (n ≥ 2).
+    pub ci95_half_width: Option<f64>,
+    /// The model's prediction at the point.
+    pub predicted: f64,
+    /// The measured target, if any.
+    pub target: Option<f64>,
+    /// (mean − target) / target.
+    pub relative_error: Option<f64>,
+    /// Within the target's tolerance (None without a target or a mean).
+    pub pass: Option<bool>,
+}
+
+/// What verification found.
+#[derive(Debug, Clone, Serialize)]
+pub struct Verification {
+    /// The points in actual units: (name, factor values).
+    pub points: Vec<(String, Vec<f64>)>,
+    /// One check per point and response.
+    pub checks: Vec<Check>,
+    /// Runs, and how many were in the store.
+    pub runs: usize,
+    /// Runs cached before the stage.
+    pub cached: usize,
+}
+
+/// Verifies the optimum of `rsm` and the study's named points (see the
+/// module docs); `None` when the study has no verification block.
+pub fn verify<E, F>(
+    dir: &StudyDir,
+    study: &DesignStudy,
+    rsm: &RsmOutcome,
+    store: &Store,
+    pool: &LocalPool,
+    runner: &F,
+) -> Result<Option<Verification>, StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let Some(plan) = &study.verification else {
+        return Ok(None);
+    };
+    let names = study.factor_names();
+    let ranges = study.ranges();
+    let mut named: Vec<(String, Vec<f64>)> = Vec::new();
+    if let Some(best) = &rsm.optimum_actual {
+        named.push(("optimum".into(), best.clone()));
+    }
+    for (name, values) in &plan.points {
+        named.push((name.clone(), names.iter().map(|f| values[f]).collect()));
+    }
+    let points: Vec<Point> = named
+        .iter()
+        .enumerate()
+        .map(|(i, (_, actual))| Point {
+            index: i as u64,
+            values: study
+                .factors
+                .values()
+                .zip(actual)
+                .map(|(f, v)| (f.address.clone(), *v))
+                .collect(),
+            shown: actual.clone(),
+        })
+        .collect();
+    let stage = dir.stage("verify")?;
+    let runs = run_points(
+        study,
+        store,
+        pool,
+        runner,
+        SeedStage::Verify,
+        names.clone(),
+        points,
+        plan.replicates,
+    )?;
+    write_table(dir, "verify", study, &runs, &stage.join("responses.csv"))?;
+    let mut checks = Vec::new();
+    for a in &rsm.analyses {
+        let values = runs.by_point(&a.response);
+        for (k, (name, actual)) in named.iter().enumerate() {
+            let coded: Vec<f64> = actual.iter().zip(&ranges).map(|(x, r)| r.to_coded(*x)).collect();
+            let summary = mean_ci(&values[k]);
+            let mean = summary
+                .map(|s| s.mean)
+                .or_else(|| values[k].first().copied());
+            let target = study.targets.get(&a.response);
+            let relative_error = mean.zip(target).map(|(m, t)| (m - t.value) / t.value);
+            checks.push(Check {
+                point: name.clone(),
+                response: a.response.clone(),
+                n: values[k].len(),
+                mean,
+                ci95_half_width: summary.map(|s| s.half_width),
+                predicted: a.fit.predict(&coded),
+                target: target.map(|t| t.value),
+                relative_error,
+                pass: relative_error
+                    .zip(target)
+                    .map(|(e, t)| e.abs() <= t.tolerance_fraction),
+            });
+        }
+    }
+    let outcome = Verification {
+        points: named,
+        checks,
+        runs: runs.total,
+        cached: runs.cached,
+    };
+    let lineage = dir
+        .lineage(
+            "verify",
+            serde_json::json!({ "replicates": plan.replicates }),
+        )
+        .with_input(dir.input("responses", &stage.join("responses.csv"))?);
+    write_output(&stage.join("verification.csv"), csv(&outcome).as_bytes(), &lineage)?;
+    write_output(
+        &stage.join("verification.md"),
+        markdown(study, &outcome).as_bytes(),
+        &lineage,
+    )?;
+    Ok(Some(outcome))
+}
+
+fn csv(v: &Verification) -> String {
+    let mut csv = CsvWriter::new(
+        &[
+            "point", "response", "n", "mean", "ci95_half_width", "predicted", "target",
+            "relative_error", "pass",
+        ]
+        .map(String::from),
+    );
+    let num = |x: Option<f64>| x.map_or(Cell::Empty, Cell::Number);
+    for c in &v.checks {
+        csv.row(&[
+            Cell::Text(c.point.clone()),
+            Cell::Text(c.response.clone()),
+            Cell::Integer(c.n as u64),
+            num(c.mean),
+            num(c.ci95_half_width),
+            Cell::Number(c.predicted),
+            num(c.target),
+            num(c.relative_error),
+            Cell::Text(c.pass.map_or(String::new(), |p| p.to_string())),
+        ]);
+    }
+    csv.finish()
+}
+
+/// The verification table in Markdown.
+pub fn markdown(study: &DesignStudy, v: &Verification) -> String {
+    let names = study.factor_names();
+    let mut md = format!(
+        "# {} — verification ({} runs, {} were in the store)\n\n| Point | {} |\n|---|{}\n",
+        study.name,
+        v.runs,
+        v.cached,
+        names.join(" | "),
+        "---:|".repeat(names.len())
+    );
+    for (name, values) in &v.points {
+        let cells: Vec<String> = values.iter().map(|x| format!("{x:.4}")).collect();
+        md.push_str(&format!("| {name} | {} |\n", cells.join(" | ")));
+    }
+    md.push_str("\n| Point | Response | n | Simulated mean ± 95 % CI | Model | Measured | Error | Pass |\n|---|---|---:|---|---:|---:|---:|---|\n");
+    for c in &v.checks {
+        let sim = match (c.mean, c.ci95_half_width) {
+            (Some(m), Some(h)) => format!("{m:.2} ± {h:.2}"),
+            (Some(m), None) => format!("{m:.2}"),
+            _ => "not measured".into(),
+        };
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {:.2} | {} | {} | {} |\n",
+            c.point,
+            c.response,
+            c.n,
+            sim,
+            c.predicted,
+            c.target.map_or(String::new(), |t| format!("{t}")),
+            c.relative_error.map_or(String::new(), |e| format!("{:+.2} %", 100.0 * e)),
+            c.pass.map_or("", |p| if p { "pass" } else { "fail" })
+        ));
+    }
+    md
+}
