@@ -31,7 +31,7 @@ use crate::store::{
     write_atomic, CacheOutcome, Depth, InputRef, Lineage, RunDir, RunError, RunState, RunStatus,
     RunSummary, Store, StoreError,
 };
-use crate::study::executor::LocalPool;
+use crate::exec::LocalPool;
 use crate::study::spec::{is_design_study, read_design_study, DesignStudy};
 use crate::study::{self, StudyError};
 use crate::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
@@ -135,7 +135,7 @@ pub enum CommandError {
     Study(#[from] StudyError),
     /// The executor refused the runs (inconsistent plans or over the limits).
     #[error(transparent)]
-    Exec(#[from] crate::study::executor::ExecError),
+    Exec(#[from] crate::exec::ExecError),
     /// Runs whose files no longer match their seals (each was named above).
     #[error("{count} damaged run(s); run them again to recompute them")]
     Damaged {

@@ -3,6 +3,11 @@
 //!
 //! Module map (dependencies point downward only):
 //! - [`commands`]: one function per CLI subcommand (the binary only parses arguments).
+//! - [`study`]: studies as data — the design-study manifest and its stages
+//!   (screen, rsm, verify), each run through [`exec`] into a response table.
+//! - [`calibrate`]: the he2019 stages (sample, batch, train, search, verify).
+//! - [`tradeoff`]: what accuracy costs in time (`repose tradeoff`).
+//! - [`exec`]: the one executor seam: runs experiments through the store.
 //! - [`mod@bench`]: the engine throughput benchmark (`repose bench`).
 //! - [`scenes`]: runs an experiment's scene and produces its result; its
 //!   [`scenes::plan`] checks and prices a run before it starts.
@@ -32,5 +37,6 @@ pub mod measure;
 pub mod packing;
 pub mod scenes;
 pub mod store;
+pub mod exec;
 pub mod study;
 pub mod tradeoff;

@@ -20,7 +20,7 @@ use repose::calibrate::{CalibrateError, Stage, StudyDir};
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::scenes::run_experiment;
 use repose::store::{Lineage, RunDir, RunResult, RunStatus, Store};
-use repose::study::executor::LocalPool;
+use repose::exec::LocalPool;
 use serde_json::{json, Value};
 use sha2::{Digest, Sha256};
 

@@ -14,7 +14,7 @@ use repose::calibrate::sample::{sample, SampleSettings};
 use repose::calibrate::{parameter_names, CalibrateError, Stage, StudyDir};
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
-use repose::study::executor::LocalPool;
+use repose::exec::LocalPool;
 use serde_json::json;
 
 /// The smoke study with a 36-point design: 24 training rows, 12 validation.

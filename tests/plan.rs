@@ -17,7 +17,7 @@ use repose::manifest::{parse_experiment, parse_study, Experiment};
 use repose::scenes::plan::{plan, Limits, ENGINE_MAX_PARTICLES};
 use repose::scenes::run_experiment;
 use repose::store::{RunDir, RunResult, Store};
-use repose::study::executor::{ExecError, LocalPool};
+use repose::exec::{ExecError, LocalPool};
 use serde_json::{json, Value};
 
 /// `base` (an example under experiments/) with the edits applied.

@@ -12,8 +12,8 @@ use repose::tradeoff::{report, run, summarise};
 
 const GOLDEN: &str = "golden/tradeoff_drum_tiny.csv";
 
-fn pool(jobs: usize) -> repose::study::executor::LocalPool {
-    repose::study::executor::LocalPool {
+fn pool(jobs: usize) -> repose::exec::LocalPool {
+    repose::exec::LocalPool {
         jobs,
         progress: false,
         limits: repose::scenes::plan::Limits::default(),

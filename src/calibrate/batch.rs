@@ -1,7 +1,7 @@
 //! `repose batch STUDY`: runs every sampled experiment that is not complete
 //! and writes the simulated-angle table (the equivalent of he2019's Table A1).
 //!
-//! The runs are handed to the one executor ([`crate::study::executor`]): a
+//! The runs are handed to the one executor ([`crate::exec`]): a
 //! complete run is never repeated, a batch killed midway resumes where it
 //! stopped, and a run whose plan is inconsistent or over the limits refuses
 //! the stage before anything runs. A failed run is reported at the end and
@@ -16,7 +16,7 @@ use super::table::{parse_number, Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
 use crate::store::{Depth, RunDir, RunResult, RunState, RunStatus, Store};
-use crate::study::executor::{run_incomplete, LocalPool, Ran};
+use crate::exec::{run_incomplete, LocalPool, Ran};
 
 /// One row of design.csv.
 #[derive(Debug, Clone, PartialEq)]

@@ -183,7 +183,7 @@ pub enum CalibrateError {
     Store(#[from] StoreError),
     /// The executor refused the runs.
     #[error(transparent)]
-    Exec(#[from] crate::study::executor::ExecError),
+    Exec(#[from] crate::exec::ExecError),
     /// Training could not run.
     #[error(transparent)]
     Train(#[from] surrogate::TrainError),

@@ -5,8 +5,7 @@
 //! - [`spec`]: the design study manifest (factors by address, design,
 //!   replicates, scenes, named responses, targets, screening, verification)
 //!   and the experiments it generates.
-//! - [`executor`]: the one seam through which every stage runs experiments;
-//!   [`progress`] its progress bar.
+//! - [`crate::exec`]: the one seam through which every stage runs experiments.
 //! - [`runs`]: points × replicates × scenes → executor → response table.
 //! - [`screen`], [`rsm`], [`optimum`], [`verify`]: the stages and the joint
 //!   desirability optimum.
@@ -16,9 +15,7 @@
 //! stages or studies is simulated once, and a killed stage resumes.
 
 pub mod dir;
-pub mod executor;
 pub mod optimum;
-pub mod progress;
 pub mod rsm;
 pub mod runs;
 pub mod screen;
@@ -29,7 +26,7 @@ use std::path::Path;
 
 use crate::manifest::{Experiment, ValidationErrors};
 use crate::store::{RunDir, RunResult, Store, StoreError};
-use executor::{ExecError, LocalPool};
+use crate::exec::{ExecError, LocalPool};
 use spec::DesignStudy;
 
 /// Why a study stage failed.

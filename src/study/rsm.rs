@@ -24,7 +24,7 @@ use crate::report::plots::{contour, predicted_vs_actual, ContourGrid};
 use crate::report::table::{Cell, CsvWriter, Table};
 use crate::stats::rsm::{fit_quadratic, AnovaRow, RsmFit};
 use crate::store::{RunDir, RunResult, Store};
-use crate::study::executor::LocalPool;
+use crate::exec::LocalPool;
 
 /// Starts of the desirability search.
 pub const OPTIMISER_STARTS: usize = 64;

@@ -17,7 +17,7 @@ use crate::manifest::{ContentId, Experiment};
 use crate::report::table::{Cell, CsvWriter};
 use crate::scenes::responses::response;
 use crate::store::{Depth, InputRef, RunDir, RunResult, RunState, Store};
-use crate::study::executor::{run_incomplete, LocalPool, Ran};
+use crate::exec::{run_incomplete, LocalPool, Ran};
 
 /// One point of a stage, in actual units.
 #[derive(Debug, Clone, PartialEq)]

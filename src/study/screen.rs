@@ -18,7 +18,7 @@ use crate::report::table::{Cell, CsvWriter};
 use crate::stats::oneway::one_way_anova;
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store};
-use crate::study::executor::LocalPool;
+use crate::exec::LocalPool;
 
 /// One level of one screened factor, for one response.
 #[derive(Debug, Clone, Serialize)]

@@ -20,7 +20,7 @@ use crate::manifest::Experiment;
 use crate::report::table::{Cell, CsvWriter};
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store};
-use crate::study::executor::LocalPool;
+use crate::exec::LocalPool;
 
 /// One response at one verified point.
 #[derive(Debug, Clone, Serialize)]

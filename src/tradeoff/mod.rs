@@ -16,7 +16,7 @@ pub mod stats;
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::run_experiment;
 use crate::store::{RunDir, RunResult, Store, TimingRecord};
-use crate::study::executor::{run_incomplete, ExecError, LocalPool, Ran};
+use crate::exec::{run_incomplete, ExecError, LocalPool, Ran};
 use plan::Point;
 use stats::{difference_ci, mean_ci, pareto_front, MeanCi};
 
@@ -34,7 +34,7 @@ pub struct Outcome {
 }
 
 /// Runs every replicate of every point through the one executor
-/// ([`crate::study::executor`]: cached by id, already complete runs are not
+/// ([`crate::exec`]: cached by id, already complete runs are not
 /// repeated, each run on one thread of its own, `pool.jobs` at once) and
 /// reads the outcomes back from the store, in plan order. Refused before
 /// anything runs when a replicate's plan is inconsistent or over the pool's

@@ -23,11 +23,13 @@
 //! [`crate::scenes::run_experiment`] with the run's MCAP log, as `repose run`
 //! does. A cluster executor is a second implementation of this seam.
 
+pub mod progress;
+
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
-use super::progress::BatchProgress;
+use progress::BatchProgress;
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::plan::{plan, Limits};
 use crate::store::{RunDir, RunResult, RunStatus, Store};
