@@ -4,6 +4,7 @@
 //! Module map (dependencies point downward only):
 //! - [`commands`]: one function per CLI subcommand (the binary only parses arguments).
 //! - [`mod@bench`]: the engine throughput benchmark (`repose bench`).
+//! - [`doe`]: designs of experiments (Latin hypercubes) and their diagnostics.
 //! - [`scenes`]: runs an experiment's scene and produces its result; its
 //!   [`scenes::plan`] checks and prices a run before it starts.
 //! - [`log`]: MCAP run logs for Foxglove (writing, and `repose inspect`).
@@ -23,6 +24,7 @@ pub mod bench;
 pub mod calibrate;
 pub mod commands;
 pub mod dem;
+pub mod doe;
 pub mod errors;
 #[cfg(target_os = "linux")]
 pub mod huge_pages;
