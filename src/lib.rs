@@ -4,7 +4,10 @@
 //! Module map (dependencies point downward only):
 //! - [`commands`]: one function per CLI subcommand (the binary only parses arguments).
 //! - [`mod@bench`]: the engine throughput benchmark (`repose bench`).
-//! - [`doe`]: designs of experiments (Latin hypercubes) and their diagnostics.
+//! - [`calibrate`]: the he2019 calibration stages (sample, batch, train,
+//!   search, verify) over a study's runs.
+//! - [`doe`]: designs of experiments as pure functions (Latin hypercubes,
+//!   Box–Behnken, full factorial, one-factor-at-a-time) and their diagnostics.
 //! - [`scenes`]: runs an experiment's scene and produces its result; its
 //!   [`scenes::plan`] checks and prices a run before it starts.
 //! - [`log`]: MCAP run logs for Foxglove (writing, and `repose inspect`).
