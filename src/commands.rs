@@ -11,7 +11,6 @@ use crate::audit::{self, AuditError};
 use crate::bench::{self, BenchError, BenchOptions};
 use crate::calibrate::batch::batch as run_batch;
 use crate::calibrate::curve;
-use crate::calibrate::diagnostics::Diagnostics;
 use crate::calibrate::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
 use crate::calibrate::search::{search as run_search, SearchSettings};
 use crate::calibrate::surrogate::TrainSettings;
@@ -19,6 +18,7 @@ use crate::calibrate::train::DEFAULT_TRAIN_FRACTION;
 use crate::calibrate::train::{train_study, train_table, TableSpec, TrainOptions, TrainOutcome};
 use crate::calibrate::verify::verify as run_verify;
 use crate::calibrate::{CalibrateError, StudyDir};
+use crate::doe::diagnostics::Diagnostics;
 use crate::log::{inspect, InspectError};
 use crate::manifest::{
     read_document, read_experiment, ContentId, Document, DocumentKind, Experiment, ManifestError,

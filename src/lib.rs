@@ -9,6 +9,10 @@
 //! - [`tradeoff`]: what accuracy costs in time (`repose tradeoff`).
 //! - [`exec`]: the one executor seam: runs experiments through the store.
 //! - [`mod@bench`]: the engine throughput benchmark (`repose bench`).
+//! - [`calibrate`]: the he2019 calibration stages (sample, batch, train,
+//!   search, verify) over a study's runs.
+//! - [`doe`]: designs of experiments as pure functions (Latin hypercubes,
+//!   Box–Behnken, full factorial, one-factor-at-a-time) and their diagnostics.
 //! - [`scenes`]: runs an experiment's scene and produces its result; its
 //!   [`scenes::plan`] checks and prices a run before it starts.
 //! - [`log`]: MCAP run logs for Foxglove (writing, and `repose inspect`).
@@ -28,6 +32,7 @@ pub mod bench;
 pub mod calibrate;
 pub mod commands;
 pub mod dem;
+pub mod doe;
 pub mod errors;
 #[cfg(target_os = "linux")]
 pub mod huge_pages;

@@ -10,7 +10,6 @@ use clap::{Parser, Subcommand};
 use repose::bench::BenchOptions;
 use repose::calibrate::genetic::GaSettings;
 use repose::calibrate::levenberg::LmSettings;
-use repose::calibrate::lhs::Placement;
 use repose::calibrate::meanshift::Kernel;
 use repose::calibrate::sample::SampleSettings;
 use repose::calibrate::search::SearchSettings;
@@ -18,6 +17,7 @@ use repose::calibrate::surrogate::TrainSettings;
 use repose::calibrate::train::{TableSpec, TrainOptions, DEFAULT_TRAIN_FRACTION};
 use repose::commands::{self, CommandError, KindArg, TradeoffOptions};
 use repose::dem::simulation::{NormalChoice, RollingChoice};
+use repose::doe::lhs::Placement;
 use repose::scenes::plan::Limits;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
 use repose::tradeoff::plan::{Knob, KNOB_NAMES};
@@ -221,7 +221,7 @@ struct SampleArgs {
     #[arg(long, default_value_t = 5000)]
     optimise_iterations: usize,
     /// Warn when two columns' |correlation| reaches this.
-    #[arg(long, default_value_t = repose::calibrate::diagnostics::STRONG_CORRELATION)]
+    #[arg(long, default_value_t = repose::doe::diagnostics::STRONG_CORRELATION)]
     max_correlation: f64,
 }
 

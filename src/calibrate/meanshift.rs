@@ -16,7 +16,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::lhs::distance;
+use crate::doe::lhs::distance;
 
 /// The kernel of the density estimate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]

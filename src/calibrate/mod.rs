@@ -63,10 +63,8 @@
 
 pub mod batch;
 pub mod curve;
-pub mod diagnostics;
 pub mod genetic;
 pub mod levenberg;
-pub mod lhs;
 pub mod meanshift;
 pub mod metrics;
 pub mod network;

@@ -1,9 +1,9 @@
 //! `repose sample STUDY`: the study's Latin hypercube (he2019 §3.1) over the
 //! calibrated parameters, one experiment manifest per sample, and the
-//! design's diagnostics ([`super::diagnostics`]).
+//! design's diagnostics ([`crate::doe::diagnostics`]).
 //!
-//! Design kinds: `lhs` is [`super::lhs::latin_hypercube`]; `lhs_optimised`
-//! adds [`super::lhs::optimise`] (maximin through φ_p). The full-factorial and
+//! Design kinds: `lhs` is [`crate::doe::lhs::latin_hypercube`]; `lhs_optimised`
+//! adds [`crate::doe::lhs::optimise`] (maximin through φ_p). The full-factorial and
 //! Box–Behnken kinds are not produced by this stage (yet) and are refused.
 //!
 //! Also `repose sample --diagnose TABLE.csv`: the same diagnostics for any
@@ -16,13 +16,13 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::diagnostics::{diagnose, unit_scaled, Diagnostics};
-use super::lhs::{latin_hypercube, optimise, Optimisation, Placement};
 use super::table::{Cell, CsvWriter, Table};
 use super::{
     create_dir, json_bytes, parameter_names, rng, serde_name, to_physical, write_file,
     write_output, CalibrateError, Stage, Stream, StudyDir,
 };
+use crate::doe::diagnostics::{diagnose, unit_scaled, Diagnostics};
+use crate::doe::lhs::{latin_hypercube, optimise, Optimisation, Placement};
 use crate::manifest::{canonical_json, DesignKind, Study};
 
 /// Options of the sample stage.
@@ -43,7 +43,7 @@ impl Default for SampleSettings {
         SampleSettings {
             placement: Placement::Midpoint,
             optimise_iterations: 5000,
-            strong_correlation: super::diagnostics::STRONG_CORRELATION,
+            strong_correlation: crate::doe::diagnostics::STRONG_CORRELATION,
         }
     }
 }

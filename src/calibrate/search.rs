@@ -18,7 +18,6 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::lhs::{latin_hypercube, Placement};
 use super::meanshift::{estimate_bandwidth, mean_shift, Kernel};
 use super::surrogate::Model;
 use super::svg::scatter_matrix;
@@ -27,6 +26,7 @@ use super::{
     parameter_names, rng, serde_name, to_physical, write_output, CalibrateError, Stage, Stream,
     StudyDir,
 };
+use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::manifest::Study;
 
 /// Options of the search stage.
