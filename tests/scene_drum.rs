@@ -102,7 +102,7 @@ fn a_looser_at_rest_criterion_ends_the_settle_sooner() {
         e.at_rest.kinetic_energy_fraction = fraction;
         let r = run_experiment(&e, None).unwrap();
         (
-            r.measurements["settled_before_rotation"],
+            r.measurements["settled"],
             r.measurements["rotation_start_s"],
         )
     };

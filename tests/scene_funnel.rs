@@ -148,7 +148,7 @@ fn funnel_counts(exp: &Experiment) -> Counts {
     Counts {
         height: m["pile_height_m"],
         discharged_fraction: m["discharged_fraction"],
-        removed_fraction: m["removed"] / m["particles_charged"],
+        removed_fraction: m["removed"] / m["particles"],
         blades: m["brush_blades"],
     }
 }

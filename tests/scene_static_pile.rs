@@ -133,7 +133,7 @@ fn every_particle_is_generated_and_accounted_for() {
     let exp = smoke();
     let r = smoke_result();
     let count = scene(&exp).particle_count as f64;
-    assert_eq!(m(r, "particles_generated"), count);
+    assert_eq!(m(r, "particles"), count);
     assert_eq!(m(r, "particles_not_generated"), 0.0);
     let accounted = m(r, "funnel_retained")
         + m(r, "particles_on_disk")

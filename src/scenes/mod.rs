@@ -14,6 +14,7 @@ pub mod physics;
 pub mod plan;
 pub mod protocol;
 pub mod responses;
+pub mod skeleton;
 pub mod static_pile;
 
 use std::path::Path;
