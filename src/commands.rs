@@ -26,6 +26,7 @@ use crate::manifest::{
 };
 use crate::scenes::plan::{plan as plan_run, Limits, OverLimit, RunPlan};
 use crate::scenes::protocol::{progress_enabled, set_quiet};
+use crate::scenes::responses::listing;
 use crate::scenes::run_experiment;
 use crate::store::{
     write_atomic, CacheOutcome, Depth, InputRef, Lineage, RunDir, RunError, RunState, RunStatus,
@@ -434,6 +435,33 @@ pub fn bench(
 /// Formats an optional number for the runs table.
 fn cell(v: Option<f64>) -> String {
     v.map_or_else(|| "-".to_string(), |v| format!("{v:.4}"))
+}
+
+/// `repose responses [SCENE] [--json]`: the named responses of one scene kind
+/// (or of all) from [`crate::scenes::responses::listing`], as text (name,
+/// unit, description per line under each kind) or JSON (a list of
+/// `{"scene", "responses"}` objects). An unknown kind is a usage error.
+pub fn responses(scene: Option<&str>, json: bool, out: &mut dyn Write) -> Result<(), CommandError> {
+    let listed = listing(scene).map_err(|e| CommandError::Usage(e.to_string()))?;
+    if json {
+        let doc: Vec<_> = listed
+            .iter()
+            .map(|(kind, specs)| serde_json::json!({ "scene": kind, "responses": specs }))
+            .collect();
+        writeln!(
+            out,
+            "{}",
+            serde_json::to_string_pretty(&doc).map_err(io::Error::from)?
+        )?;
+        return Ok(());
+    }
+    for (kind, specs) in listed {
+        writeln!(out, "{kind}")?;
+        for s in specs {
+            writeln!(out, "  {:<24} {:<4} {}", s.name, s.unit, s.description)?;
+        }
+    }
+    Ok(())
 }
 
 /// `repose runs list`: one line per run (id prefix, scene, profile, the

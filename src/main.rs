@@ -174,6 +174,15 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
+    /// List the named responses (scalar physics results with units) of one
+    /// scene kind, or of every kind, that a calibration can target.
+    Responses {
+        /// Scene kind as written in manifests (e.g. drum, hopper) [default: all].
+        scene: Option<String>,
+        /// Print JSON: a list of {"scene", "responses"} objects.
+        #[arg(long)]
+        json: bool,
+    },
     /// Inspect the run store.
     Runs {
         #[command(subcommand)]
@@ -626,6 +635,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         Command::Audit { path, rerun, seed } => {
             commands::audit(&cli.store, &path, rerun, seed, &mut out)
         }
+        Command::Responses { scene, json } => commands::responses(scene.as_deref(), json, &mut out),
         Command::Runs {
             command: RunsCommand::List,
         } => commands::runs_list(&cli.store, &mut out),

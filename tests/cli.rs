@@ -235,3 +235,36 @@ fn an_empty_store_lists_nothing() {
     assert_eq!(out.status.code(), Some(0));
     assert!(stdout(&out).starts_with("no runs in"));
 }
+
+#[test]
+fn responses_lists_every_scene_or_one_and_refuses_an_unknown_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = repose(tmp.path(), &["responses"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = stdout(&out);
+    for kind in repose::scenes::responses::kinds() {
+        assert!(text.lines().any(|l| l == *kind), "{kind} missing:\n{text}");
+    }
+    assert!(text.contains("angle_2h_d_deg") && text.contains("flow_rate_1s_per_s"));
+
+    let out = repose(tmp.path(), &["responses", "drum", "--json"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let doc: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(doc[0]["scene"], "drum");
+    let names: Vec<&str> = doc[0]["responses"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["dynamic_angle_deg", "static_angle_deg"]);
+    assert_eq!(doc[0]["responses"][0]["unit"], "deg");
+
+    let out = repose(tmp.path(), &["responses", "tumbler"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = stderr(&out);
+    assert!(
+        err.contains("unknown scene kind 'tumbler'") && err.contains("hopper, static_pile"),
+        "{err}"
+    );
+}

@@ -5,6 +5,7 @@
 //! determinism, and the two ways a run refuses to give a number.
 
 use repose::manifest::{parse_experiment, Experiment, Scene};
+use repose::scenes::responses::{catalogue, response};
 use repose::scenes::run_experiment;
 use repose::store::RunResult;
 use serde_json::{json, Value};
@@ -145,6 +146,18 @@ fn smoke_manifest_gives_a_plausible_angle_and_balanced_books() {
     assert!((2.25e-3..2.25e-3 + 6.8e-6).contains(&placed), "{placed}");
     assert_books_balance(&r);
     assert_baffle_cleared_the_bed(&r, 0.003);
+    // The one named response is the headline angle.
+    let names: Vec<_> = catalogue("baffle_lift")
+        .unwrap()
+        .iter()
+        .map(|s| s.name)
+        .collect();
+    assert_eq!(names, ["angle_deg"]);
+    assert_eq!(response(&r, "baffle_lift", "angle_deg").unwrap(), angle);
+    let err = response(&r, "baffle_lift", "static_angle_deg")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("its responses are: angle_deg"), "{err}");
 }
 
 #[test]

@@ -3,6 +3,7 @@
 //! result's bookkeeping.
 
 use repose::manifest::{parse_experiment, Experiment};
+use repose::scenes::responses::{catalogue, response};
 use repose::scenes::run_experiment;
 
 /// A 30 mm drum slice of 1 mm glass-like spheres (soft: E = 5 MPa), 30 rpm.
@@ -56,7 +57,29 @@ fn rougher_particles_stand_steeper_in_the_drum() {
         assert!(r.traces.contains_key("angle") && r.traces.contains_key("kinetic_energy"));
         let a = angle(r);
         assert!(a > 5.0 && a < 70.0, "implausible dynamic angle {a}");
+        // Both named responses read from the run, as the measurements they name.
+        for name in ["dynamic_angle_deg", "static_angle_deg"] {
+            assert_eq!(response(r, "drum", name).unwrap(), r.measurements[name]);
+        }
+        let names: Vec<_> = catalogue("drum").unwrap().iter().map(|s| s.name).collect();
+        assert_eq!(names, ["dynamic_angle_deg", "static_angle_deg"]);
+        let err = response(r, "drum", "angle_deg").unwrap_err().to_string();
+        assert!(
+            err.contains("its responses are: dynamic_angle_deg, static_angle_deg"),
+            "{err}"
+        );
     }
+    // A run without a dynamic window says so, naming the response and the run.
+    let mut windowless = smooth.clone();
+    windowless.measurements.remove("dynamic_angle_deg");
+    let err = response(&windowless, "drum", "dynamic_angle_deg")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("did not measure response 'dynamic_angle_deg'")
+            && err.contains(smooth.id.short(12)),
+        "{err}"
+    );
 }
 
 #[test]
@@ -79,7 +102,7 @@ fn a_looser_at_rest_criterion_ends_the_settle_sooner() {
         e.at_rest.kinetic_energy_fraction = fraction;
         let r = run_experiment(&e, None).unwrap();
         (
-            r.measurements["settled_before_rotation"],
+            r.measurements["settled"],
             r.measurements["rotation_start_s"],
         )
     };

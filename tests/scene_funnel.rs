@@ -9,6 +9,7 @@
 use repose::dem::walls::Motion;
 use repose::manifest::{parse_experiment, Experiment, Scene};
 use repose::scenes::funnel::{self, geometry};
+use repose::scenes::responses::{catalogue, response};
 use repose::scenes::run_experiment;
 use repose::store::RunResult;
 
@@ -89,6 +90,18 @@ fn smoke_manifest_forms_a_measurable_pile() {
     // overlap is 0.5 % of the radius here and the blades crush nothing.
     let overlap = &r.traces["max_overlap_ratio"].values;
     assert!(overlap.iter().all(|&o| o < 0.2), "{overlap:?}");
+    // The one named response is the headline angle.
+    let names: Vec<_> = catalogue("funnel_pile")
+        .unwrap()
+        .iter()
+        .map(|s| s.name)
+        .collect();
+    assert_eq!(names, ["angle_deg"]);
+    assert_eq!(response(&r, "funnel_pile", "angle_deg").unwrap(), a);
+    let err = response(&r, "funnel_pile", "angle_views")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("its responses are: angle_deg"), "{err}");
 }
 
 /// The smoke funnel with particle–particle surface energy `gamma` (J/m²).
@@ -135,7 +148,7 @@ fn funnel_counts(exp: &Experiment) -> Counts {
     Counts {
         height: m["pile_height_m"],
         discharged_fraction: m["discharged_fraction"],
-        removed_fraction: m["removed"] / m["particles_charged"],
+        removed_fraction: m["removed"] / m["particles"],
         blades: m["brush_blades"],
     }
 }

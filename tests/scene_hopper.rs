@@ -8,6 +8,7 @@
 
 use repose::manifest::{parse_experiment, Experiment};
 use repose::scenes::hopper::{beverloo_rate_per_s, BEVERLOO_K};
+use repose::scenes::responses::{catalogue, response};
 use repose::scenes::run_experiment;
 use repose::store::RunResult;
 use serde_json::{json, Value};
@@ -88,7 +89,7 @@ fn smoke_manifest_runs_healthy_with_plausible_angles() {
     let (alpha, theta) = (m(r, "upper_angle_deg"), m(r, "bottom_angle_deg"));
     eprintln!(
         "smoke: alpha {alpha:.2}, theta {theta:.2}, {} particles, {} steps, discharged {}",
-        m(r, "particles_inserted"),
+        m(r, "particles"),
         m(r, "steps"),
         m(r, "discharged")
     );
@@ -116,14 +117,54 @@ fn smoke_manifest_runs_healthy_with_plausible_angles() {
         }
     }
     // The bed came to rest before the lid opened, and most of it left.
-    assert_eq!(m(r, "settled_before_opening"), 1.0);
-    assert!(m(r, "discharged") > 0.3 * m(r, "particles_inserted"));
+    assert_eq!(m(r, "settled"), 1.0);
+    assert!(m(r, "discharged") > 0.3 * m(r, "particles"));
     // A poured bed of spheres is between random loose (0.55) and random close
     // (0.64) packing.
     let phi = m(r, "settled_solid_fraction");
     assert!(phi > 0.54 && phi < 0.645, "solid fraction {phi}");
     let overlap = trace(r, "max_overlap_ratio");
     assert!(overlap.values.iter().all(|&v| v < 0.3));
+}
+
+#[test]
+fn every_named_response_is_read_or_said_to_be_unmeasured() {
+    let r = smoke();
+    let read = |name: &str| response(r, "hopper", name);
+    assert_eq!(read("alpha_deg").unwrap(), m(r, "upper_angle_deg"));
+    assert_eq!(read("theta_deg").unwrap(), m(r, "bottom_angle_deg"));
+    assert_eq!(r.headline_angle_deg, Some(read("theta_deg").unwrap()));
+    assert_eq!(
+        read("flow_rate_steady_per_s").unwrap(),
+        m(r, "flow_rate_steady_per_s")
+    );
+    assert_eq!(
+        read("window_speed_m_s").unwrap(),
+        m(r, "window_speed_mean_m_s")
+    );
+    // FR(t) exists for the times inside the discharge and only for them.
+    let covered = m(r, "flow_rate_times_covered") as usize;
+    assert!(covered >= 1, "the smoke discharges for over 1 s");
+    for (k, t) in [1, 2, 3, 4].into_iter().enumerate() {
+        let name = format!("flow_rate_{t}s_per_s");
+        if k < covered {
+            let rate = read(&name).unwrap();
+            assert_eq!(rate, m(r, &name));
+            assert!(rate > 0.0, "{name} {rate}");
+        } else {
+            let err = read(&name).unwrap_err().to_string();
+            assert!(err.contains("did not measure response"), "{err}");
+        }
+    }
+    for spec in catalogue("hopper").unwrap() {
+        let known = spec.name.starts_with("flow_rate_") && spec.name.ends_with("s_per_s");
+        assert!(known || read(spec.name).is_ok(), "{}", spec.name);
+    }
+    let err = read("upper_angle_deg").unwrap_err().to_string();
+    assert!(
+        err.contains("its responses are: alpha_deg, theta_deg, flow_rate_1s_per_s"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -140,7 +181,7 @@ fn particles_are_conserved_and_the_discharge_never_decreases() {
 /// Every sample: in the hopper + below it + removed = inserted; the discharge
 /// count starts at 0, never falls, and ends at the reported total.
 fn check_bookkeeping(r: &RunResult) {
-    let inserted = m(r, "particles_inserted");
+    let inserted = m(r, "particles");
     let (hopper, below, removed) = (
         trace(r, "in_hopper"),
         trace(r, "below_hopper"),

@@ -11,6 +11,7 @@
 use repose::dem::simulation::Simulation;
 use repose::manifest::scene::{Scene, StaticPileScene};
 use repose::manifest::{read_experiment, Experiment};
+use repose::scenes::responses::{catalogue, response};
 use repose::scenes::run_experiment;
 use repose::scenes::static_pile::{rig, Census, VIEWS, VIEW_AZIMUTHS_DEG};
 use repose::store::RunResult;
@@ -103,11 +104,36 @@ fn smoke_pile_is_healthy_and_plausible() {
 /// Every particle of `particle_count` is generated, and every generated one is
 /// accounted for: in the funnel, on the disk, falling off it, or removed.
 #[test]
+fn the_named_responses_are_the_height_and_profile_angles() {
+    let r = smoke_result();
+    let names: Vec<_> = catalogue("static_pile")
+        .unwrap()
+        .iter()
+        .map(|s| s.name)
+        .collect();
+    assert_eq!(names, ["angle_2h_d_deg", "angle_profile_deg"]);
+    let height = response(r, "static_pile", "angle_2h_d_deg").unwrap();
+    assert_eq!(height, m(r, "height_angle_deg"));
+    assert_eq!(r.headline_angle_deg, Some(height));
+    assert_eq!(
+        response(r, "static_pile", "angle_profile_deg").unwrap(),
+        m(r, "profile_angle_deg")
+    );
+    let err = response(r, "static_pile", "height_angle_deg")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("its responses are: angle_2h_d_deg, angle_profile_deg"),
+        "{err}"
+    );
+}
+
+#[test]
 fn every_particle_is_generated_and_accounted_for() {
     let exp = smoke();
     let r = smoke_result();
     let count = scene(&exp).particle_count as f64;
-    assert_eq!(m(r, "particles_generated"), count);
+    assert_eq!(m(r, "particles"), count);
     assert_eq!(m(r, "particles_not_generated"), 0.0);
     let accounted = m(r, "funnel_retained")
         + m(r, "particles_on_disk")

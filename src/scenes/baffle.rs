@@ -67,12 +67,12 @@
 //! # Results
 //!
 //! `static_angle_deg` (the headline), `static_angle_r2`, `static_angle_points`,
-//! `static_angle_low_r2`, `slope_height_m`; the books (`placed_*`, `in_box_*`,
-//! `outside_*`, `removed_*` as particle counts and masses in kg,
-//! `discharged_mass_fraction`); the protocol (`fill_column_height_m`,
-//! `bed_height_m`, `lift_start_s`,
-//! `lift_end_s`, `settled_before_lift`, `settled_after_lift`, `end_s`, `steps`,
-//! `dt_s`). Traces every `sample_interval_s`: the engine's (kinetic energy,
+//! `static_angle_low_r2`, `slope_height_m`; the books (`particles` placed,
+//! `placed_mass_kg`, `in_box_*`, `outside_*`, `removed_*` as particle counts
+//! and masses in kg, `discharged_mass_fraction`); the protocol
+//! (`fill_column_height_m`, `bed_height_m`, `lift_start_s`, `lift_end_s`,
+//! `settled` before the lift, `settled_after_lift`, `end_time_s`, `steps`,
+//! `dt_s`; the shared keys are [`super::skeleton`]'s). Traces every `sample_interval_s`: the engine's (kinetic energy,
 //! contacts, wall contacts, largest overlap), `angle` (whenever the slope is
 //! measurable), `in_box_mass`, `removed_mass` and `baffle_lower_edge`. The
 //! MCAP log holds a frame per sample, the angle samples and the discharged
@@ -90,19 +90,17 @@
 //! is still, so the rest phase often runs its full `settle_time_s`;
 //! `settled_after_lift` says which.
 
-use super::physics;
 use super::physics::STANDARD_GRAVITY_M_S2;
-use super::protocol::{
-    finish_result, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
-};
+use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::skeleton::{finish, open_log, Lab};
 use super::SceneError;
 use crate::dem::domain::Domain;
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::particles::Particles;
-use crate::dem::simulation::{Simulation, SimulationSetup, World};
+use crate::dem::simulation::{Simulation, World};
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::{Motion, Wall};
-use crate::log::{AngleSample, LogError, LogOptions, RunLog, Trace};
+use crate::log::{AngleSample, LogError, RunLog, Trace};
 use crate::manifest::scene::BaffleLiftScene;
 use crate::manifest::Experiment;
 use crate::measure::baffle::{baffle_slope_angle, BaffleSpec, SlopeAngle};
@@ -372,39 +370,19 @@ pub fn run(
     scene: &BaffleLiftScene,
     log: Option<&Path>,
 ) -> Result<RunResult, SceneError> {
-    let contact = physics::contact_setup(
-        exp,
-        &[scene.box_material.as_str(), scene.floor_material.as_str()],
-    );
-    let rho = exp.material.particle.density_kg_m3;
-    let sizes = physics::size_distribution(exp);
-    let (d_min, d_mean) = physics::diameter_bounds(&sizes).map_err(BaffleError::from)?;
-    let plan = physics::time_step(exp, &contact, 0.5 * d_min)?;
+    let walls = [scene.box_material.as_str(), scene.floor_material.as_str()];
+    let lab = Lab::new(exp, &walls, |e| BaffleError::from(e).into())?;
+    let d_mean = lab.d_mean_m;
     let every = scene.sample_interval();
 
-    let (world, geo, placed) = build_world(exp, scene, &sizes, d_mean)?;
-    let setup = SimulationSetup {
-        contact,
-        density_kg_m3: rho,
-        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -STANDARD_GRAVITY_M_S2)),
-        dt_s: plan.dt_s,
-        skin_m: 0.1 * d_mean,
-        health: HealthLimits::default(),
-    };
-    let mut sim = Simulation::new(world, &setup).map_err(BaffleError::from)?;
+    let (world, geo, placed) = build_world(exp, scene, &lab.sizes, d_mean)?;
+    let mut sim = lab
+        .simulation(world, HealthLimits::default())
+        .map_err(BaffleError::from)?;
 
-    let mut log_file = match log {
-        Some(path) => Some(RunLog::create(
-            path,
-            exp,
-            LogOptions {
-                // Free-fall speed over the box height: the fastest outflow.
-                speed_scale_m_s: (2.0 * STANDARD_GRAVITY_M_S2 * scene.box_height_m).sqrt(),
-                ..LogOptions::default()
-            },
-        )?),
-        None => None,
-    };
+    // Free-fall speed over the box height: the fastest outflow.
+    let speed_scale_m_s = (2.0 * STANDARD_GRAVITY_M_S2 * scene.box_height_m).sqrt();
+    let mut log_file = open_log(log, exp, speed_scale_m_s)?;
     let mut sampler = BaffleSampler {
         traces: Traces::default(),
         geo,
@@ -413,12 +391,8 @@ pub fn run(
         removed: Tally::default(),
     };
     let mut progress = Progress::on_stderr();
-    let at_rest = SettleCriterion::at_rest(
-        &exp.at_rest,
-        rho * std::f64::consts::PI / 6.0 * d_mean.powi(3),
-        d_mean,
-    );
-    let dt = plan.dt_s;
+    let at_rest = SettleCriterion::at_rest(&exp.at_rest, lab.mean_particle_mass_kg(), d_mean);
+    let dt = lab.plan.dt_s;
 
     let settle = Phase {
         name: "settle",
@@ -463,23 +437,25 @@ pub fn run(
     let slope = sampler.slope(&w.particles).map_err(BaffleError::from)?;
     let (inside, outside) = census(&w.particles, &geo);
     let removed = sampler.removed;
-    let (steps, end) = (w.step, w.time_s);
     let traces = std::mem::take(&mut sampler.traces);
     drop(sampler);
 
-    let mut result =
-        finish_result(exp, &sim, &plan, traces, log_file).map_err(BaffleError::from)?;
+    let mut result = finish(
+        exp,
+        &sim,
+        &lab.plan,
+        traces,
+        log_file,
+        placed.count,
+        settled.settled,
+    )
+    .map_err(BaffleError::from)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };
     let flag = |b: bool| f64::from(u8::from(b));
-    put("dt_s", dt);
-    put("steps", steps as f64);
-    put("end_s", end);
-    put("particles", placed.count as f64);
     put("placed_mass_kg", placed.mass_kg);
     put("fill_column_height_m", geo.column_m);
-    put("settled_before_lift", flag(settled.settled));
     put("bed_height_m", bed_height);
     put("lift_start_s", lift_start);
     put("lift_end_s", lifted.end_s);

@@ -21,17 +21,16 @@
 //! over the second half of the rotation (the first half is spin-up and is
 //! not averaged); the static angle is measured at the end of standing.
 
-use super::protocol::{
-    finish_result, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
-};
-use super::{physics, SceneError};
+use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::skeleton::{finish, open_log, Lab};
+use super::SceneError;
 use crate::dem::domain::Domain;
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::particles::Particles;
-use crate::dem::simulation::{Simulation, SimulationSetup, World};
+use crate::dem::simulation::{Simulation, World};
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::{Motion, Wall};
-use crate::log::{LogOptions, RunLog};
+use crate::log::RunLog;
 use crate::manifest::scene::DrumScene;
 use crate::manifest::Experiment;
 use crate::measure::drum::{drum_surface_angle, DrumSpec};
@@ -128,38 +127,21 @@ pub fn run(
     scene: &DrumScene,
     log: Option<&Path>,
 ) -> Result<RunResult, SceneError> {
-    let contact = physics::contact_setup(exp, &[scene.wall_material.as_str()]);
-    let rho = exp.material.particle.density_kg_m3;
-    let sizes = physics::size_distribution(exp);
-    let (d_min, d_mean) =
-        physics::diameter_bounds(&sizes).map_err(|e| SceneError::Drum(e.into()))?;
-    let plan = physics::time_step(exp, &contact, 0.5 * d_min)?;
+    let lab = Lab::new(exp, &[scene.wall_material.as_str()], |e| {
+        SceneError::Drum(e.into())
+    })?;
+    let d_mean = lab.d_mean_m;
     let r_drum = 0.5 * scene.inner_diameter_m;
     let length = scene.periodic_slice_m.unwrap_or(scene.length_m);
 
-    let world = build_world(exp, scene, &sizes, d_mean).map_err(SceneError::Drum)?;
+    let world = build_world(exp, scene, &lab.sizes, d_mean).map_err(SceneError::Drum)?;
     let particle_count = world.particles.len();
-    let setup = SimulationSetup {
-        contact,
-        density_kg_m3: rho,
-        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -physics::STANDARD_GRAVITY_M_S2)),
-        dt_s: plan.dt_s,
-        skin_m: 0.1 * d_mean,
-        health: HealthLimits::default(),
-    };
-    let mut sim = Simulation::new(world, &setup).map_err(|e| SceneError::Drum(e.into()))?;
+    let mut sim = lab
+        .simulation(world, HealthLimits::default())
+        .map_err(|e| SceneError::Drum(e.into()))?;
 
-    let mut log_file = match log {
-        Some(path) => Some(RunLog::create(
-            path,
-            exp,
-            LogOptions {
-                speed_scale_m_s: r_drum * scene.rpm * 2.0 * PI / 60.0,
-                ..LogOptions::default()
-            },
-        )?),
-        None => None,
-    };
+    let speed_scale_m_s = r_drum * scene.rpm * 2.0 * PI / 60.0;
+    let mut log_file = open_log(log, exp, speed_scale_m_s)?;
     let mut sampler = DrumSampler {
         traces: Traces::default(),
         spec: DrumSpec::new([0.0, 0.0], r_drum, d_mean),
@@ -168,13 +150,13 @@ pub fn run(
         dynamic: Vec::new(),
     };
     let mut progress = Progress::on_stderr();
-    let mass = rho * PI / 6.0 * d_mean.powi(3);
+    let mass = lab.mean_particle_mass_kg();
     let settle = Phase {
         name: "settle",
         max_duration_s: scene.settle_max_s,
         settle: Some(SettleCriterion::at_rest(&exp.at_rest, mass, d_mean)),
     };
-    let dt = plan.dt_s;
+    let dt = lab.plan.dt_s;
     let every = scene.sample_interval_s;
     let settled = run_phase(&mut sim, &settle, dt, every, &mut sampler, &mut progress)?;
 
@@ -209,23 +191,23 @@ pub fn run(
     let last = drum_surface_angle(&w.particles.position, &w.particles.radius, &sampler.spec)
         .map_err(|e| SceneError::Drum(e.into()))?;
     let dynamic = mean_std(&sampler.dynamic).ok();
-    let steps = w.step;
     let traces = std::mem::take(&mut sampler.traces);
     drop(sampler);
 
-    let mut result = finish_result(exp, &sim, &plan, traces, log_file)?;
+    let mut result = finish(
+        exp,
+        &sim,
+        &lab.plan,
+        traces,
+        log_file,
+        particle_count,
+        settled.settled,
+    )?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };
-    put("particles", particle_count as f64);
-    put("dt_s", dt);
-    put("steps", steps as f64);
     put("simulated_length_m", length);
     put("rotation_start_s", start);
-    put(
-        "settled_before_rotation",
-        f64::from(u8::from(settled.settled)),
-    );
     put("static_angle_deg", last.angle_deg);
     put("static_angle_r2", last.r2);
     put("static_angle_points", last.points as f64);

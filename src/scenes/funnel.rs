@@ -97,16 +97,15 @@ pub mod fill;
 pub mod geometry;
 
 use self::geometry::FunnelGeometry;
-use super::protocol::{
-    finish_result, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
-};
+use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::skeleton::{finish, open_log, Lab};
 use super::{physics, SceneError};
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::material::effective_youngs_modulus;
 use crate::dem::particles::Particles;
-use crate::dem::simulation::{ContactSetup, Simulation, SimulationSetup, World};
+use crate::dem::simulation::{ContactSetup, Simulation, World};
 use crate::dem::vec3::Vec3;
-use crate::log::{AngleSample, LogError, LogOptions, RunLog, Trace};
+use crate::log::{AngleSample, LogError, RunLog, Trace};
 use crate::manifest::scene::FunnelPileScene;
 use crate::manifest::Experiment;
 pub use crate::measure::pile::VIEW_AZIMUTHS_DEG;
@@ -272,17 +271,7 @@ pub fn run(
     scene: &FunnelPileScene,
     log: Option<&Path>,
 ) -> Result<RunResult, SceneError> {
-    let mut log_file = match log {
-        Some(path) => Some(RunLog::create(
-            path,
-            exp,
-            LogOptions {
-                speed_scale_m_s: speed_scale(exp, scene)?,
-                ..LogOptions::default()
-            },
-        )?),
-        None => None,
-    };
+    let mut log_file = open_log(log, exp, speed_scale(exp, scene)?)?;
     let FunnelOutcome {
         mut result,
         world,
@@ -356,18 +345,13 @@ pub fn simulate(
     scene: &FunnelPileScene,
     log: Option<&mut RunLog>,
 ) -> Result<FunnelOutcome, SceneError> {
-    let contact = physics::contact_setup(
-        exp,
-        &[
-            scene.funnel_material.as_str(),
-            scene.platform_material.as_str(),
-        ],
-    );
-    let rho = exp.material.particle.density_kg_m3;
-    let sizes = physics::size_distribution(exp);
-    let (d_min, d_mean) = physics::diameter_bounds(&sizes).map_err(FunnelError::from)?;
-    let plan = physics::time_step(exp, &contact, 0.5 * d_min)?;
-    let dt = plan.dt_s;
+    let walls = [
+        scene.funnel_material.as_str(),
+        scene.platform_material.as_str(),
+    ];
+    let lab = Lab::new(exp, &walls, |e| FunnelError::from(e).into())?;
+    let (rho, d_mean, sizes) = (lab.density_kg_m3, lab.d_mean_m, &lab.sizes);
+    let dt = lab.plan.dt_s;
     let geom = FunnelGeometry::new(scene, d_mean);
     let brush_start = scene.fill_time_s + scene.standing_time_s;
     let brush_end = scene.total_time_s - scene.settle_time_s;
@@ -376,7 +360,7 @@ pub fn simulate(
         |h| geom.charge_region(h),
         scene.fill_height(),
         scene.funnel_height_m,
-        &sizes,
+        sizes,
         scene.fill_fraction,
         exp.seeds.packing_seed,
         d_mean,
@@ -397,18 +381,10 @@ pub fn simulate(
     }
     let health = HealthLimits::default();
     let domain = geom
-        .domain(spring_out_speed(&contact, rho, &health))
+        .domain(spring_out_speed(&lab.contact, rho, &health))
         .map_err(FunnelError::from)?;
     let world = World::new(particles, walls, domain);
-    let setup = SimulationSetup {
-        contact,
-        density_kg_m3: rho,
-        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -geometry::G_M_S2)),
-        dt_s: dt,
-        skin_m: 0.1 * d_mean,
-        health,
-    };
-    let mut sim = Simulation::new(world, &setup).map_err(FunnelError::from)?;
+    let mut sim = lab.simulation(world, health).map_err(FunnelError::from)?;
 
     // Fill: layer k is released at k / n of the generation time.
     let n = charge.layers.len();
@@ -454,7 +430,7 @@ pub fn simulate(
         max_duration_s: scene.settle_time_s,
         settle: Some(SettleCriterion::at_rest(
             &exp.at_rest,
-            rho * std::f64::consts::PI / 6.0 * d_mean.powi(3),
+            lab.mean_particle_mass_kg(),
             d_mean,
         )),
     };
@@ -471,18 +447,13 @@ pub fn simulate(
         .count();
     let traces = std::mem::take(&mut sampler.traces);
     // `run` finishes the log, after measuring the pile.
-    let mut result = finish_result(exp, &sim, &plan, traces, None)?;
+    let mut result = finish(exp, &sim, &lab.plan, traces, None, charged, settled.settled)?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };
-    put("dt_s", dt);
-    put("steps", w.step as f64);
-    put("end_time_s", w.time_s);
-    put("settled", f64::from(u8::from(settled.settled)));
     put("brush_blades", f64::from(scene.brush_blade_count()));
     put("brush_start_s", brush_start);
     put("brush_end_s", brush_end);
-    put("particles_charged", charged as f64);
     put("charge_height_m", charge.height_m);
     put("charge_lattice_spacing", charge.spacing);
     put("charge_sites_at_brush", charge.dropped_at_walls as f64);

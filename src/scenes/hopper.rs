@@ -47,7 +47,7 @@
 //! trip the domain-exit health check; the box leaves room for the fastest
 //! particle to travel for one sample interval. They stay counted as
 //! discharged (`removed_off_plate`). Every sample satisfies
-//! in_hopper + below_hopper + removed = particles_inserted (traces).
+//! in_hopper + below_hopper + removed = particles (traces).
 //!
 //! Measurements (yan2015 §3.2; `angles` and [`crate::measure`]):
 //! - upper angle α (the crater left in the hopper) and bottom angle θ (the
@@ -96,14 +96,15 @@ pub use angles::R2_FLOOR;
 
 use self::geometry::{Geometry, LID_WALL};
 use self::sampler::DischargeSampler;
-use super::physics::{self, STANDARD_GRAVITY_M_S2 as G_M_S2};
-use super::protocol::{finish_result, run_phase, Phase, Progress, SettleCriterion};
+use super::physics::STANDARD_GRAVITY_M_S2 as G_M_S2;
+use super::protocol::{run_phase, Phase, Progress, SettleCriterion};
+use super::skeleton::{finish, open_log, Lab};
 use super::SceneError;
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::particles::Particles;
-use crate::dem::simulation::{Simulation, SimulationSetup, World};
+use crate::dem::simulation::World;
 use crate::dem::vec3::Vec3;
-use crate::log::{LogError, LogOptions, RunLog};
+use crate::log::LogError;
 use crate::manifest::scene::HopperScene;
 use crate::manifest::Experiment;
 use crate::measure::flow::{flow_rates, interval_rate, DischargeSample};
@@ -144,9 +145,6 @@ pub enum HopperError {
     /// The particles could not be placed.
     #[error("hopper pour: {0}")]
     Packing(#[from] PackingError),
-    /// No stable time step.
-    #[error("time_step: {0}")]
-    TimeStep(#[from] crate::dem::timestep::TimeStepError),
     /// The engine refused the setup.
     #[error("hopper: {0}")]
     Setup(#[from] crate::dem::simulation::SetupError),
@@ -190,61 +188,40 @@ pub fn run(
     scene: &HopperScene,
     log: Option<&Path>,
 ) -> Result<RunResult, SceneError> {
-    run_hopper(exp, scene, log).map_err(SceneError::Hopper)
+    let walls = [
+        scene.hopper_material.as_str(),
+        scene.plate_material.as_str(),
+    ];
+    let lab = Lab::new(exp, &walls, |e| SceneError::Hopper(e.into()))?;
+    run_hopper(exp, scene, &lab, log).map_err(SceneError::Hopper)
 }
 
 fn run_hopper(
     exp: &Experiment,
     scene: &HopperScene,
+    lab: &Lab,
     log: Option<&Path>,
 ) -> Result<RunResult, HopperError> {
-    let contact = physics::contact_setup(
-        exp,
-        &[
-            scene.hopper_material.as_str(),
-            scene.plate_material.as_str(),
-        ],
-    );
-    let rho = exp.material.particle.density_kg_m3;
-    let sizes = physics::size_distribution(exp);
-    let (d_min, d_mean) = physics::diameter_bounds(&sizes)?;
-    let plan = physics::time_step(exp, &contact, 0.5 * d_min)?;
+    let (d_min, d_mean) = (lab.d_min_m, lab.d_mean_m);
     let geo = Geometry::new(scene, d_mean, d_min);
     let every = scene.sample_interval_s.unwrap_or(DEFAULT_SAMPLE_INTERVAL_S);
     let fill_height = scene.fill_height_m.unwrap_or(scene.height_m);
 
-    let (placed, top_z) = pour(exp, scene, &geo, &sizes, fill_height)?;
+    let (placed, top_z) = pour(exp, scene, &geo, &lab.sizes, fill_height)?;
     let mut particles = Particles::default();
     for p in &placed.particles {
-        particles.push(p, rho);
+        particles.push(p, lab.density_kg_m3);
     }
     let inserted = particles.len();
     let world = World::new(particles, geo.walls()?, geo.domain(top_z, every)?);
-    let setup = SimulationSetup {
-        contact,
-        density_kg_m3: rho,
-        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -G_M_S2)),
-        dt_s: plan.dt_s,
-        skin_m: 0.1 * d_mean,
-        health: HealthLimits::default(),
-    };
-    let mut sim = Simulation::new(world, &setup)?;
+    let mut sim = lab.simulation(world, HealthLimits::default())?;
 
-    let mut log_file = match log {
-        Some(path) => Some(RunLog::create(
-            path,
-            exp,
-            LogOptions {
-                speed_scale_m_s: (2.0 * G_M_S2 * scene.drop_height_m).sqrt(),
-                ..LogOptions::default()
-            },
-        )?),
-        None => None,
-    };
+    let speed_scale_m_s = (2.0 * G_M_S2 * scene.drop_height_m).sqrt();
+    let mut log_file = open_log(log, exp, speed_scale_m_s)?;
     let mut sampler = DischargeSampler::new(geo, scene.no_discharge_stop_s, log_file.as_mut());
     let mut progress = Progress::on_stderr();
-    let mass = rho * PI / 6.0 * d_mean.powi(3);
-    let dt = plan.dt_s;
+    let mass = lab.mean_particle_mass_kg();
+    let dt = lab.plan.dt_s;
     let settle = Phase {
         name: "settle",
         max_duration_s: scene.settle_max_s.unwrap_or(DEFAULT_SETTLE_MAX_S),
@@ -277,25 +254,25 @@ fn run_hopper(
         }
     })?;
     let census = sampler.census(&sim);
-    let steps = w.step;
     let removed = sampler.removed();
     let last_discharge = sampler.last_discharge_s();
     let samples = sampler.discharge().to_vec();
     let traces = sampler.into_traces();
 
-    let mut result = finish_result(exp, &sim, &plan, traces, log_file)?;
+    let mut result = finish(
+        exp,
+        &sim,
+        &lab.plan,
+        traces,
+        log_file,
+        inserted,
+        settled.settled,
+    )?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };
-    put("particles_inserted", inserted as f64);
     put("spilled_during_fill", spilled as f64);
-    put("dt_s", dt);
-    put("steps", steps as f64);
     put("lid_open_s", t_open);
-    put(
-        "settled_before_opening",
-        f64::from(u8::from(settled.settled)),
-    );
     if let Some(phi) = solid_fraction {
         put("settled_solid_fraction", phi);
     }

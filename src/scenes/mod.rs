@@ -13,6 +13,8 @@ pub mod pair;
 pub mod physics;
 pub mod plan;
 pub mod protocol;
+pub mod responses;
+pub mod skeleton;
 pub mod static_pile;
 
 use std::path::Path;

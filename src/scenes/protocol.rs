@@ -7,13 +7,10 @@
 //! Everything that reaches results depends on simulated time only; wall-clock
 //! time is used for the progress line and nothing else.
 
-use super::physics;
 use crate::dem::health::HealthError;
 use crate::dem::simulation::Simulation;
-use crate::dem::timestep::TimeStepPlan;
-use crate::log::{LogError, RunLog};
-use crate::manifest::{AtRest, Experiment};
-use crate::store::{RunResult, Trace};
+use crate::manifest::AtRest;
+use crate::store::Trace;
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -187,33 +184,6 @@ impl Traces {
     pub fn into_map(self) -> BTreeMap<String, Trace> {
         self.series
     }
-}
-
-/// The end every scene shares once its simulation `sim` has succeeded:
-/// closes the run's MCAP log, if it has one (the file appears only now,
-/// complete), and starts the result with the experiment, the kernel that ran,
-/// the sampled traces and the warnings about the time step `plan` (contacts
-/// faster than it resolves, see [`physics::time_step_warnings`]); the scene
-/// then adds its measurements and its headline angle.
-///
-/// Why a helper: every scene ended with these same lines, copied; one place
-/// keeps the log and the result's common fields done the same way in all of
-/// them. A scene that finishes its log itself, later (funnel_pile, after
-/// measuring the pile), passes `None`.
-pub fn finish_result(
-    exp: &Experiment,
-    sim: &Simulation,
-    plan: &TimeStepPlan,
-    traces: Traces,
-    log: Option<RunLog>,
-) -> Result<RunResult, LogError> {
-    if let Some(log) = log {
-        log.finish()?;
-    }
-    let mut result = RunResult::new(exp, sim.kernel_name());
-    result.traces = traces.into_map();
-    result.warnings = physics::time_step_warnings(plan, sim.stats().max_approach_speed_m_s);
-    Ok(result)
 }
 
 /// Progress on stderr for long runs: phase, simulated time, wall time,

@@ -99,7 +99,7 @@
 //!
 //! # Results and traces
 //!
-//! Counts: `particles_generated`, `particles_not_generated`,
+//! Counts: `particles` (generated), `particles_not_generated`,
 //! `funnel_retained`, `particles_on_disk`, `particles_below_disk` (falling off
 //! the rim, removed at the next window) and `removed_off_disk` add up to
 //! `particle_count`. Traces (every `sample_interval_s` and at the end):
@@ -111,18 +111,19 @@
 //! discharged count at the same instants.
 
 use super::protocol::{
-    finish_result, mean_kinetic_energy_j, run_phase, Phase, Progress, Sampler, SettleCriterion,
-    Traces, STANDARD_GRAVITY_M_S2,
+    mean_kinetic_energy_j, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
+    STANDARD_GRAVITY_M_S2,
 };
+use super::skeleton::{finish, open_log, Lab};
 use super::{physics, SceneError};
 use crate::dem::domain::{Domain, DomainError};
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::particles::Particles;
-use crate::dem::simulation::{SetupError, Simulation, SimulationSetup, World};
+use crate::dem::simulation::{SetupError, Simulation, World};
 use crate::dem::timestep::TimeStepPlan;
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::{Wall, WallError};
-use crate::log::{AngleSample, LogError, LogOptions, RunLog, Trace};
+use crate::log::{AngleSample, LogError, RunLog, Trace};
 use crate::manifest::scene::StaticPileScene;
 use crate::manifest::Experiment;
 use crate::measure::pile::{height_diameter_angle, side_views, HeightAngle, PileSpec, SideViews};
@@ -391,41 +392,35 @@ pub struct Rig {
 
 /// Builds the rig of a `static_pile` experiment (see the module docs).
 pub fn rig(exp: &Experiment, scene: &StaticPileScene) -> Result<Rig, SceneError> {
-    let contact = physics::contact_setup(
-        exp,
-        &[scene.funnel_material.as_str(), scene.disk_material.as_str()],
-    );
-    let sizes = physics::size_distribution(exp);
     let fail = |e: StaticPileError| SceneError::StaticPile(e);
-    let (min_m, median_m) = physics::diameter_bounds(&sizes).map_err(|e| fail(e.into()))?;
-    let max_m = sizes.sampler().map_err(|e| fail(e.into()))?.max_diameter();
+    let walls = [scene.funnel_material.as_str(), scene.disk_material.as_str()];
+    let lab = Lab::new(exp, &walls, |e| fail(e.into()))?;
+    let max_m = lab
+        .sizes
+        .sampler()
+        .map_err(|e| fail(e.into()))?
+        .max_diameter();
     let diameters = Diameters {
-        min_m,
-        median_m,
+        min_m: lab.d_min_m,
+        median_m: lab.d_mean_m,
         max_m,
     };
-    let plan = physics::time_step(exp, &contact, 0.5 * min_m)?;
     let geometry = Geometry::new(scene);
     let removal = Removal::new(&geometry, max_m);
     let world =
         empty_world(&geometry, &removal, max_m, scene.insertion_interval_s).map_err(fail)?;
-    let setup = SimulationSetup {
-        contact,
-        density_kg_m3: exp.material.particle.density_kg_m3,
-        gravity_m_s2: Some(Vec3::new(0.0, 0.0, -STANDARD_GRAVITY_M_S2)),
-        dt_s: plan.dt_s,
-        skin_m: 0.1 * median_m,
-        health: HealthLimits::default(),
-    };
-    let sim = Simulation::new(world, &setup).map_err(|e| fail(e.into()))?;
-    let feeder = Feeder::new(exp, scene, &geometry, median_m).map_err(|e| fail(e.into()))?;
+    let sim = lab
+        .simulation(world, HealthLimits::default())
+        .map_err(|e| fail(e.into()))?;
+    let feeder =
+        Feeder::new(exp, scene, &geometry, diameters.median_m).map_err(|e| fail(e.into()))?;
     Ok(Rig {
         sim,
         feeder,
         geometry,
         removal,
         diameters,
-        plan,
+        plan: lab.plan,
     })
 }
 
@@ -663,17 +658,8 @@ pub fn run(
         plan,
     } = rig(exp, scene)?;
     let dt_s = plan.dt_s;
-    let mut log_file = match log {
-        Some(path) => Some(RunLog::create(
-            path,
-            exp,
-            LogOptions {
-                speed_scale_m_s: (2.0 * STANDARD_GRAVITY_M_S2 * geometry.top_z_m).sqrt(),
-                ..LogOptions::default()
-            },
-        )?),
-        None => None,
-    };
+    let speed_scale_m_s = (2.0 * STANDARD_GRAVITY_M_S2 * geometry.top_z_m).sqrt();
+    let mut log_file = open_log(log, exp, speed_scale_m_s)?;
     let d50 = diameters.median_m;
     let mut sampler = PileSampler {
         feeder,
@@ -726,16 +712,22 @@ pub fn run(
         },
     )?;
     let rest_ratio = mean_kinetic_energy_j(&sim) / (mass * STANDARD_GRAVITY_M_S2 * d50);
-    let (steps, end_s) = (w.step, w.time_s);
     let traces = std::mem::take(&mut sampler.traces);
     let removed = sampler.removed;
     drop(sampler);
 
-    let mut result = finish_result(exp, &sim, &plan, traces, log_file)?;
+    let mut result = finish(
+        exp,
+        &sim,
+        &plan,
+        traces,
+        log_file,
+        generated as usize,
+        settled.settled,
+    )?;
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };
-    put("particles_generated", generated as f64);
     put(
         "particles_not_generated",
         (scene.particle_count - generated) as f64,
@@ -744,11 +736,7 @@ pub fn run(
     put("funnel_retained", census.in_funnel as f64);
     put("particles_on_disk", census.on_disk as f64);
     put("particles_below_disk", census.below_disk as f64);
-    put("dt_s", dt_s);
-    put("steps", steps as f64);
     put("pour_end_s", pour_end_s);
-    put("end_s", end_s);
-    put("settled", f64::from(u8::from(settled.settled)));
     put("final_kinetic_energy_ratio", rest_ratio);
     let profile = &pile.profile;
     put("profile_angle_deg", profile.mean_deg());

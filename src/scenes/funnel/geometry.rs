@@ -10,8 +10,8 @@ use crate::dem::walls::{rpm_to_rad_s, Motion, Wall, WallError};
 use crate::manifest::scene::FunnelPileScene;
 use crate::packing::region::Region;
 
-/// Gravitational acceleration, m/s² (−z).
-pub const G_M_S2: f64 = 9.81;
+/// Gravitational acceleration, m/s² (−z): the one every lab scene uses.
+pub const G_M_S2: f64 = crate::scenes::physics::STANDARD_GRAVITY_M_S2;
 /// Particles whose centre sinks this many mean diameters below the platform's
 /// top face have fallen off it and are removed.
 pub const REMOVAL_DEPTH_DIAMETERS: f64 = 2.0;
