@@ -19,6 +19,7 @@ use crate::calibrate::train::{train_study, train_table, TableSpec, TrainOptions,
 use crate::calibrate::verify::verify as run_verify;
 use crate::calibrate::{CalibrateError, StudyDir};
 use crate::doe::diagnostics::Diagnostics;
+use crate::exec::LocalPool;
 use crate::log::{inspect, InspectError};
 use crate::manifest::{
     read_document, read_experiment, ContentId, Document, DocumentKind, Experiment, ManifestError,
@@ -32,7 +33,6 @@ use crate::store::{
     write_atomic, CacheOutcome, Depth, InputRef, Lineage, RunDir, RunError, RunState, RunStatus,
     RunSummary, Store, StoreError,
 };
-use crate::exec::LocalPool;
 use crate::study::spec::{is_design_study, read_design_study, DesignStudy};
 use crate::study::{self, StudyError};
 use crate::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
@@ -1117,9 +1117,13 @@ pub fn rsm(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, store) = open_design_study(store_root, study_path)?;
-    let report = study::run_rsm(store_root, &study, &store, pool, &|e: &Experiment, dir: &RunDir| {
-        run_experiment(e, Some(&dir.mcap_path()))
-    })?;
+    let report = study::run_rsm(
+        store_root,
+        &study,
+        &store,
+        pool,
+        &|e: &Experiment, dir: &RunDir| run_experiment(e, Some(&dir.mcap_path())),
+    )?;
     if json {
         print_json(&report, out)?;
     } else {
@@ -1130,14 +1134,23 @@ pub fn rsm(
             writeln!(out)?;
             write!(out, "{}", study::verify::markdown(&study, v))?;
         }
-        writeln!(out, "
-written: {}", report.rsm.dir.parent().unwrap_or(&report.rsm.dir).display())?;
+        writeln!(
+            out,
+            "
+written: {}",
+            report.rsm.dir.parent().unwrap_or(&report.rsm.dir).display()
+        )?;
     }
     Ok(())
 }
 
 /// `repose rsm --table FILE`: the response-surface analysis of any CSV table.
-pub fn rsm_table(path: &Path, spec: &study::rsm::TableSpec, json: bool, out: &mut dyn Write) -> Result<(), CommandError> {
+pub fn rsm_table(
+    path: &Path,
+    spec: &study::rsm::TableSpec,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
     let analysis = study::rsm::analyse_table(path, spec)?;
     if json {
         print_json(&analysis, out)
@@ -1156,9 +1169,13 @@ pub fn screen(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, store) = open_design_study(store_root, study_path)?;
-    let outcome = study::run_screen(store_root, &study, &store, pool, &|e: &Experiment, dir: &RunDir| {
-        run_experiment(e, Some(&dir.mcap_path()))
-    })?;
+    let outcome = study::run_screen(
+        store_root,
+        &study,
+        &store,
+        pool,
+        &|e: &Experiment, dir: &RunDir| run_experiment(e, Some(&dir.mcap_path())),
+    )?;
     if json {
         print_json(&outcome, out)
     } else {

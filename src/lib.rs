@@ -34,6 +34,7 @@ pub mod commands;
 pub mod dem;
 pub mod doe;
 pub mod errors;
+pub mod exec;
 #[cfg(target_os = "linux")]
 pub mod huge_pages;
 pub mod log;
@@ -42,6 +43,5 @@ pub mod measure;
 pub mod packing;
 pub mod scenes;
 pub mod store;
-pub mod exec;
 pub mod study;
 pub mod tradeoff;

@@ -359,16 +359,26 @@ impl RsmArgs {
             for spec in &self.ranges {
                 let parsed = spec.split_once('=').and_then(|(name, range)| {
                     let (lo, hi) = range.split_once(':')?;
-                    Some((name.to_string(), lo.trim().parse::<f64>().ok()?, hi.trim().parse::<f64>().ok()?))
+                    Some((
+                        name.to_string(),
+                        lo.trim().parse::<f64>().ok()?,
+                        hi.trim().parse::<f64>().ok()?,
+                    ))
                 });
                 let Some((name, low, high)) = parsed.filter(|(_, lo, hi)| lo < hi) else {
-                    return Err(format!("--ranges `{spec}`: expected NAME=LOW:HIGH with LOW < HIGH"));
+                    return Err(format!(
+                        "--ranges `{spec}`: expected NAME=LOW:HIGH with LOW < HIGH"
+                    ));
                 };
                 by_name.insert(name, repose::doe::Range { low, high });
             }
             let mut ranges = Vec::new();
             for f in &self.factors {
-                ranges.push(by_name.remove(f).ok_or_else(|| format!("--ranges: no range for factor `{f}`"))?);
+                ranges.push(
+                    by_name
+                        .remove(f)
+                        .ok_or_else(|| format!("--ranges: no range for factor `{f}`"))?,
+                );
             }
             if let Some(extra) = by_name.keys().next() {
                 return Err(format!("--ranges: `{extra}` is not among --factors"));

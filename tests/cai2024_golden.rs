@@ -93,13 +93,22 @@ fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
     )
     .unwrap_or_else(|e| panic!("screen failed: {e}"));
     let screen_md = String::from_utf8(out).unwrap();
-    assert!(screen_md.contains("one-way ANOVA") || screen_md.contains("| F |"), "{screen_md}");
+    assert!(
+        screen_md.contains("one-way ANOVA") || screen_md.contains("| F |"),
+        "{screen_md}"
+    );
 
     let dir = study_dir(&two);
     let tables = [
         ("responses.csv", dir.join("rsm/responses.csv")),
-        ("anova_static.csv", dir.join("rsm/static_angle_deg/anova.csv")),
-        ("anova_dynamic.csv", dir.join("rsm/dynamic_angle_deg/anova.csv")),
+        (
+            "anova_static.csv",
+            dir.join("rsm/static_angle_deg/anova.csv"),
+        ),
+        (
+            "anova_dynamic.csv",
+            dir.join("rsm/dynamic_angle_deg/anova.csv"),
+        ),
         ("optimum.csv", dir.join("rsm/optimum.csv")),
         ("verification.csv", dir.join("verify/verification.csv")),
         ("screen_levels.csv", dir.join("screen/levels.csv")),

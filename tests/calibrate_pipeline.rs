@@ -17,10 +17,10 @@ use repose::calibrate::surrogate::TrainSettings;
 use repose::calibrate::train::{train_study, TrainOptions, DEFAULT_TRAIN_FRACTION};
 use repose::calibrate::verify::verify;
 use repose::calibrate::{CalibrateError, Stage, StudyDir};
+use repose::exec::LocalPool;
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::scenes::run_experiment;
 use repose::store::{Lineage, RunDir, RunResult, RunStatus, Store};
-use repose::exec::LocalPool;
 use serde_json::{json, Value};
 use sha2::{Digest, Sha256};
 

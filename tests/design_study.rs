@@ -45,7 +45,10 @@ fn a_response_the_scene_does_not_produce_is_rejected_with_the_allowed_names() {
         "/responses/static_angle_deg/response",
         Some(json!("flow_rate")),
     ));
-    assert!(e.contains("responses.static_angle_deg.response = \"flow_rate\""), "{e}");
+    assert!(
+        e.contains("responses.static_angle_deg.response = \"flow_rate\""),
+        "{e}"
+    );
     assert!(e.contains("angle_2h_d_deg"), "{e}");
 }
 
@@ -56,7 +59,10 @@ fn a_response_of_an_unknown_scene_is_rejected() {
         "/responses/static_angle_deg/scene",
         Some(json!("hopper")),
     ));
-    assert!(e.contains("responses.static_angle_deg.scene = \"hopper\""), "{e}");
+    assert!(
+        e.contains("responses.static_angle_deg.scene = \"hopper\""),
+        "{e}"
+    );
 }
 
 #[test]
@@ -95,12 +101,19 @@ fn box_behnken_with_two_factors_is_rejected() {
     v = common::edit(v, "/factors/D", None);
     v = common::edit(v, "/verification", None);
     let e = rejected(v);
-    assert!(e.contains("design.kind = \"box_behnken\": needs at least 3 factors; the study has 2"), "{e}");
+    assert!(
+        e.contains("design.kind = \"box_behnken\": needs at least 3 factors; the study has 2"),
+        "{e}"
+    );
 }
 
 #[test]
 fn zero_centre_points_are_rejected() {
-    let e = rejected(common::edit(smoke(), "/design/centre_points", Some(json!(0))));
+    let e = rejected(common::edit(
+        smoke(),
+        "/design/centre_points",
+        Some(json!(0)),
+    ));
     assert!(e.contains("design.centre_points = 0"), "{e}");
 }
 
@@ -133,11 +146,24 @@ fn a_target_that_is_not_a_response_or_outside_its_band_is_rejected() {
         Some(json!({"value": 1.0, "tolerance_fraction": 0.05, "low": 0.0, "high": 2.0})),
     );
     v = common::edit(v, "/targets/static_angle_deg/low", Some(json!(45.0)));
-    v = common::edit(v, "/targets/dynamic_angle_deg/tolerance_fraction", Some(json!(1.5)));
+    v = common::edit(
+        v,
+        "/targets/dynamic_angle_deg/tolerance_fraction",
+        Some(json!(1.5)),
+    );
     let e = rejected(v);
-    assert!(e.contains("targets.flow = (present): must name one of the study's responses"), "{e}");
-    assert!(e.contains("targets.static_angle_deg.value = 41.8 (low 45, high 55)"), "{e}");
-    assert!(e.contains("targets.dynamic_angle_deg.tolerance_fraction = 1.5"), "{e}");
+    assert!(
+        e.contains("targets.flow = (present): must name one of the study's responses"),
+        "{e}"
+    );
+    assert!(
+        e.contains("targets.static_angle_deg.value = 41.8 (low 45, high 55)"),
+        "{e}"
+    );
+    assert!(
+        e.contains("targets.dynamic_angle_deg.tolerance_fraction = 1.5"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -162,8 +188,14 @@ fn a_verification_point_must_give_every_factor_and_only_factors() {
         Some(json!({"A": 0.36, "B": 0.31, "C": 0.38, "E": 1.0})),
     );
     let e = rejected(v);
-    assert!(e.contains("verification.points.cai2024.D = (absent)"), "{e}");
-    assert!(e.contains("verification.points.cai2024.E = (present)"), "{e}");
+    assert!(
+        e.contains("verification.points.cai2024.D = (absent)"),
+        "{e}"
+    );
+    assert!(
+        e.contains("verification.points.cai2024.E = (present)"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -183,7 +215,10 @@ fn a_point_outside_a_fields_allowed_range_names_the_generated_field() {
         Some(json!({"address": "contact.particle_particle.restitution", "min": 1.5, "max": 2.5})),
     );
     let e = rejected(v);
-    assert!(e.contains("contact.particle_particle.restitution = 2"), "{e}");
+    assert!(
+        e.contains("contact.particle_particle.restitution = 2"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -213,7 +248,9 @@ fn addresses_write_the_generated_experiment() {
     }
     assert_eq!((e.seeds.sample_index, e.seeds.packing_seed), (7, 99));
     // `scene.rpm` does not exist in the static pile: skipped there.
-    let s = study.experiment("static", &[("scene.rpm", 30.0)], 7, 99).unwrap();
+    let s = study
+        .experiment("static", &[("scene.rpm", 30.0)], 7, 99)
+        .unwrap();
     assert_eq!(s, study.experiment("static", &[], 7, 99).unwrap());
 }
 

@@ -12,9 +12,9 @@ use repose::calibrate::batch::{batch, read_design};
 use repose::calibrate::curve::{csv_header, learning_curve};
 use repose::calibrate::sample::{sample, SampleSettings};
 use repose::calibrate::{parameter_names, CalibrateError, Stage, StudyDir};
+use repose::exec::LocalPool;
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
-use repose::exec::LocalPool;
 use serde_json::json;
 
 /// The smoke study with a 36-point design: 24 training rows, 12 validation.

@@ -13,11 +13,11 @@ use common::{edit, example, repose, stderr, stdout};
 use repose::calibrate::batch::batch;
 use repose::calibrate::sample::{sample, SampleSettings};
 use repose::calibrate::{CalibrateError, StudyDir};
+use repose::exec::{ExecError, LocalPool};
 use repose::manifest::{parse_experiment, parse_study, Experiment};
 use repose::scenes::plan::{plan, Limits, ENGINE_MAX_PARTICLES};
 use repose::scenes::run_experiment;
 use repose::store::{RunDir, RunResult, Store};
-use repose::exec::{ExecError, LocalPool};
 use serde_json::{json, Value};
 
 /// `base` (an example under experiments/) with the edits applied.

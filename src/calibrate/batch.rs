@@ -14,9 +14,9 @@ use serde_json::json;
 use super::sample::{design_path, experiment_path};
 use super::table::{parse_number, Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
+use crate::exec::{run_incomplete, LocalPool, Ran};
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
 use crate::store::{Depth, RunDir, RunResult, RunState, RunStatus, Store};
-use crate::exec::{run_incomplete, LocalPool, Ran};
 
 /// One row of design.csv.
 #[derive(Debug, Clone, PartialEq)]

@@ -28,9 +28,9 @@ use serde_json::json;
 
 use super::table::{Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
+use crate::exec::{run_incomplete, LocalPool, Ran};
 use crate::manifest::{ContentId, Experiment, Study};
 use crate::store::{RunDir, RunResult, Store};
-use crate::exec::{run_incomplete, LocalPool, Ran};
 
 /// One row of the Table 3 equivalent.
 #[derive(Debug, Clone, PartialEq)]

@@ -29,10 +29,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
-use progress::BatchProgress;
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::plan::{plan, Limits};
 use crate::store::{RunDir, RunResult, RunStatus, Store};
+use progress::BatchProgress;
 
 /// Why experiments could not be handed to the executor.
 #[derive(Debug, thiserror::Error)]

@@ -24,9 +24,9 @@ pub mod verify;
 
 use std::path::Path;
 
+use crate::exec::{ExecError, LocalPool};
 use crate::manifest::{Experiment, ValidationErrors};
 use crate::store::{RunDir, RunResult, Store, StoreError};
-use crate::exec::{ExecError, LocalPool};
 use spec::DesignStudy;
 
 /// Why a study stage failed.
@@ -36,7 +36,9 @@ pub enum StudyError {
     #[error("{0}")]
     Settings(String),
     /// A design point does not make a valid experiment.
-    #[error("design point {point}, scene {scene}: the point makes an invalid experiment:\n{errors}")]
+    #[error(
+        "design point {point}, scene {scene}: the point makes an invalid experiment:\n{errors}"
+    )]
     InvalidPoint {
         /// The point's index in its stage.
         point: u64,

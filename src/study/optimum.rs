@@ -131,9 +131,11 @@ pub fn maximise(goals: &[Goal], factors: usize, starts: usize, seed: u64) -> Sea
         });
     }
     found.sort_by(|a, b| {
-        b.desirability
-            .total_cmp(&a.desirability)
-            .then_with(|| a.coded.partial_cmp(&b.coded).unwrap_or(std::cmp::Ordering::Equal))
+        b.desirability.total_cmp(&a.desirability).then_with(|| {
+            a.coded
+                .partial_cmp(&b.coded)
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
     });
     let mut distinct: Vec<Optimum> = Vec::new();
     for o in found {

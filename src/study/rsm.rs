@@ -19,12 +19,12 @@ use super::runs::{run_points, write_table, Point, Runs};
 use super::spec::{DesignSpec, DesignStudy, SeedStage};
 use super::StudyError;
 use crate::doe::{box_behnken, full_factorial, Range};
+use crate::exec::LocalPool;
 use crate::manifest::Experiment;
 use crate::report::plots::{contour, predicted_vs_actual, ContourGrid};
 use crate::report::table::{Cell, CsvWriter, Table};
 use crate::stats::rsm::{fit_quadratic, AnovaRow, RsmFit};
 use crate::store::{RunDir, RunResult, Store};
-use crate::exec::LocalPool;
 
 /// Starts of the desirability search.
 pub const OPTIMISER_STARTS: usize = 64;
@@ -40,7 +40,12 @@ pub fn coded_design(study: &DesignStudy) -> Result<Vec<Vec<f64>>, StudyError> {
             let lists: Vec<Vec<f64>> = study.factors.keys().map(|f| levels[f].clone()).collect();
             full_factorial(&lists)?
                 .iter()
-                .map(|row| row.iter().zip(&ranges).map(|(x, r)| r.to_coded(*x)).collect())
+                .map(|row| {
+                    row.iter()
+                        .zip(&ranges)
+                        .map(|(x, r)| r.to_coded(*x))
+                        .collect()
+                })
                 .collect()
         }
     })
@@ -53,7 +58,11 @@ fn design_points(study: &DesignStudy, coded: &[Vec<f64>]) -> Vec<Point> {
         .iter()
         .enumerate()
         .map(|(i, c)| {
-            let actual: Vec<f64> = c.iter().zip(&ranges).map(|(x, r)| r.to_actual(*x)).collect();
+            let actual: Vec<f64> = c
+                .iter()
+                .zip(&ranges)
+                .map(|(x, r)| r.to_actual(*x))
+                .collect();
             Point {
                 index: i as u64,
                 values: study
@@ -132,7 +141,11 @@ pub fn analyse(
 
 /// The coded rows and values of `response` over every replicate that
 /// measured it, and how many did not.
-fn observations(runs: &Runs, coded: &[Vec<f64>], response: &str) -> (Vec<Vec<f64>>, Vec<f64>, usize) {
+fn observations(
+    runs: &Runs,
+    coded: &[Vec<f64>],
+    response: &str,
+) -> (Vec<Vec<f64>>, Vec<f64>, usize) {
     let (mut x, mut y, mut missing) = (Vec::new(), Vec::new(), 0);
     for r in &runs.replicates {
         match r.responses.get(response).copied().flatten() {
@@ -180,9 +193,13 @@ where
     }
     let optimum = joint_optimum(study, &analyses);
     let optimum_actual = optimum.as_ref().and_then(|s| {
-        s.optima
-            .first()
-            .map(|o| o.coded.iter().zip(&ranges).map(|(x, r)| r.to_actual(*x)).collect())
+        s.optima.first().map(|o| {
+            o.coded
+                .iter()
+                .zip(&ranges)
+                .map(|(x, r)| r.to_actual(*x))
+                .collect()
+        })
     });
     let lineage_of = |what: &str| {
         let mut l = dir.lineage(
@@ -202,25 +219,45 @@ where
     for a in &analyses {
         let sub = stage.join(&a.response);
         let lineage = lineage_of(&a.response);
-        write_output(&sub.join("anova.csv"), anova_csv(&a.fit).as_bytes(), &lineage)?;
-        write_output(&sub.join("coefficients.csv"), coefficients_csv(a).as_bytes(), &lineage)?;
+        write_output(
+            &sub.join("anova.csv"),
+            anova_csv(&a.fit).as_bytes(),
+            &lineage,
+        )?;
+        write_output(
+            &sub.join("coefficients.csv"),
+            coefficients_csv(a).as_bytes(),
+            &lineage,
+        )?;
         write_output(&sub.join("fit.json"), &json_bytes(a), &lineage)?;
         let pairs: Vec<(f64, f64)> = y_of(&runs, &a.response)
             .into_iter()
             .zip(a.fit.fitted.iter().copied())
             .collect();
-        let parity = predicted_vs_actual(&pairs, &format!("{}: predicted vs actual", a.response), "")
-            .map_err(|e| StudyError::Plot(e.to_string()))?;
+        let parity =
+            predicted_vs_actual(&pairs, &format!("{}: predicted vs actual", a.response), "")
+                .map_err(|e| StudyError::Plot(e.to_string()))?;
         write_output(&sub.join("parity.svg"), parity.as_bytes(), &lineage)?;
         let grid = contour_grid(study, a, &hold);
-        let svg = contour(&grid, &format!("{} (other factors at the optimum)", a.response))
-            .map_err(|e| StudyError::Plot(e.to_string()))?;
+        let svg = contour(
+            &grid,
+            &format!("{} (other factors at the optimum)", a.response),
+        )
+        .map_err(|e| StudyError::Plot(e.to_string()))?;
         write_output(&sub.join("contour.svg"), svg.as_bytes(), &lineage)?;
-        write_output(&sub.join("anova.md"), anova_markdown(study, a).as_bytes(), &lineage)?;
+        write_output(
+            &sub.join("anova.md"),
+            anova_markdown(study, a).as_bytes(),
+            &lineage,
+        )?;
     }
     if let Some(search) = &optimum {
         let lineage = lineage_of("optimum");
-        write_output(&stage.join("optimum.csv"), optimum_csv(study, search).as_bytes(), &lineage)?;
+        write_output(
+            &stage.join("optimum.csv"),
+            optimum_csv(study, search).as_bytes(),
+            &lineage,
+        )?;
     }
     let outcome = RsmOutcome {
         study: study.name.clone(),
@@ -228,7 +265,15 @@ where
         factors: study
             .factors
             .iter()
-            .map(|(n, f)| (n.clone(), label(&f.label, &f.address), f.address.clone(), f.min, f.max))
+            .map(|(n, f)| {
+                (
+                    n.clone(),
+                    label(&f.label, &f.address),
+                    f.address.clone(),
+                    f.min,
+                    f.max,
+                )
+            })
             .collect(),
         runs: runs.total,
         cached: runs.cached,
@@ -237,7 +282,11 @@ where
         optimum_actual,
         dir: stage.clone(),
     };
-    write_output(&stage.join("rsm.md"), summary_markdown(&outcome).as_bytes(), &lineage_of("summary"))?;
+    write_output(
+        &stage.join("rsm.md"),
+        summary_markdown(&outcome).as_bytes(),
+        &lineage_of("summary"),
+    )?;
     Ok(outcome)
 }
 
@@ -356,7 +405,9 @@ fn anova_rows(fit: &RsmFit) -> Vec<&AnovaRow> {
 
 /// The ANOVA table as CSV: source, SS, df, MS, F, p.
 pub fn anova_csv(fit: &RsmFit) -> String {
-    let mut csv = CsvWriter::new(&["source", "sum_of_squares", "df", "mean_square", "f", "p"].map(String::from));
+    let mut csv = CsvWriter::new(
+        &["source", "sum_of_squares", "df", "mean_square", "f", "p"].map(String::from),
+    );
     for row in anova_rows(fit) {
         csv.row(&[
             Cell::Text(row.source.clone()),
@@ -372,8 +423,17 @@ pub fn anova_csv(fit: &RsmFit) -> String {
 
 fn coefficients_csv(a: &ResponseAnalysis) -> String {
     let mut csv = CsvWriter::new(
-        &["term", "coded_estimate", "standard_error", "t", "p", "ci95_low", "ci95_high", "actual_coefficient"]
-            .map(String::from),
+        &[
+            "term",
+            "coded_estimate",
+            "standard_error",
+            "t",
+            "p",
+            "ci95_low",
+            "ci95_high",
+            "actual_coefficient",
+        ]
+        .map(String::from),
     );
     for (c, (_, actual)) in a.fit.coefficients.iter().zip(&a.actual_coefficients) {
         csv.row(&[
@@ -407,7 +467,12 @@ fn optimum_csv(study: &DesignStudy, search: &Search) -> String {
     for (k, o) in search.optima.iter().enumerate() {
         let mut cells = vec![Cell::Integer(k as u64 + 1)];
         cells.extend(o.coded.iter().map(|x| Cell::Number(*x)));
-        cells.extend(o.coded.iter().zip(&ranges).map(|(x, r)| Cell::Number(r.to_actual(*x))));
+        cells.extend(
+            o.coded
+                .iter()
+                .zip(&ranges)
+                .map(|(x, r)| Cell::Number(r.to_actual(*x))),
+        );
         cells.push(Cell::Number(o.desirability));
         for (_, y, d) in &o.responses {
             cells.push(Cell::Number(*y));
@@ -443,7 +508,9 @@ pub fn anova_markdown(study: &DesignStudy, a: &ResponseAnalysis) -> String {
 
 fn anova_markdown_body(a: &ResponseAnalysis) -> String {
     let fit = &a.fit;
-    let mut md = String::from("| Source | Sum of squares | df | Mean square | F | p |\n|---|---:|---:|---:|---:|---:|\n");
+    let mut md = String::from(
+        "| Source | Sum of squares | df | Mean square | F | p |\n|---|---:|---:|---:|---:|---:|\n",
+    );
     for row in anova_rows(fit) {
         md.push_str(&format!(
             "| {} | {} | {} | {} | {} | {} |\n",
@@ -553,7 +620,13 @@ pub fn analyse_table(path: &Path, spec: &TableSpec) -> Result<ResponseAnalysis, 
         .collect::<Result<Vec<_>, _>>()?;
     let response_column = table.require(path, &spec.response)?;
     let ranges = spec.ranges.clone().unwrap_or_else(|| {
-        vec![Range { low: -1.0, high: 1.0 }; spec.factors.len()]
+        vec![
+            Range {
+                low: -1.0,
+                high: 1.0
+            };
+            spec.factors.len()
+        ]
     });
     if ranges.len() != spec.factors.len() {
         return Err(StudyError::Settings(format!(

@@ -13,11 +13,11 @@ use std::path::Path;
 
 use super::spec::{packing_seed, DesignStudy, SeedStage};
 use super::StudyError;
+use crate::exec::{run_incomplete, LocalPool, Ran};
 use crate::manifest::{ContentId, Experiment};
 use crate::report::table::{Cell, CsvWriter};
 use crate::scenes::responses::response;
 use crate::store::{Depth, InputRef, RunDir, RunResult, RunState, Store};
-use crate::exec::{run_incomplete, LocalPool, Ran};
 
 /// One point of a stage, in actual units.
 #[derive(Debug, Clone, PartialEq)]
@@ -93,14 +93,25 @@ impl Runs {
         let mut csv = CsvWriter::new(&header);
         for r in &self.replicates {
             let p = &self.points[r.point];
-            let mut cells = vec![Cell::Integer(p.index), Cell::Integer(u64::from(r.replicate))];
+            let mut cells = vec![
+                Cell::Integer(p.index),
+                Cell::Integer(u64::from(r.replicate)),
+            ];
             cells.extend(p.shown.iter().map(|v| Cell::Number(*v)));
             cells.push(Cell::Integer(r.packing_seed));
             for s in scenes {
-                cells.push(Cell::Text(r.ids.get(s).map(|i| i.to_string()).unwrap_or_default()));
+                cells.push(Cell::Text(
+                    r.ids.get(s).map(|i| i.to_string()).unwrap_or_default(),
+                ));
             }
             for name in &self.responses {
-                cells.push(r.responses.get(name).copied().flatten().map_or(Cell::Empty, Cell::Number));
+                cells.push(
+                    r.responses
+                        .get(name)
+                        .copied()
+                        .flatten()
+                        .map_or(Cell::Empty, Cell::Number),
+                );
             }
             let status = if r.problems.is_empty() {
                 "ok".to_string()
@@ -190,7 +201,11 @@ where
                     )?);
                     Ok(result)
                 }
-                other => Err(format!("{scene} run {} is {}", id.short(12), other.status())),
+                other => Err(format!(
+                    "{scene} run {} is {}",
+                    id.short(12),
+                    other.status()
+                )),
             },
         };
         for (name, rr) in study.responses.iter().filter(|(_, rr)| &rr.scene == scene) {

@@ -12,13 +12,13 @@ use super::runs::{run_points, write_table, Point};
 use super::spec::{DesignStudy, SeedStage};
 use super::StudyError;
 use crate::doe::one_factor_at_a_time;
+use crate::exec::LocalPool;
 use crate::manifest::Experiment;
 use crate::report::plots::{level_means, LevelPanel};
 use crate::report::table::{Cell, CsvWriter};
 use crate::stats::oneway::one_way_anova;
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store};
-use crate::exec::LocalPool;
 
 /// One level of one screened factor, for one response.
 #[derive(Debug, Clone, Serialize)]
@@ -186,28 +186,59 @@ where
                 unit: String::new(),
                 response: response.clone(),
                 levels: e.levels.iter().map(|l| l.value).collect(),
-                means: e.levels.iter().map(|l| l.mean.unwrap_or(f64::NAN)).collect(),
+                means: e
+                    .levels
+                    .iter()
+                    .map(|l| l.mean.unwrap_or(f64::NAN))
+                    .collect(),
                 ci_half: e
                     .levels
                     .iter()
                     .map(|l| l.ci95_half_width.unwrap_or(0.0))
                     .collect(),
-                note: e.p.map_or("ANOVA: n/a".into(), |p| format!("one-way ANOVA p = {p:.3}")),
+                note: e
+                    .p
+                    .map_or("ANOVA: n/a".into(), |p| format!("one-way ANOVA p = {p:.3}")),
             })
             .collect();
-        let svg = level_means(&panels, &format!("{}: {response} by factor level", study.name))
-            .map_err(|e| StudyError::Plot(e.to_string()))?;
-        write_output(&stage.join(format!("{response}.svg")), svg.as_bytes(), &lineage)?;
+        let svg = level_means(
+            &panels,
+            &format!("{}: {response} by factor level", study.name),
+        )
+        .map_err(|e| StudyError::Plot(e.to_string()))?;
+        write_output(
+            &stage.join(format!("{response}.svg")),
+            svg.as_bytes(),
+            &lineage,
+        )?;
     }
-    write_output(&stage.join("levels.csv"), levels_csv(&outcome).as_bytes(), &lineage)?;
-    write_output(&stage.join("screen.md"), markdown(study, &outcome).as_bytes(), &lineage)?;
+    write_output(
+        &stage.join("levels.csv"),
+        levels_csv(&outcome).as_bytes(),
+        &lineage,
+    )?;
+    write_output(
+        &stage.join("screen.md"),
+        markdown(study, &outcome).as_bytes(),
+        &lineage,
+    )?;
     Ok(outcome)
 }
 
 fn levels_csv(s: &Screen) -> String {
     let mut csv = CsvWriter::new(
-        &["factor", "response", "level", "n", "mean", "ci95_half_width", "anova_f", "anova_p", "significant"]
-            .map(String::from),
+        &[
+            "factor",
+            "response",
+            "level",
+            "n",
+            "mean",
+            "ci95_half_width",
+            "anova_f",
+            "anova_p",
+            "significant",
+        ]
+        .map(String::from),
     );
     let num = |x: Option<f64>| x.map_or(Cell::Empty, Cell::Number);
     for e in &s.effects {

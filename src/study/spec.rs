@@ -331,7 +331,11 @@ impl DesignStudy {
             );
         }
         if self.scenes.is_empty() {
-            fail("scenes".into(), "{}".into(), "needs at least one scene".into());
+            fail(
+                "scenes".into(),
+                "{}".into(),
+                "needs at least one scene".into(),
+            );
         }
         for (name, scene) in &self.scenes {
             if matches!(scene, Scene::Pair(_)) {
@@ -343,7 +347,11 @@ impl DesignStudy {
             }
         }
         if self.factors.is_empty() {
-            fail("factors".into(), "{}".into(), "needs at least one factor".into());
+            fail(
+                "factors".into(),
+                "{}".into(),
+                "needs at least one factor".into(),
+            );
         }
         for (name, f) in &self.factors {
             let path = format!("factors.{name}");
@@ -359,7 +367,11 @@ impl DesignStudy {
             }
         }
         if self.responses.is_empty() {
-            fail("responses".into(), "{}".into(), "needs at least one response".into());
+            fail(
+                "responses".into(),
+                "{}".into(),
+                "needs at least one response".into(),
+            );
         }
         for (name, r) in &self.responses {
             let path = format!("responses.{name}");
@@ -397,7 +409,12 @@ impl DesignStudy {
             if !(t.value.is_finite() && t.low < t.value && t.value < t.high) {
                 fail(
                     format!("{path}.value"),
-                    format!("{} (low {}, high {})", number(t.value), number(t.low), number(t.high)),
+                    format!(
+                        "{} (low {}, high {})",
+                        number(t.value),
+                        number(t.low),
+                        number(t.high)
+                    ),
                     "must be finite with low < value < high".into(),
                 );
             }
@@ -415,7 +432,10 @@ impl DesignStudy {
                     fail(
                         "design.kind".into(),
                         "\"box_behnken\"".into(),
-                        format!("needs at least 3 factors; the study has {}", self.factors.len()),
+                        format!(
+                            "needs at least 3 factors; the study has {}",
+                            self.factors.len()
+                        ),
                     );
                 }
                 if *centre_points < 1 {
@@ -448,11 +468,19 @@ impl DesignStudy {
             }
         }
         if self.replicates < 1 {
-            fail("replicates".into(), self.replicates.to_string(), "must be >= 1".into());
+            fail(
+                "replicates".into(),
+                self.replicates.to_string(),
+                "must be >= 1".into(),
+            );
         }
         if let Some(s) = &self.screening {
             if s.factors.is_empty() {
-                fail("screening.factors".into(), "{}".into(), "needs at least one factor".into());
+                fail(
+                    "screening.factors".into(),
+                    "{}".into(),
+                    "needs at least one factor".into(),
+                );
             }
             for (name, f) in &s.factors {
                 let path = format!("screening.factors.{name}");
@@ -471,7 +499,11 @@ impl DesignStudy {
                 );
             }
             if !(s.alpha > 0.0 && s.alpha < 1.0) {
-                fail("screening.alpha".into(), number(s.alpha), "must be in (0, 1)".into());
+                fail(
+                    "screening.alpha".into(),
+                    number(s.alpha),
+                    "must be in (0, 1)".into(),
+                );
             }
         }
         if let Some(v) = &self.verification {
@@ -494,7 +526,11 @@ impl DesignStudy {
                         fail(
                             format!("verification.points.{name}.{factor}"),
                             number(point[factor]),
-                            format!("must be finite (range {}..{})", number(f.min), number(f.max)),
+                            format!(
+                                "must be finite (range {}..{})",
+                                number(f.min),
+                                number(f.max)
+                            ),
                         );
                     }
                 }
@@ -588,7 +624,9 @@ fn set_address(json: &mut Value, address: &str, value: f64) -> Result<(), String
     }
     let parts: Vec<&str> = address.split('.').collect();
     if parts.iter().any(|p| p.is_empty()) {
-        return Err("must be a dotted path such as contact.particle_particle.static_friction".into());
+        return Err(
+            "must be a dotted path such as contact.particle_particle.static_friction".into(),
+        );
     }
     set_at(json, &parts, value, address)
 }
@@ -603,7 +641,9 @@ fn set_at(node: &mut Value, parts: &[&str], value: f64, address: &str) -> Result
         };
     };
     let Value::Object(map) = node else {
-        return Err(format!("`{address}`: `{head}` is below a value that has no fields"));
+        return Err(format!(
+            "`{address}`: `{head}` is below a value that has no fields"
+        ));
     };
     if *head == "*" {
         if map.is_empty() {
@@ -625,12 +665,15 @@ fn set_at(node: &mut Value, parts: &[&str], value: f64, address: &str) -> Result
 
 /// Reads and validates a design study.
 pub fn read_design_study(path: &Path) -> Result<DesignStudy, crate::manifest::ManifestError> {
-    let text = std::fs::read_to_string(path).map_err(|source| crate::manifest::ManifestError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text =
+        std::fs::read_to_string(path).map_err(|source| crate::manifest::ManifestError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
     let study: DesignStudy = serde_json::from_str(&text)?;
-    study.validate()?;
+    study
+        .validate()
+        .map_err(crate::manifest::ManifestError::Invalid)?;
     Ok(study)
 }
 

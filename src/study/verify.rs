@@ -16,11 +16,11 @@ use super::rsm::RsmOutcome;
 use super::runs::{run_points, write_table, Point};
 use super::spec::{DesignStudy, SeedStage};
 use super::StudyError;
+use crate::exec::LocalPool;
 use crate::manifest::Experiment;
 use crate::report::table::{Cell, CsvWriter};
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store};
-use crate::exec::LocalPool;
 
 /// One response at one verified point.
 #[derive(Debug, Clone, Serialize)]
@@ -114,7 +114,11 @@ where
     for a in &rsm.analyses {
         let values = runs.by_point(&a.response);
         for (k, (name, actual)) in named.iter().enumerate() {
-            let coded: Vec<f64> = actual.iter().zip(&ranges).map(|(x, r)| r.to_coded(*x)).collect();
+            let coded: Vec<f64> = actual
+                .iter()
+                .zip(&ranges)
+                .map(|(x, r)| r.to_coded(*x))
+                .collect();
             let summary = mean_ci(&values[k]);
             let mean = summary
                 .map(|s| s.mean)
@@ -148,7 +152,11 @@ where
             serde_json::json!({ "replicates": plan.replicates }),
         )
         .with_input(dir.input("responses", &stage.join("responses.csv"))?);
-    write_output(&stage.join("verification.csv"), csv(&outcome).as_bytes(), &lineage)?;
+    write_output(
+        &stage.join("verification.csv"),
+        csv(&outcome).as_bytes(),
+        &lineage,
+    )?;
     write_output(
         &stage.join("verification.md"),
         markdown(study, &outcome).as_bytes(),
@@ -160,8 +168,15 @@ where
 fn csv(v: &Verification) -> String {
     let mut csv = CsvWriter::new(
         &[
-            "point", "response", "n", "mean", "ci95_half_width", "predicted", "target",
-            "relative_error", "pass",
+            "point",
+            "response",
+            "n",
+            "mean",
+            "ci95_half_width",
+            "predicted",
+            "target",
+            "relative_error",
+            "pass",
         ]
         .map(String::from),
     );
@@ -212,7 +227,8 @@ pub fn markdown(study: &DesignStudy, v: &Verification) -> String {
             sim,
             c.predicted,
             c.target.map_or(String::new(), |t| format!("{t}")),
-            c.relative_error.map_or(String::new(), |e| format!("{:+.2} %", 100.0 * e)),
+            c.relative_error
+                .map_or(String::new(), |e| format!("{:+.2} %", 100.0 * e)),
             c.pass.map_or("", |p| if p { "pass" } else { "fail" })
         ));
     }

@@ -13,10 +13,10 @@ pub mod plan;
 pub mod report;
 pub mod stats;
 
+use crate::exec::{run_incomplete, ExecError, LocalPool, Ran};
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::run_experiment;
 use crate::store::{RunDir, RunResult, Store, TimingRecord};
-use crate::exec::{run_incomplete, ExecError, LocalPool, Ran};
 use plan::Point;
 use stats::{difference_ci, mean_ci, pareto_front, MeanCi};
 

@@ -186,7 +186,11 @@ pub fn compare_golden(golden_dir: &str, name: &str, now: &str, exact: &[&str], t
     let pinned = Table::parse(&pinned).unwrap();
     let now = Table::parse(now).unwrap();
     assert_eq!(pinned.header, now.header, "{name}: columns; {hint}");
-    assert_eq!(pinned.rows.len(), now.rows.len(), "{name}: row count; {hint}");
+    assert_eq!(
+        pinned.rows.len(),
+        now.rows.len(),
+        "{name}: row count; {hint}"
+    );
     for (line, (p, c)) in pinned.rows.iter().zip(&now.rows).enumerate() {
         for ((column, a), b) in pinned.header.iter().zip(p).zip(c) {
             assert!(
