@@ -47,23 +47,17 @@
 //!   `2 r_mean + extra_range + skin`; particle `i` scans the cells within
 //!   `2 r_i + extra_range + skin` and lists only partners no larger than itself, so each
 //!   pair is found once, by its larger member. Small particles scan 27 small cells; only
-//!   the few large ones scan many. The cost per particle stays near the monodisperse one
-//!   (a 1:10 bidisperse bed, 1 mm + 10 mm: 122 ns/particle, against 11.9 µs/particle
-//!   with one cell size from the largest cutoff). What still grows is the work of the
-//!   large particles themselves, ∝ (r_i / r_mean)³ cells each: a bed whose *volume* is
-//!   mostly large particles pays roughly as if that volume were filled with mean-sized
-//!   ones.
+//!   the few large ones scan many, so the cost per particle stays near the monodisperse
+//!   one. What still grows is the work of the large particles themselves,
+//!   ∝ (r_i / r_mean)³ cells each: a bed whose *volume* is mostly large particles pays
+//!   roughly as if that volume were filled with mean-sized ones.
 //!
-//! Measured (release, shared 2-core machine, min of repeats; R = 1 mm, skin 0.2 mm,
-//! periodic x/y, `cargo test --release --lib neighbor::tests::timing -- --ignored
-//! --nocapture`): steady rebuild ~70–76 ns/particle on 1 thread for the jittered 2.4 mm
-//! lattice (0.15 pairs/particle), ~150–156 ns/particle for a 2.05 mm lattice
-//! (2.5 pairs/particle, like a settled bed), flat from 5k to 50k particles; ~1.65× faster
-//! on 2 threads at 50k. `needs_rebuild` ~2.2 ns/particle (1.9× on 2 threads).
 //! Sparse scenes (hoppers, funnels: a bounding box of many empty cells) are capped at
 //! `16 N + 4096` cells, beyond which cells grow.
 //!
 //! All buffers are kept between rebuilds; `needs_rebuild` allocates nothing.
+//!
+//! Measurements, and what was tried and not kept, are in `docs/performance.md`.
 
 use crate::dem::domain::{Domain, DomainError};
 use crate::dem::vec3::Vec3;

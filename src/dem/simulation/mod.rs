@@ -12,60 +12,14 @@
 //! into per-particle sums: a particle's own sum for the pairs of its own
 //! block of particles and a partial sum for each earlier block whose pairs
 //! reach it (`tiles`), so no pair's forces are ever written to a buffer and
-//! read back (a buffer of every pair's forces, gathered per particle, ran
-//! 12–21 % slower at N = 50,000 on one thread, 2026-11-25). How many blocks
-//! there are depends on the particle count alone, where they start on the
-//! neighbour list, neither on the threads; on more than one thread the
-//! sweep runs one tile (a run of whole blocks) per thread.
-//! Until 2026-11-26 the sums followed the tiles instead, and the particles
-//! one tile's pairs reached in another were gathered from a per-pair buffer
-//! on two threads but not on one: at 5,120 particles the second thread then
-//! added 1.6–1.9 instead of 2 (the pair sweep alone now scales 1.98×). On
-//! more than one thread the stages run on a `team` of threads that stays
-//! awake between them, instead of rayon's fork-join. Each stage is cut into
-//! one job per member (a tile of the sweep, an equal share of the particles
-//! in the per-particle passes); member `t` first runs its own and then takes
-//! the job of a member that has not started yet.
-//!
-//! Tried and not kept (dense-bed benchmark, `repose bench`, this 2-vCPU
-//! builder):
-//! - Interleaving the pair evaluation with the gather in blocks: 25–35 %
-//!   slower on one thread. Redone on 2026-11-25 with double-buffered packed
-//!   records and one tile per thread (blocks of 128 particles; particles with
-//!   a pair from an earlier tile gathered in a second pass), so the pair
-//!   buffer is read back from L1/L2 instead of main memory: still 5 % slower
-//!   on one thread at N = 5,120 and 50,000, 17–21 % slower on two.
-//! - Software prefetch at N = 50,000: of the gather's second-side pair
-//!   records 4–32 particles ahead, no gain in alternating runs; of the pair
-//!   kernel's second-particle records 24 particles beyond the row's
-//!   frontier, ±3 % over four side-by-side runs.
-//! - Eight contacts at a time as two interleaved four-lane groups, so that
-//!   their square-root and division chains overlap: 15 % slower at 5,120 (the
-//!   doubled live state no longer fits the 16 AVX registers).
-//! - Each pair's second-particle share (48 B) written straight into a buffer
-//!   ordered by second particle, so the gather reads only sequential streams:
-//!   8 % slower at 5,120 and 6 % slower at 50,000 — the scattered writes cost
-//!   more than the scattered reads they replace, although a profile at 50,000
-//!   shows the gather's first load of each pair record taking 26 % of its
-//!   samples (6 % at 5,120).
-//! - Finishing each particle (walls, kicks, drift) inside its tile's sweep as
-//!   soon as its last pair is done, with the in-place sums (no pair buffer on
-//!   one thread, records updated in place — a particle is never read after
-//!   its own row — and frozen copies of the particles other tiles reach): on one
-//!   thread 4–6 % slower at 5,120 and 15 % slower at 50,000 (2026-11-26, side
-//!   by side with the separate pass). A profile at 5,120 shows the finishing
-//!   itself no cheaper than the separate pass and the pair kernel 4 % dearer:
-//!   interleaving the per-particle streams (state, walls, kicks) with the
-//!   kernel's (pairs, history, records) costs more than re-reading records
-//!   the separate pass finds in cache anyway.
-//! - Drifting only the packed centres and copying them to the particles'
-//!   positions before a rebuild, an energy check and the end of `advance`
-//!   (one read and one write of 24 B per particle and step fewer): −1 % at
-//!   5,120, +3.5 % and −3 % at 50,000 in two side-by-side pairs — within the
-//!   host's noise, so not worth a second copy of the positions to keep in
-//!   step.
-//! - Always inlining the wall contact (`PlacedWall::contact`, 4 % of the
-//!   samples at 5,120 as a call of its own): −1 % at 5,120, within noise.
+//! read back. How many blocks there are depends on the particle count alone,
+//! where they start on the neighbour list, neither on the threads; on more
+//! than one thread the sweep runs one tile (a run of whole blocks) per
+//! thread. On more than one thread the stages run on a `team` of threads
+//! that stays awake between them, instead of rayon's fork-join. Each stage is
+//! cut into one job per member (a tile of the sweep, an equal share of the
+//! particles in the per-particle passes); member `t` first runs its own and
+//! then takes the job of a member that has not started yet.
 //!
 //! Determinism: each particle sums its pairs in the neighbour list's fixed
 //! order, its own block's pairs in its own sum and each earlier block's in a
@@ -74,6 +28,8 @@
 //! no order that changes with the threads; reductions are either exact (max,
 //! counts) or summed serially. The result is bit-identical on any number of
 //! threads.
+//!
+//! Measurements, and what was tried and not kept, are in `docs/performance.md`.
 
 use crate::dem::contact::normal_hertz::Hertz;
 use crate::dem::contact::normal_jkr::Jkr;

@@ -1,11 +1,8 @@
 //! A team of threads that stays awake through the stages of a step, each
 //! member always taking the same share of the work.
 //!
-//! Why not rayon for the stages: a fork-join region hands its parts to
-//! whichever worker comes first, so the thread that summed a tile's forces in
-//! the pair sweep finishes those particles only half the time, and work
-//! stealing is what evened out the shares, so the cut itself never had to.
-//! A team member takes share `t` every time and spins between the stages
+//! A team member takes share `t` every time (rayon's fork-join would hand
+//! a region's parts to whichever worker comes first) and spins between the stages
 //! (they follow each other within microseconds). Between the parts of a run
 //! that are not the team's (neighbour rebuilds, which are rayon's, and the
 //! caller's own work between `advance` calls) the caller sends it to rest:
@@ -14,6 +11,8 @@
 //!
 //! Results never depend on the team: each share's work and the order its
 //! results are combined in are fixed by the caller.
+//!
+//! Measurements, and what was tried and not kept, are in `docs/performance.md`.
 
 use std::any::Any;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
@@ -60,7 +59,7 @@ unsafe impl Send for TaskRef {}
 /// jobs per member need more blocks: eight blocks at 5,120 particles with
 /// four jobs per member ran 3 % slower on two threads in quiet rounds and
 /// no better in disturbed ones (2026-11-26, 13:54–13:57, alternating;
-/// `src/bench.rs` docs).
+/// `docs/performance.md`).
 pub(super) const JOBS_PER_MEMBER: usize = 1;
 
 /// Runs `jobs` on `team` (see [`Team::for_each`]), or all of them here in

@@ -21,13 +21,7 @@
 //! the single tile still writes the partials: that is what keeps its result
 //! the same as on two.
 //!
-//! Why not a per-pair buffer for the particles other tiles reach (the design
-//! before 2026-11-26): their sums then had to follow the tiles' cut to stay
-//! in pair order, so one thread buffered nothing and two buffered every pair
-//! of 8–9 % of the particles at 5,120, each gathered at three times the cost
-//! of a ready sum — the second thread's extra work. A partial costs one more
-//! addition of a 48-byte sum per reached particle and block, on any number
-//! of threads.
+//! Measurements, and what was tried and not kept, are in `docs/performance.md`.
 
 use super::pair_kernel::{Motion, PairForce, PairSink};
 use crate::dem::neighbor::offsets_of;
