@@ -68,7 +68,6 @@ pub mod genetic;
 pub mod levenberg;
 pub mod lhs;
 pub mod meanshift;
-pub mod metrics;
 pub mod network;
 pub mod objective;
 pub mod progress;
