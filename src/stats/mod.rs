@@ -6,15 +6,27 @@
 //!   interval of a difference of means, t quantiles and the p-values of t and
 //!   F statistics (exact, from `statrs`, not a table).
 //! - [`metrics`]: fit metrics of paired values (R², mean squared error).
+//! - [`regression`]: ordinary least squares by Householder QR, with standard
+//!   errors, t statistics, two-sided p-values and leverages; a column that is
+//!   a linear combination of earlier ones is refused, naming it.
+//! - [`rsm`]: the quadratic response-surface analysis as Design-Expert prints
+//!   it: coefficients in coded and actual units, the ANOVA with partial
+//!   (Type III) sums of squares, lack of fit against pure error, R², adjusted
+//!   and predicted R², coefficient of variation and adequate precision.
+//! - [`oneway`]: one-way analysis of variance of groups of observations.
 //!
-//! Inputs are checked before any arithmetic: a non-finite value, slices of
-//! different lengths, too few observations for the parameters and an aliased
-//! design are each a [`StatsError`] rather than a NaN in the output.
+//! The fits and analyses of variance check their inputs before any
+//! arithmetic: a non-finite value, slices of different lengths, too few
+//! observations for the parameters and an aliased design are each a
+//! [`StatsError`] rather than a NaN in the output.
 //!
 //! Nonlinear least squares and principal component analysis (for the yan2015
 //! calibration) belong here too and are a later addition.
 
 pub mod metrics;
+pub mod oneway;
+pub mod regression;
+pub mod rsm;
 pub mod summary;
 
 /// Why a statistic could not be computed from the data given.
@@ -81,6 +93,19 @@ pub enum StatsError {
         /// Index of the empty group.
         index: usize,
     },
+}
+
+/// Checks that every value of `values` is finite, naming `what` and the index
+/// of the first that is not.
+pub(crate) fn check_finite(what: &str, values: &[f64]) -> Result<(), StatsError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(StatsError::NonFinite {
+            what: what.to_string(),
+            index,
+            value: values[index],
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Test helper: asserts |actual − expected| ≤ 1e-6 · |expected| for each pair.
