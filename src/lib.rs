@@ -25,6 +25,8 @@
 //! - [`packing`]: size distributions, non-overlapping insertion, rate factories,
 //!   coarse-graining rules.
 //! - [`dem`]: the soft-sphere DEM engine; knows nothing of studies, manifests or files.
+//! - [`stats`]: statistics as pure functions on slices (confidence intervals,
+//!   least squares, response surfaces, ANOVA); knows nothing of runs or files.
 //! - `huge_pages` (Linux): the binary's global allocator, huge pages for big arrays.
 
 pub mod audit;
@@ -42,6 +44,7 @@ pub mod manifest;
 pub mod measure;
 pub mod packing;
 pub mod scenes;
+pub mod stats;
 pub mod store;
 pub mod study;
 pub mod tradeoff;

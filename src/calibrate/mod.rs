@@ -66,7 +66,6 @@ pub mod curve;
 pub mod genetic;
 pub mod levenberg;
 pub mod meanshift;
-pub mod metrics;
 pub mod network;
 pub mod objective;
 pub mod sample;

@@ -44,10 +44,10 @@ use serde::{Deserialize, Serialize};
 
 use super::genetic::{evolve, GaSettings};
 use super::levenberg::{refine, LmSettings, LmStop};
-use super::metrics::{mse, r_squared};
 use super::network::Shape;
 use super::objective::Objective;
 use super::{rng, Stream};
+use crate::stats::metrics::{mse, r_squared};
 
 /// A linear map of one quantity from `[min, max]` onto [−1, 1].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -19,7 +19,6 @@ use serde::Serialize;
 use serde_json::json;
 
 use super::batch::read_angles;
-use super::metrics::r_squared;
 use super::surrogate::{sweep, Dataset, Scale, Sweep, TrainSettings};
 use super::svg::{parity_plot, ParityPoint};
 use super::table::{parse_number, Cell, CsvWriter, Table};
@@ -28,6 +27,7 @@ use super::{
     StudyDir,
 };
 use crate::manifest::Study;
+use crate::stats::metrics::r_squared;
 use crate::store::InputRef;
 use crate::store::Lineage;
 

@@ -9,16 +9,17 @@
 //! health, and whether the point is on the Pareto front of (|error|, wall
 //! time). [`report`] writes them as CSV, Markdown and SVG.
 
+pub mod pareto;
 pub mod plan;
 pub mod report;
-pub mod stats;
 
 use crate::exec::{run_incomplete, ExecError, LocalPool, Ran};
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::run_experiment;
+use crate::stats::summary::{difference_ci, mean_ci, MeanCi};
 use crate::store::{RunDir, RunResult, Store, TimingRecord};
+use pareto::pareto_front;
 use plan::Point;
-use stats::{difference_ci, mean_ci, pareto_front, MeanCi};
 
 /// The outcome of one replicate.
 #[derive(Debug, Clone)]
