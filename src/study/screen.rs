@@ -11,7 +11,7 @@ use super::dir::{write_output, StudyDir};
 use super::runs::{run_points, write_table, Point};
 use super::spec::{DesignStudy, SeedStage};
 use super::StudyError;
-use crate::doe::one_factor_at_a_time;
+use crate::doe::ofat::one_factor_at_a_time;
 use crate::exec::LocalPool;
 use crate::manifest::Experiment;
 use crate::report::plots::{level_means, LevelPanel};
