@@ -16,10 +16,10 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use repose::calibrate::table::Table;
 use repose::calibrate::{Stage, StudyDir};
 use repose::commands::calibrate;
 use repose::manifest::parse_study;
+use repose::report::table::Table;
 use repose::scenes::plan::Limits;
 use repose::store::TIMING_FILE;
 

@@ -31,9 +31,9 @@ use serde_json::json;
 
 use super::progress::BatchProgress;
 use super::sample::{design_path, experiment_path};
-use super::table::{parse_number, Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
+use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::scenes::plan::{plan, Limits};
 use crate::store::{Depth, RunDir, RunResult, RunState, RunStatus, Store};
 

@@ -40,11 +40,11 @@ use serde_json::json;
 use super::batch::{read_angles, read_design, AngleRow};
 use super::search::{find, SearchSettings};
 use super::surrogate::{sweep, Dataset, TrainSettings};
-use super::svg::{learning_curve_plot, CurvePoint};
-use super::table::{Cell, CsvWriter};
 use super::train::{input_scales, DEFAULT_TRAIN_FRACTION};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{ContentId, Study};
+use crate::report::svg::{learning_curve_plot, CurvePoint};
+use crate::report::table::{Cell, CsvWriter};
 use crate::store::{Store, TimingRecord};
 
 /// One size of the learning curve.

@@ -18,12 +18,12 @@ use serde_json::json;
 
 use super::diagnostics::{diagnose, unit_scaled, Diagnostics};
 use super::lhs::{latin_hypercube, optimise, Optimisation, Placement};
-use super::table::{Cell, CsvWriter, Table};
 use super::{
     create_dir, json_bytes, parameter_names, rng, serde_name, to_physical, write_file,
     write_output, CalibrateError, Stage, Stream, StudyDir,
 };
 use crate::manifest::{canonical_json, DesignKind, Study};
+use crate::report::table::{Cell, CsvWriter, Table};
 
 /// Options of the sample stage.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

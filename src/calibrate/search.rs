@@ -21,13 +21,13 @@ use serde_json::json;
 use super::lhs::{latin_hypercube, Placement};
 use super::meanshift::{estimate_bandwidth, mean_shift, Kernel};
 use super::surrogate::Model;
-use super::svg::scatter_matrix;
-use super::table::{Cell, CsvWriter};
 use super::{
     parameter_names, rng, serde_name, to_physical, write_output, CalibrateError, Stage, Stream,
     StudyDir,
 };
 use crate::manifest::Study;
+use crate::report::svg::scatter_matrix;
+use crate::report::table::{Cell, CsvWriter};
 
 /// Options of the search stage.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

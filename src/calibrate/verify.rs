@@ -27,9 +27,9 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::batch::{run_incomplete, BatchSettings, Ran};
-use super::table::{Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{ContentId, Experiment, Study};
+use crate::report::table::{Cell, CsvWriter, Table};
 use crate::store::{RunDir, RunResult, Store};
 
 /// One row of the Table 3 equivalent.
