@@ -19,5 +19,6 @@
 //! are pure (data in, text out), which keeps the outputs reproducible and
 //! testable byte for byte.
 
+pub mod markdown;
 pub mod svg;
 pub mod table;
