@@ -20,5 +20,6 @@
 //! testable byte for byte.
 
 pub mod markdown;
+pub mod plots;
 pub mod svg;
 pub mod table;
