@@ -16,6 +16,8 @@
 //! - [`scenes`]: runs an experiment's scene and produces its result; its
 //!   [`scenes::plan`] checks and prices a run before it starts.
 //! - [`log`]: MCAP run logs for Foxglove (writing, and `repose inspect`).
+//! - [`report`]: the one report writer: CSV tables (`csv` crate), Markdown
+//!   tables, the golden-pinned hand-written SVG plots and newer `plotters` plots.
 //! - [`store`]: the content-addressed run store (`runs/<id>/`), atomic writes,
 //!   caching, lineage records.
 //! - [`manifest`]: the experiment model (experiments and studies), validation,
@@ -43,6 +45,7 @@ pub mod log;
 pub mod manifest;
 pub mod measure;
 pub mod packing;
+pub mod report;
 pub mod scenes;
 pub mod stats;
 pub mod store;

@@ -580,6 +580,6 @@ fn a_verification_scene_that_cannot_measure_an_angle_is_a_failed_candidate() {
     let drum15 = csv.lines().find(|l| l.starts_with("1,drum15,")).unwrap();
     let cell = reason.replace(',', ";");
     assert!(drum15.ends_with(&format!(",no,{cell}")), "{drum15}");
-    let table = repose::calibrate::table::Table::parse(&csv).unwrap();
+    let table = repose::report::table::Table::parse(&csv).unwrap();
     assert!(table.rows.iter().all(|r| r.len() == table.header.len()));
 }

@@ -12,10 +12,10 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::sample::{design_path, experiment_path};
-use super::table::{parse_number, Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::exec::{run_incomplete, LocalPool, Ran};
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
+use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::store::{Depth, RunDir, RunResult, RunState, RunStatus, Store};
 
 /// One row of design.csv.

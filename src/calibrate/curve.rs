@@ -40,11 +40,12 @@ use serde_json::json;
 use super::batch::{read_angles, read_design, AngleRow};
 use super::search::{find, SearchSettings};
 use super::surrogate::{sweep, Dataset, TrainSettings};
-use super::svg::{learning_curve_plot, CurvePoint};
-use super::table::{Cell, CsvWriter};
 use super::train::{input_scales, DEFAULT_TRAIN_FRACTION};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{ContentId, Study};
+use crate::report::markdown::MarkdownTable;
+use crate::report::svg::{learning_curve_plot, CurvePoint};
+use crate::report::table::{Cell, CsvWriter};
 use crate::store::{Store, TimingRecord};
 
 /// One size of the learning curve.
@@ -364,42 +365,40 @@ fn markdown(
          search points; centre: the largest cluster's. DEM time: summed wall time of the n \
          runs (timing.json).\n"
     );
-    let _ = writeln!(
-        s,
-        "| n | hidden | validation R² | RMSE (deg) | kept | clusters | {} | relative spread | DEM wall (s) |",
-        names
-            .iter()
-            .map(|n| format!("{n} centre ± sd"))
-            .collect::<Vec<_>>()
-            .join(" | ")
-    );
-    let _ = writeln!(
-        s,
-        "|---|---|---|---|---|---|{}---|---|",
-        "---|".repeat(names.len())
-    );
+    let mut header: Vec<String> = [
+        "n",
+        "hidden",
+        "validation R²",
+        "RMSE (deg)",
+        "kept",
+        "clusters",
+    ]
+    .map(String::from)
+    .to_vec();
+    header.extend(names.iter().map(|n| format!("{n} centre ± sd")));
+    header.extend(["relative spread", "DEM wall (s)"].map(String::from));
+    let mut table = MarkdownTable::new(&header);
     for r in rows {
-        let params: Vec<String> = (0..names.len())
-            .map(|j| match (&r.centre, &r.spread) {
-                (Some(c), Some(sd)) => format!("{:.4} ± {:.4}", c[j], sd[j]),
-                _ => "–".to_string(),
-            })
-            .collect();
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.3} | {:.2} | {} | {} | {} | {} | {:.0} |",
-            r.size,
-            r.hidden,
-            r.validation_r2,
-            r.validation_rmse_deg,
-            r.kept,
-            r.clusters,
-            params.join(" | "),
+        let mut cells = vec![
+            r.size.to_string(),
+            r.hidden.to_string(),
+            format!("{:.3}", r.validation_r2),
+            format!("{:.2}", r.validation_rmse_deg),
+            r.kept.to_string(),
+            r.clusters.to_string(),
+        ];
+        cells.extend((0..names.len()).map(|j| match (&r.centre, &r.spread) {
+            (Some(c), Some(sd)) => format!("{:.4} ± {:.4}", c[j], sd[j]),
+            _ => "–".to_string(),
+        }));
+        cells.push(
             r.relative_spread
                 .map_or("–".to_string(), |v| format!("{v:.3}")),
-            r.dem_wall_s,
         );
+        cells.push(format!("{:.0}", r.dem_wall_s));
+        table.row(&cells);
     }
+    s.push_str(&table.render());
     s
 }
 

@@ -71,8 +71,6 @@ pub mod objective;
 pub mod sample;
 pub mod search;
 pub mod surrogate;
-pub mod svg;
-pub mod table;
 pub mod train;
 pub mod verify;
 
@@ -82,8 +80,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::manifest::{canonical_json, ContentId, Study, ValidationErrors};
+use crate::report::table::TableError;
 use crate::store::{write_atomic, InputRef, Lineage, StoreError};
-use table::TableError;
 
 /// The purposes that draw random numbers; each gets its own ChaCha stream of
 /// a seed, so adding draws to one never shifts another.

@@ -16,7 +16,6 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::table::{Cell, CsvWriter, Table};
 use super::{
     create_dir, json_bytes, parameter_names, rng, serde_name, to_physical, write_file,
     write_output, CalibrateError, Stage, Stream, StudyDir,
@@ -24,6 +23,7 @@ use super::{
 use crate::doe::diagnostics::{diagnose, unit_scaled, Diagnostics};
 use crate::doe::lhs::{latin_hypercube, optimise, Optimisation, Placement};
 use crate::manifest::{canonical_json, DesignKind, Study};
+use crate::report::table::{Cell, CsvWriter, Table};
 
 /// Options of the sample stage.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -20,14 +20,15 @@ use serde_json::json;
 
 use super::meanshift::{estimate_bandwidth, mean_shift, Kernel};
 use super::surrogate::Model;
-use super::svg::scatter_matrix;
-use super::table::{Cell, CsvWriter};
 use super::{
     parameter_names, rng, serde_name, to_physical, write_output, CalibrateError, Stage, Stream,
     StudyDir,
 };
 use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::manifest::Study;
+use crate::report::markdown::MarkdownTable;
+use crate::report::svg::scatter_matrix;
+use crate::report::table::{Cell, CsvWriter};
 
 /// Options of the search stage.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -364,22 +365,16 @@ fn markdown(
         t.target_angle_deg,
         serde_name(settings.kernel)
     );
-    let _ = writeln!(
-        s,
-        "| group | size | {} | predicted angle (deg) |",
-        names.join(" | ")
-    );
-    let _ = writeln!(s, "|---|---|{}---|", "---|".repeat(names.len()));
+    let mut header = vec!["group".to_string(), "size".to_string()];
+    header.extend(names.iter().cloned());
+    header.push("predicted angle (deg)".to_string());
+    let mut table = MarkdownTable::new(&header);
     for c in clusters {
-        let centre: Vec<String> = c.centre.iter().map(|v| format!("{v:.6}")).collect();
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {:.2} |",
-            c.group,
-            c.size,
-            centre.join(" | "),
-            c.predicted_angle_deg
-        );
+        let mut cells = vec![c.group.to_string(), c.size.to_string()];
+        cells.extend(c.centre.iter().map(|v| format!("{v:.6}")));
+        cells.push(format!("{:.2}", c.predicted_angle_deg));
+        table.row(&cells);
     }
+    s.push_str(&table.render());
     s
 }

@@ -20,14 +20,14 @@ use serde_json::json;
 
 use super::batch::read_angles;
 use super::surrogate::{sweep, Dataset, Scale, Sweep, TrainSettings};
-use super::svg::{parity_plot, ParityPoint};
-use super::table::{parse_number, Cell, CsvWriter, Table};
 use super::{
     create_dir, json_bytes, parameter_names, serde_name, write_output, CalibrateError, Stage,
     StudyDir,
 };
 use crate::manifest::Study;
 use crate::stats::metrics::r_squared;
+use crate::report::svg::{parity_plot, ParityPoint};
+use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::store::InputRef;
 use crate::store::Lineage;
 

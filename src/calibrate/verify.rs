@@ -26,10 +26,11 @@ use std::path::PathBuf;
 
 use serde_json::json;
 
-use super::table::{Cell, CsvWriter, Table};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::exec::{run_incomplete, LocalPool, Ran};
 use crate::manifest::{ContentId, Experiment, Study};
+use crate::report::markdown::MarkdownTable;
+use crate::report::table::{Cell, CsvWriter, Table};
 use crate::store::{RunDir, RunResult, Store};
 
 /// One row of the Table 3 equivalent.
@@ -266,23 +267,25 @@ fn csv_word(text: &str) -> String {
 }
 
 fn markdown(rows: &[VerifyRow]) -> String {
-    let mut out = String::from(
-        "| candidate | scene | simulated (°) | measured (°) | relative error | pass |\n\
-         |---|---|---|---|---|---|\n",
-    );
+    let mut table = MarkdownTable::new(&[
+        "candidate",
+        "scene",
+        "simulated (°)",
+        "measured (°)",
+        "relative error",
+        "pass",
+    ]);
     for r in rows {
         let simulated = match (&r.status, r.simulated_deg) {
             (VerifyStatus::Measured, Some(s)) => format!("{s:.2}"),
             (VerifyStatus::NotMeasurable(_), _) => "not measurable".to_string(),
             _ => "failed".to_string(),
         };
-        let _ = writeln!(
-            out,
-            "| {} | {} | {} | {:.2} | {} | {} |",
-            r.group,
-            r.scene,
+        table.row(&[
+            r.group.to_string(),
+            r.scene.clone(),
             simulated,
-            r.measured_deg,
+            format!("{:.2}", r.measured_deg),
             r.relative_error
                 .map_or_else(|| "—".to_string(), |e| format!("{:.1} %", 100.0 * e)),
             if r.passes() {
@@ -290,8 +293,9 @@ fn markdown(rows: &[VerifyRow]) -> String {
             } else {
                 format!("no (tolerance {:.0} %)", 100.0 * r.tolerance)
             },
-        );
+        ]);
     }
+    let mut out = table.render();
     let reasons: Vec<_> = rows
         .iter()
         .filter_map(|r| r.status.reason().map(|why| (r, why)))

@@ -1,10 +1,11 @@
 //! Small CSV tables: a header line and rows of comma-separated cells.
 //!
-//! The stage tables (design, angles, sweep, clusters) hold numbers, ids and
-//! short words, never commas or quotes, so a plain split suffices; a quoted
-//! cell is refused with its line rather than misread. Numbers are written with
-//! Rust's shortest round-trip formatting, so a table re-read gives back the
-//! same `f64`s and identical inputs give identical bytes.
+//! Reading and writing go through the `csv` crate, so a cell holding a comma,
+//! a quote or a line break is quoted on writing and read back as it was.
+//! Numbers are written with Rust's shortest round-trip formatting, so a table
+//! re-read gives back the same `f64`s and identical inputs give identical
+//! bytes; a cell is quoted only when it must be, so the stage tables (numbers,
+//! ids and short words) are plain comma-separated lines.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -66,25 +67,39 @@ impl Table {
     }
 
     /// Parses CSV text; an error gives the 1-based line and what is wrong.
+    ///
+    /// Cells are trimmed of surrounding spaces, blank lines are skipped, and a
+    /// quoted cell may hold commas, doubled quotes and line breaks.
     pub fn parse(text: &str) -> Result<Table, (usize, String)> {
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
-            .filter(|(_, l)| !l.trim().is_empty());
-        let (_, head) = lines.next().ok_or((1, "empty table".to_string()))?;
-        let header = split(head).map_err(|m| (1, m))?;
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .trim(csv::Trim::All)
+            .from_reader(text.as_bytes());
+        let mut header: Option<Vec<String>> = None;
         let mut rows = Vec::new();
-        for (line, text) in lines {
-            let cells = split(text).map_err(|m| (line, m))?;
-            if cells.len() != header.len() {
-                return Err((
-                    line,
-                    format!("{} cells, the header has {}", cells.len(), header.len()),
-                ));
+        for record in reader.records() {
+            let record = record.map_err(|e| {
+                let line = e.position().map_or(1, |p| p.line() as usize);
+                (line, e.to_string())
+            })?;
+            let line = record.position().map_or(1, |p| first_line(text, p));
+            if record.len() == 1 && record[0].is_empty() {
+                continue; // a line of spaces only
             }
-            rows.push(cells);
+            let cells: Vec<String> = record.iter().map(str::to_string).collect();
+            match &header {
+                None => header = Some(cells),
+                Some(h) if cells.len() != h.len() => {
+                    return Err((
+                        line,
+                        format!("{} cells, the header has {}", cells.len(), h.len()),
+                    ));
+                }
+                Some(_) => rows.push(cells),
+            }
         }
+        let header = header.ok_or((1, "empty table".to_string()))?;
         Ok(Table { header, rows })
     }
 
@@ -134,16 +149,23 @@ impl Table {
     }
 }
 
+/// The 1-based line where the record at `position` starts: the csv crate
+/// places a record after the blank lines before it, so skip those.
+fn first_line(text: &str, position: &csv::Position) -> usize {
+    let blank = text
+        .as_bytes()
+        .get(position.byte() as usize..)
+        .unwrap_or_default()
+        .iter()
+        .take_while(|b| b.is_ascii_whitespace())
+        .filter(|b| **b == b'\n')
+        .count();
+    position.line() as usize + blank
+}
+
 /// A finite number, or `None`.
 pub fn parse_number(cell: &str) -> Option<f64> {
     cell.trim().parse::<f64>().ok().filter(|v| v.is_finite())
-}
-
-fn split(line: &str) -> Result<Vec<String>, String> {
-    if line.contains('"') {
-        return Err("quoted cells are not supported".to_string());
-    }
-    Ok(line.split(',').map(|c| c.trim().to_string()).collect())
 }
 
 /// Builds CSV text row by row.
@@ -159,7 +181,7 @@ pub enum Cell {
     Number(f64),
     /// An integer.
     Integer(u64),
-    /// A word or id (must not contain commas, quotes or line breaks).
+    /// A word, id or message (quoted if it holds a comma, a quote or a line break).
     Text(String),
     /// No value.
     Empty,
@@ -191,12 +213,18 @@ impl CsvWriter {
 
     fn push_line(&mut self, cells: impl Iterator<Item = String>) {
         let cells: Vec<String> = cells.collect();
-        debug_assert!(
-            cells.iter().all(|c| !c.contains([',', '"', '\n'])),
-            "{cells:?}"
-        );
-        self.text.push_str(&cells.join(","));
-        self.text.push('\n');
+        // One small writer per line keeps `CsvWriter` a plain buffer (Clone,
+        // Default); its records all end in `\n`, quoted only where needed.
+        let mut line = csv::WriterBuilder::new()
+            .buffer_capacity(256)
+            .from_writer(Vec::new());
+        line.write_record(&cells)
+            .expect("a CSV line in memory cannot fail to write");
+        let bytes = line
+            .into_inner()
+            .expect("a CSV line in memory cannot fail to flush");
+        self.text
+            .push_str(std::str::from_utf8(&bytes).expect("CSV of strings is UTF-8"));
     }
 
     /// The CSV text.
@@ -230,5 +258,61 @@ mod tests {
         assert_eq!(err, "t.csv:3: column `a` = `x`: must be a finite number");
         let err = t.numbers(Path::new("t.csv"), "b").unwrap_err().to_string();
         assert_eq!(err, "t.csv: no column `b` (columns: a)");
+    }
+
+    #[test]
+    fn plain_cells_are_written_unquoted() {
+        let mut w = CsvWriter::new(&["index", "mu", "id", "angle", "status"]);
+        w.row(&[
+            Cell::Integer(3),
+            Cell::Number(0.25),
+            Cell::Text("ab12".into()),
+            Cell::Empty,
+            Cell::Text("failed".into()),
+        ]);
+        w.row(&[
+            Cell::Integer(4),
+            Cell::Number(1e-7),
+            Cell::Text("cd34".into()),
+            Cell::Number(31.5),
+            Cell::Text("ok".into()),
+        ]);
+        assert_eq!(
+            w.finish(),
+            "index,mu,id,angle,status\n3,0.25,ab12,,failed\n4,0.0000001,cd34,31.5,ok\n"
+        );
+    }
+
+    #[test]
+    fn commas_quotes_and_line_breaks_round_trip() {
+        let awkward = "has 1 surface points, at least 3 are \"needed\"\nsee log";
+        let mut w = CsvWriter::new(&["a", "why"]);
+        w.row(&[Cell::Integer(1), Cell::Text(awkward.into())]);
+        let text = w.finish();
+        assert_eq!(
+            text,
+            "a,why\n1,\"has 1 surface points, at least 3 are \"\"needed\"\"\nsee log\"\n"
+        );
+        let t = Table::parse(&text).unwrap();
+        assert_eq!(t.rows, vec![vec!["1".to_string(), awkward.to_string()]]);
+    }
+
+    #[test]
+    fn blank_lines_spaces_and_crlf_are_tolerated() {
+        let t = Table::parse("a , b\r\n\r\n 1, 2 \r\n   \n3,4\n").unwrap();
+        assert_eq!(t.header, vec!["a", "b"]);
+        assert_eq!(t.rows, vec![vec!["1", "2"], vec!["3", "4"]]);
+        assert_eq!(
+            Table::parse("").unwrap_err(),
+            (1, "empty table".to_string())
+        );
+        assert_eq!(
+            Table::parse("a,b\n\n1,2,3\n").unwrap_err(),
+            (3, "3 cells, the header has 2".to_string())
+        );
+        assert_eq!(
+            Table::parse("a,b\n\"x\ny\",2\n\n  \n3\n").unwrap_err(),
+            (6, "1 cells, the header has 2".to_string())
+        );
     }
 }
