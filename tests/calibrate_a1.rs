@@ -12,8 +12,8 @@ use repose::calibrate::surrogate::TrainSettings;
 use repose::calibrate::train::{
     train_table, TableSpec, TrainOptions, TrainOutcome, DEFAULT_TRAIN_FRACTION,
 };
-use repose::stats::metrics::r_squared;
 use repose::report::table::Table;
+use repose::stats::metrics::r_squared;
 
 const TABLE: &str = "experiments/he2019-table-a1/table_a1.csv";
 const GOLDEN: &str = "golden/he2019_table_a1_sweep.csv";

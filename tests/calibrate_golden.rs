@@ -19,7 +19,6 @@ use std::path::{Path, PathBuf};
 use repose::calibrate::{Stage, StudyDir};
 use repose::commands::calibrate;
 use repose::manifest::parse_study;
-use repose::report::table::Table;
 use repose::scenes::plan::Limits;
 
 const STUDY: &str = "experiments/calibrate-smoke/study.json";

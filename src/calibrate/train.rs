@@ -25,9 +25,9 @@ use super::{
     StudyDir,
 };
 use crate::manifest::Study;
-use crate::stats::metrics::r_squared;
 use crate::report::svg::{parity_plot, ParityPoint};
 use crate::report::table::{parse_number, Cell, CsvWriter, Table};
+use crate::stats::metrics::r_squared;
 use crate::store::InputRef;
 use crate::store::Lineage;
 

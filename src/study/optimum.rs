@@ -17,12 +17,19 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
+/// The ChaCha stream of the starts ("optimum" in ASCII), apart from the
+/// packing seeds' streams.
+const OPTIMISER_STREAM: u64 = 0x006f_7074_696d_756d;
+
+/// A fitted model: coded factors → predicted response.
+pub type Model<'a> = Box<dyn Fn(&[f64]) -> f64 + 'a>;
+
 /// A response's fitted model and its goal.
 pub struct Goal<'a> {
     /// Response name.
     pub response: String,
     /// The model: coded factors → predicted response.
-    pub predict: Box<dyn Fn(&[f64]) -> f64 + 'a>,
+    pub predict: Model<'a>,
     /// Target value T.
     pub target: f64,
     /// Lower end L (d = 0 at and below).
@@ -114,7 +121,7 @@ fn climb(goals: &[Goal], start: Vec<f64>) -> Vec<f64> {
 /// `factors` dimensions (see the module docs).
 pub fn maximise(goals: &[Goal], factors: usize, starts: usize, seed: u64) -> Search {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(0x6f70_7469_6d75_6d); // "optimum"
+    rng.set_stream(OPTIMISER_STREAM);
     let mut found: Vec<Optimum> = Vec::new();
     for s in 0..starts.max(1) {
         let start: Vec<f64> = if s == 0 {
