@@ -4,14 +4,15 @@
 //! {0.05, 0.45, 0.85} (36 runs).
 //!
 //! Run order is the standard order: the first factor changes fastest, the last
-//! slowest (run r takes level (r / Πⱼ₍ⱼ₍ᵢ₎ nⱼ) mod nᵢ of factor i), as pyDOE3's
-//! `fullfact`. Levels are used in the order listed, not sorted.
+//! slowest (run r takes level ⌊r / (n₀ n₁ ⋯ nᵢ₋₁)⌋ mod nᵢ of factor i, nⱼ the
+//! number of levels of factor j), as pyDOE3's `fullfact`. Levels are used in
+//! the order listed, not sorted.
 
 use super::{check_levels, DesignError};
 
 /// Every combination of one level from each of `levels` (one list per factor,
-/// actual units), in standard order (first factor fastest): Πᵢ |levels[i]| runs
-/// of `levels.len()` values.
+/// actual units), in standard order (first factor fastest):
+/// Πᵢ `levels[i].len()` runs of `levels.len()` values.
 ///
 /// Refused when there are no factors, a factor has no levels, or a factor's
 /// levels are not finite or not distinct (a repeated level would repeat runs).

@@ -21,7 +21,7 @@ pub struct OfatRun {
 
 /// The runs that vary each factor of `base` through its `levels` list in turn,
 /// holding the others at `base` (actual units), in the order of the module
-/// docs: Σᵢ |levels[i]| runs.
+/// docs: Σᵢ `levels[i].len()` runs.
 ///
 /// Refused when `base` and `levels` differ in length, a base coordinate is not
 /// finite, or a factor's levels are not finite or not distinct.
