@@ -157,7 +157,7 @@ fn a_target_that_is_not_a_response_or_outside_its_band_is_rejected() {
         "{e}"
     );
     assert!(
-        e.contains("targets.static_angle_deg.value = 41.8 (low 45, high 55)"),
+        e.contains("targets.static_angle_deg.value = 41.8 (low 45.0, high 55.0)"),
         "{e}"
     );
     assert!(
