@@ -76,7 +76,11 @@
 //! must fit (`min_views` = 4 in [`crate::measure::pile::side_views`]; the
 //! funnel scene accepts 3): the disk pile is large and centred, and no run has
 //! failed one view alone, so the profile stays the full four-view mean. A flank fit
-//! with R² below [`R2_FLOOR`] sets `profile_r2_below_floor` to 1.
+//! with R² below [`R2_FLOOR`] sets `profile_r2_below_floor` to 1. A pile whose
+//! flanks hold too few surface points for a fit (a small pile of coarse
+//! particles, or a low mound) has no profile: `profile_measured` is 0 and the
+//! `profile_*` keys are absent, while the height angle, the headline, is still
+//! measured.
 //!
 //! The height angle `height_angle_deg` = atan(2H/D) uses H, the highest
 //! particle top above the disk (`pile_height_m`), and the disk diameter D. It
@@ -444,9 +448,9 @@ fn empty_world(
 /// The pile's measurements (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PileMeasurement {
-    /// Profile angle in each view of [`VIEW_AZIMUTHS_DEG`]; all four are fitted
-    /// (a pile measures only when every view does).
-    pub profile: SideViews,
+    /// Profile angle in each view of [`VIEW_AZIMUTHS_DEG`]; all four are fitted,
+    /// or `None` when a view cannot be (too few surface points on a flank).
+    pub profile: Option<SideViews>,
     /// cai2024's atan(2H/D).
     pub height: HeightAngle,
     /// Share of the rim's sectors reached by the pile, in [0, 1].
@@ -475,7 +479,7 @@ pub fn measure_pile(
         min_height_diameters: MIN_HEIGHT_DIAMETERS,
         ..PileSpec::new(0.0, bin_width_m)
     };
-    let profile = side_views(&pos, &rad, &base, VIEWS)?;
+    let profile = side_views(&pos, &rad, &base, VIEWS).ok();
     let height = height_diameter_angle(
         &pos,
         &rad,
@@ -609,23 +613,25 @@ impl PileSampler<'_> {
             .map(|i| (p.position[i], p.radius[i]))
             .unzip();
         let pile = measure_pile(&self.geometry, &pos, &rad, self.d50_m).ok();
-        if let Some(m) = pile {
+        if let Some(profile) = pile.and_then(|m| m.profile) {
             self.traces
-                .push("profile_angle", "deg", t, m.profile.mean_deg());
+                .push("profile_angle", "deg", t, profile.mean_deg());
+        }
+        if let Some(m) = pile {
             self.traces
                 .push("height_angle", "deg", t, m.height.angle_deg);
         }
         if let Some(log) = self.log.as_deref_mut() {
             log.record(sim)?;
             log.scalar(Trace::Discharged, t, discharged as f64)?;
-            if let Some(m) = pile {
+            if let Some(profile) = pile.and_then(|m| m.profile) {
                 log.angle(
                     t,
                     &AngleSample {
-                        left_deg: m.profile.left_deg(),
-                        right_deg: m.profile.right_deg(),
-                        mean_deg: m.profile.mean_deg(),
-                        fit_r2: m.profile.min_r2(),
+                        left_deg: profile.left_deg(),
+                        right_deg: profile.right_deg(),
+                        mean_deg: profile.mean_deg(),
+                        fit_r2: profile.min_r2(),
                     },
                 )?;
             }
@@ -738,29 +744,34 @@ pub fn run(
     put("particles_below_disk", census.below_disk as f64);
     put("pour_end_s", pour_end_s);
     put("final_kinetic_energy_ratio", rest_ratio);
-    let profile = &pile.profile;
-    put("profile_angle_deg", profile.mean_deg());
-    put("profile_left_deg", profile.left_deg());
-    put("profile_right_deg", profile.right_deg());
-    for (az, a) in VIEW_AZIMUTHS_DEG.iter().zip(&profile.views) {
-        let Some(a) = a else { continue };
-        let view = format!("az{az:03}");
-        put(&format!("profile_{view}_left_deg"), a.left_deg);
-        put(&format!("profile_{view}_right_deg"), a.right_deg);
-        put(&format!("profile_{view}_mean_deg"), a.mean_deg);
-        put(&format!("profile_{view}_r2_left"), a.r2_left);
-        put(&format!("profile_{view}_r2_right"), a.r2_right);
-        put(&format!("profile_{view}_points_left"), a.points_left as f64);
+    put(
+        "profile_measured",
+        f64::from(u8::from(pile.profile.is_some())),
+    );
+    if let Some(profile) = &pile.profile {
+        put("profile_angle_deg", profile.mean_deg());
+        put("profile_left_deg", profile.left_deg());
+        put("profile_right_deg", profile.right_deg());
+        for (az, a) in VIEW_AZIMUTHS_DEG.iter().zip(&profile.views) {
+            let Some(a) = a else { continue };
+            let view = format!("az{az:03}");
+            put(&format!("profile_{view}_left_deg"), a.left_deg);
+            put(&format!("profile_{view}_right_deg"), a.right_deg);
+            put(&format!("profile_{view}_mean_deg"), a.mean_deg);
+            put(&format!("profile_{view}_r2_left"), a.r2_left);
+            put(&format!("profile_{view}_r2_right"), a.r2_right);
+            put(&format!("profile_{view}_points_left"), a.points_left as f64);
+            put(
+                &format!("profile_{view}_points_right"),
+                a.points_right as f64,
+            );
+        }
+        put("profile_r2_min", profile.min_r2());
         put(
-            &format!("profile_{view}_points_right"),
-            a.points_right as f64,
+            "profile_r2_below_floor",
+            f64::from(u8::from(profile.min_r2() < R2_FLOOR)),
         );
     }
-    put("profile_r2_min", profile.min_r2());
-    put(
-        "profile_r2_below_floor",
-        f64::from(u8::from(profile.min_r2() < R2_FLOOR)),
-    );
     put("height_angle_deg", pile.height.angle_deg);
     put("pile_height_m", pile.height.height_m);
     put("rim_coverage_fraction", pile.rim_coverage_fraction);
