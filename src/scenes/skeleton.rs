@@ -15,8 +15,9 @@
 //!
 //! Why: each scene used to repeat these lines and spell the shared keys its
 //! own way (`particles_inserted`, `end_s`, `settled_before_rotation` …), so a
-//! reader of results needed to know which scene wrote them. The failures they share are one [`LabError`]. Each scene keeps
-//! its geometry, protocol and own measurements in its own file.
+//! reader of results needed to know which scene wrote them. The failures
+//! they share are one [`LabError`]. Each scene keeps its geometry, protocol
+//! and own measurements in its own file.
 
 use std::path::Path;
 
