@@ -92,7 +92,7 @@
 
 use super::physics::STANDARD_GRAVITY_M_S2;
 use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
-use super::skeleton::{finish, open_log, Lab};
+use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::SceneError;
 use crate::dem::domain::Domain;
 use crate::dem::health::{HealthError, HealthLimits};
@@ -100,7 +100,7 @@ use crate::dem::particles::Particles;
 use crate::dem::simulation::{Simulation, World};
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::{Motion, Wall};
-use crate::log::{AngleSample, LogError, RunLog, Trace};
+use crate::log::{AngleSample, RunLog, Trace};
 use crate::manifest::scene::BaffleLiftScene;
 use crate::manifest::Experiment;
 use crate::measure::baffle::{baffle_slope_angle, BaffleSpec, SlopeAngle};
@@ -134,24 +134,9 @@ pub const ANGLE_R2_FLOOR: f64 = 0.9;
 /// Why a baffle-lift run failed beyond the engine's own errors.
 #[derive(Debug, thiserror::Error)]
 pub enum BaffleError {
-    /// The powder could not be placed.
-    #[error("baffle_lift fill: {0}")]
-    Packing(#[from] PackingError),
-    /// The engine refused the setup.
-    #[error("baffle_lift: {0}")]
-    Setup(#[from] crate::dem::simulation::SetupError),
-    /// The simulation became unhealthy.
+    /// What any lab scene can fail at ([`LabError`]).
     #[error(transparent)]
-    Health(#[from] HealthError),
-    /// A wall could not be built or moved.
-    #[error("baffle_lift wall: {0}")]
-    Wall(#[from] crate::dem::walls::WallError),
-    /// The domain could not be built.
-    #[error("baffle_lift domain: {0}")]
-    Domain(#[from] crate::dem::domain::DomainError),
-    /// The run log could not be written.
-    #[error(transparent)]
-    Log(#[from] LogError),
+    Lab(LabError),
     /// The settled powder stands higher than the box.
     #[error(
         "baffle_lift: the settled powder stands {bed_height_m:.4} m high, above box_height_m = \
@@ -167,6 +152,8 @@ pub enum BaffleError {
     #[error("baffle_lift: static angle {0}")]
     Angle(#[from] MeasureError),
 }
+
+lab_error_conversions!(BaffleError, "baffle_lift");
 
 /// The box, the floor and what counts as where.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -22,7 +22,7 @@
 //! not averaged); the static angle is measured at the end of standing.
 
 use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
-use super::skeleton::{finish, open_log, Lab};
+use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::SceneError;
 use crate::dem::domain::Domain;
 use crate::dem::health::{HealthError, HealthLimits};
@@ -51,25 +51,15 @@ const LATTICE_SPACING: f64 = 1.05;
 /// Why a drum run failed beyond the engine's own errors.
 #[derive(Debug, thiserror::Error)]
 pub enum DrumError {
-    /// The particles do not fit the insertion region.
-    #[error("drum fill: {0}")]
-    Packing(#[from] PackingError),
-    /// The engine refused the setup.
-    #[error("drum: {0}")]
-    Setup(#[from] crate::dem::simulation::SetupError),
-    /// The simulation became unhealthy.
+    /// What any lab scene can fail at ([`LabError`]).
     #[error(transparent)]
-    Health(#[from] HealthError),
-    /// A wall could not be built.
-    #[error("drum wall: {0}")]
-    Wall(#[from] crate::dem::walls::WallError),
-    /// The domain could not be built.
-    #[error("drum domain: {0}")]
-    Domain(#[from] crate::dem::domain::DomainError),
+    Lab(LabError),
     /// No angle could be measured at the end of standing.
     #[error("drum: static angle: {0}")]
     Angle(#[from] crate::measure::MeasureError),
 }
+
+lab_error_conversions!(DrumError, "drum");
 
 /// Samples traces, angles and log frames while the drum runs.
 struct DrumSampler<'a> {
@@ -116,7 +106,7 @@ impl Sampler for DrumSampler<'_> {
 
 impl From<HealthError> for SceneError {
     fn from(e: HealthError) -> Self {
-        SceneError::Drum(DrumError::Health(e))
+        SceneError::Drum(e.into())
     }
 }
 

@@ -98,20 +98,19 @@ pub mod geometry;
 
 use self::geometry::FunnelGeometry;
 use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
-use super::skeleton::{finish, open_log, Lab};
+use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::{physics, SceneError};
-use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::health::HealthLimits;
 use crate::dem::material::effective_youngs_modulus;
 use crate::dem::particles::Particles;
 use crate::dem::simulation::{ContactSetup, Simulation, World};
 use crate::dem::vec3::Vec3;
-use crate::log::{AngleSample, LogError, RunLog, Trace};
+use crate::log::{AngleSample, RunLog, Trace};
 use crate::manifest::scene::FunnelPileScene;
 use crate::manifest::Experiment;
 pub use crate::measure::pile::VIEW_AZIMUTHS_DEG;
 use crate::measure::pile::{side_views, PileSpec, SideViews};
 use crate::measure::MeasureError;
-use crate::packing::PackingError;
 use crate::store::RunResult;
 use std::path::Path;
 
@@ -126,9 +125,9 @@ pub const R2_FLOOR: f64 = 0.9;
 /// Why a funnel run failed beyond the engine's own errors.
 #[derive(Debug, thiserror::Error)]
 pub enum FunnelError {
-    /// The charge could not be laid out.
-    #[error("funnel_pile fill: {0}")]
-    Packing(#[from] PackingError),
+    /// What any lab scene can fail at ([`LabError`]).
+    #[error(transparent)]
+    Lab(LabError),
     /// The charge region holds no particle.
     #[error("funnel_pile fill: the charge region (fill_height_m = {fill_height_m} m above the outlet, fill_fraction = {fill_fraction}) holds no particle")]
     EmptyCharge {
@@ -137,25 +136,12 @@ pub enum FunnelError {
         /// Requested solid fraction.
         fill_fraction: f64,
     },
-    /// The engine refused the setup.
-    #[error("funnel_pile: {0}")]
-    Setup(#[from] crate::dem::simulation::SetupError),
-    /// The simulation became unhealthy.
-    #[error(transparent)]
-    Health(#[from] HealthError),
-    /// A wall could not be built.
-    #[error("funnel_pile wall: {0}")]
-    Wall(#[from] crate::dem::walls::WallError),
-    /// The domain could not be built.
-    #[error("funnel_pile domain: {0}")]
-    Domain(#[from] crate::dem::domain::DomainError),
     /// No angle could be measured at the end.
     #[error("funnel_pile: pile angle: {0}")]
     Angle(#[from] MeasureError),
-    /// The run log could not be written.
-    #[error(transparent)]
-    Log(#[from] LogError),
 }
+
+lab_error_conversions!(FunnelError, "funnel_pile");
 
 /// Fewest side views whose profile must fit for the pile to be measurable. A
 /// single short flank in one view of a small, rough pile says little about the

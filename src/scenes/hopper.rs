@@ -98,13 +98,12 @@ use self::geometry::{Geometry, LID_WALL};
 use self::sampler::DischargeSampler;
 use super::physics::STANDARD_GRAVITY_M_S2 as G_M_S2;
 use super::protocol::{run_phase, Phase, Progress, SettleCriterion};
-use super::skeleton::{finish, open_log, Lab};
+use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::SceneError;
-use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::health::HealthLimits;
 use crate::dem::particles::Particles;
 use crate::dem::simulation::World;
 use crate::dem::vec3::Vec3;
-use crate::log::LogError;
 use crate::manifest::scene::HopperScene;
 use crate::manifest::Experiment;
 use crate::measure::flow::{flow_rates, interval_rate, DischargeSample};
@@ -142,24 +141,9 @@ pub const BEVERLOO_K: f64 = 1.5;
 /// Why a hopper run failed.
 #[derive(Debug, thiserror::Error)]
 pub enum HopperError {
-    /// The particles could not be placed.
-    #[error("hopper pour: {0}")]
-    Packing(#[from] PackingError),
-    /// The engine refused the setup.
-    #[error("hopper: {0}")]
-    Setup(#[from] crate::dem::simulation::SetupError),
-    /// The simulation became unhealthy.
+    /// What any lab scene can fail at ([`LabError`]).
     #[error(transparent)]
-    Health(#[from] HealthError),
-    /// A wall could not be built or moved.
-    #[error("hopper wall: {0}")]
-    Wall(#[from] crate::dem::walls::WallError),
-    /// The simulation box could not be built.
-    #[error("hopper domain: {0}")]
-    Domain(#[from] crate::dem::domain::DomainError),
-    /// The run log could not be written.
-    #[error(transparent)]
-    Log(#[from] LogError),
+    Lab(LabError),
     /// The discharge trace could not be evaluated.
     #[error("hopper discharge: {0}")]
     Discharge(MeasureError),
@@ -172,6 +156,8 @@ pub enum HopperError {
         source: MeasureError,
     },
 }
+
+lab_error_conversions!(HopperError, "hopper");
 
 /// Beverloo's discharge rate of a flat-bottomed orifice, particles per
 /// second: W = C ρ_b √g (D_o − k d)^{5/2} (kg/s) over the particle mass

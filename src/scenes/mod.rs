@@ -4,6 +4,9 @@
 //! [`crate::store::Store::run_cached`].
 //! [`plan::plan`] checks an experiment's scene against its particles and
 //! physics and estimates the run's cost before anything runs.
+//! [`skeleton`] is the set-up and finish the five lab scenes share (and the
+//! measurement keys they all report); [`responses`] names each scene kind's
+//! scalar physics results and reads them from a run.
 
 pub mod baffle;
 pub mod drum;

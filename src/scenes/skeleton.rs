@@ -15,23 +15,126 @@
 //!
 //! Why: each scene used to repeat these lines and spell the shared keys its
 //! own way (`particles_inserted`, `end_s`, `settled_before_rotation` …), so a
-//! reader of results needed to know which scene wrote them. Each scene keeps
-//! its geometry, protocol and own measurements in its own file.
+//! reader of results needed to know which scene wrote them. The failures
+//! they share are one [`LabError`]. Each scene keeps its geometry, protocol
+//! and own measurements in its own file.
 
 use std::path::Path;
 
 use super::physics::{self, STANDARD_GRAVITY_M_S2};
 use super::protocol::Traces;
 use super::SceneError;
-use crate::dem::health::HealthLimits;
+use crate::dem::domain::DomainError;
+use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::simulation::{ContactSetup, SetupError, Simulation, SimulationSetup, World};
 use crate::dem::timestep::TimeStepPlan;
 use crate::dem::vec3::Vec3;
+use crate::dem::walls::WallError;
 use crate::log::{LogError, LogOptions, RunLog};
 use crate::manifest::Experiment;
 use crate::packing::distribution::SizeDistribution;
 use crate::packing::PackingError;
 use crate::store::RunResult;
+
+/// What any lab scene's set-up or run can fail at besides its own protocol
+/// and measurement: the variants the five lab scenes share, each message
+/// starting with the scene's kind as written in manifests. Every lab scene's
+/// error holds it as its `Lab` variant and converts from these sources with
+/// [`lab_error_conversions`], so `?` works on them inside a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum LabError {
+    /// The particles could not be placed or inserted (an invalid size
+    /// distribution, a region too small, an invalid factory setting).
+    #[error("{scene} fill: {source}")]
+    Packing {
+        /// The scene kind.
+        scene: &'static str,
+        /// Why.
+        source: PackingError,
+    },
+    /// The engine refused the set-up or an insertion.
+    #[error("{scene}: {source}")]
+    Setup {
+        /// The scene kind.
+        scene: &'static str,
+        /// Why.
+        source: SetupError,
+    },
+    /// The simulation became unhealthy (its message names the particle, step
+    /// and cause).
+    #[error(transparent)]
+    Health(HealthError),
+    /// A wall could not be built or moved.
+    #[error("{scene} wall: {source}")]
+    Wall {
+        /// The scene kind.
+        scene: &'static str,
+        /// Why.
+        source: WallError,
+    },
+    /// The simulation box could not be built.
+    #[error("{scene} domain: {source}")]
+    Domain {
+        /// The scene kind.
+        scene: &'static str,
+        /// Why.
+        source: DomainError,
+    },
+    /// The run log could not be written.
+    #[error(transparent)]
+    Log(LogError),
+}
+
+/// Implements `From` for a lab scene's error type (`$error`, which has a
+/// `Lab(LabError)` variant) from each source of [`LabError`], naming the
+/// scene `$scene` (its kind as written in manifests).
+macro_rules! lab_error_conversions {
+    ($error:ty, $scene:literal) => {
+        impl From<$crate::packing::PackingError> for $error {
+            fn from(source: $crate::packing::PackingError) -> Self {
+                Self::Lab($crate::scenes::skeleton::LabError::Packing {
+                    scene: $scene,
+                    source,
+                })
+            }
+        }
+        impl From<$crate::dem::simulation::SetupError> for $error {
+            fn from(source: $crate::dem::simulation::SetupError) -> Self {
+                Self::Lab($crate::scenes::skeleton::LabError::Setup {
+                    scene: $scene,
+                    source,
+                })
+            }
+        }
+        impl From<$crate::dem::walls::WallError> for $error {
+            fn from(source: $crate::dem::walls::WallError) -> Self {
+                Self::Lab($crate::scenes::skeleton::LabError::Wall {
+                    scene: $scene,
+                    source,
+                })
+            }
+        }
+        impl From<$crate::dem::domain::DomainError> for $error {
+            fn from(source: $crate::dem::domain::DomainError) -> Self {
+                Self::Lab($crate::scenes::skeleton::LabError::Domain {
+                    scene: $scene,
+                    source,
+                })
+            }
+        }
+        impl From<$crate::dem::health::HealthError> for $error {
+            fn from(e: $crate::dem::health::HealthError) -> Self {
+                Self::Lab($crate::scenes::skeleton::LabError::Health(e))
+            }
+        }
+        impl From<$crate::log::LogError> for $error {
+            fn from(e: $crate::log::LogError) -> Self {
+                Self::Lab($crate::scenes::skeleton::LabError::Log(e))
+            }
+        }
+    };
+}
+pub(crate) use lab_error_conversions;
 
 /// What a lab scene sets up from its experiment before building its rig.
 #[derive(Debug)]

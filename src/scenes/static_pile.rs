@@ -118,16 +118,16 @@ use super::protocol::{
     mean_kinetic_energy_j, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
     STANDARD_GRAVITY_M_S2,
 };
-use super::skeleton::{finish, open_log, Lab};
+use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::{physics, SceneError};
-use crate::dem::domain::{Domain, DomainError};
-use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::domain::Domain;
+use crate::dem::health::HealthLimits;
 use crate::dem::particles::Particles;
-use crate::dem::simulation::{SetupError, Simulation, World};
+use crate::dem::simulation::{Simulation, World};
 use crate::dem::timestep::TimeStepPlan;
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::{Wall, WallError};
-use crate::log::{AngleSample, LogError, RunLog, Trace};
+use crate::log::{AngleSample, RunLog, Trace};
 use crate::manifest::scene::StaticPileScene;
 use crate::manifest::Experiment;
 use crate::measure::pile::{height_diameter_angle, side_views, HeightAngle, PileSpec, SideViews};
@@ -163,24 +163,9 @@ const MIN_HEIGHT_DIAMETERS: f64 = 3.0;
 /// Why a static-pile run failed beyond the engine's time-step refusal.
 #[derive(Debug, thiserror::Error)]
 pub enum StaticPileError {
-    /// The size distribution or the factory settings are invalid.
-    #[error("static pile insertion: {0}")]
-    Packing(#[from] PackingError),
-    /// The engine refused the setup.
-    #[error("static pile: {0}")]
-    Setup(#[from] SetupError),
-    /// The simulation became unhealthy.
+    /// What any lab scene can fail at ([`LabError`]).
     #[error(transparent)]
-    Health(#[from] HealthError),
-    /// A wall could not be built.
-    #[error("static pile wall: {0}")]
-    Wall(#[from] WallError),
-    /// The domain could not be built.
-    #[error("static pile domain: {0}")]
-    Domain(#[from] DomainError),
-    /// The run log could not be written.
-    #[error(transparent)]
-    Log(#[from] LogError),
+    Lab(LabError),
     /// No pile could be measured at the end; the counts say why.
     #[error(
         "static pile: angle not measurable: {source}; {generated} of {particle_count} \
@@ -200,6 +185,8 @@ pub enum StaticPileError {
         in_funnel: usize,
     },
 }
+
+lab_error_conversions!(StaticPileError, "static_pile");
 
 /// The rig's dimensions, m: disk top at z = 0, funnel and disk on the z axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
