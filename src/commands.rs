@@ -30,13 +30,13 @@ use crate::scenes::protocol::{progress_enabled, set_quiet};
 use crate::scenes::responses::listing;
 use crate::scenes::run_experiment;
 use crate::store::{
-    write_atomic, CacheOutcome, Depth, InputRef, Lineage, RunDir, RunError, RunState, RunStatus,
-    RunSummary, Store, StoreError,
+    write_atomic, CacheOutcome, Depth, RunDir, RunError, RunState, RunStatus, RunSummary, Store,
+    StoreError,
 };
 use crate::study::spec::{is_design_study, read_design_study, DesignStudy};
 use crate::study::{self, StudyError};
+use crate::tradeoff as tradeoff_sweep;
 use crate::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
-use crate::tradeoff::{self as tradeoff_sweep, report};
 
 /// Which kind of manifest a file holds, as chosen on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -114,6 +114,9 @@ pub enum CommandError {
     /// invalid experiment: refused before anything runs).
     #[error("tradeoff: {0}")]
     TradeoffPlan(#[from] PlanError),
+    /// The tradeoff sweep failed to run or to write its outputs.
+    #[error("tradeoff: {0}")]
+    Tradeoff(#[from] tradeoff_sweep::SweepError),
     /// A command-line option is malformed (the message names it).
     #[error("{0}")]
     Usage(String),
@@ -170,6 +173,7 @@ impl CommandError {
             CommandError::Audit(AuditError::Store(e)) => e.is_invalid_input(),
             CommandError::Calibrate(e) => e.is_invalid_input(),
             CommandError::Exec(_) => true,
+            CommandError::Tradeoff(e) => e.is_invalid_input(),
             CommandError::Study(e) => e.is_invalid_input(),
             CommandError::RunFailed { .. }
             | CommandError::Output(_)
@@ -639,64 +643,22 @@ pub fn tradeoff(
     let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
     let points = plan_sweep(&base, &options.knobs, options.replicates)?;
     let store = open_store(store_root)?;
-    let total: usize = points.iter().map(|p| p.replicates.len()).sum();
-    let done = points
-        .iter()
-        .flat_map(|p| &p.replicates)
-        .filter(|e| store.status(&e.id()) == RunStatus::Complete)
-        .count();
-    eprintln!(
-        "tradeoff: {} points x {} replicates = {total} runs ({done} already complete) on {} thread(s)",
-        points.len(),
-        options.replicates,
-        options.threads
-    );
     let pool = LocalPool {
         jobs: options.threads,
         progress: progress_enabled(),
         limits: *limits,
     };
-    let outcomes = tradeoff_sweep::run(&store, &points, &pool)?;
-    let rows = tradeoff_sweep::summarise(&points, &outcomes);
-    let dir = options
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| store.root().join("tradeoff").join(base.id().short(12)));
-    std::fs::create_dir_all(&dir).map_err(StoreError::io(&dir))?;
-    let title = format!(
-        "What accuracy costs: {} ({})",
-        base.scene.kind(),
-        manifest.display()
-    );
-    let csv_path = dir.join("tradeoff.csv");
-    let outputs = [
-        (csv_path.clone(), report::csv(&rows)),
-        (dir.join("tradeoff.md"), report::markdown(&rows, &title)),
-        (dir.join("tradeoff.svg"), report::svg(&rows, &title)),
-    ];
-    let mut lineage = Lineage::new(
-        "tradeoff",
-        serde_json::json!({
-            "knobs": options.knobs.iter().map(|k| (k.name, k.values.clone())).collect::<Vec<_>>(),
-            "replicates": options.replicates,
-        }),
-    )
-    .with_input(InputRef::file(
-        "base_manifest",
+    let done = tradeoff_sweep::sweep(
+        &store,
+        &base,
         manifest,
-        Some(store.root()),
-    )?);
-    for row in &rows {
-        for id in &row.ids {
-            lineage = lineage.with_input(InputRef::id(row.label.clone(), id));
-        }
-    }
-    for (path, text) in &outputs {
-        write_atomic(path, text.as_bytes()).map_err(StoreError::io(path))?;
-        lineage.write_beside(path)?;
-    }
-    write!(out, "{}", report::markdown(&rows, &title))?;
-    writeln!(out, "\nwritten: {}", dir.display())?;
+        &points,
+        &options.knobs,
+        &pool,
+        options.out_dir.clone(),
+    )?;
+    write!(out, "{}", done.markdown)?;
+    writeln!(out, "\nwritten: {}", done.dir.display())?;
     Ok(())
 }
 

@@ -13,13 +13,117 @@ pub mod pareto;
 pub mod plan;
 pub mod report;
 
+use std::path::{Path, PathBuf};
+
 use crate::exec::{run_incomplete, ExecError, LocalPool, Ran};
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::run_experiment;
 use crate::stats::summary::{difference_ci, mean_ci, MeanCi};
-use crate::store::{RunDir, RunResult, Store, TimingRecord};
+use crate::store::{
+    write_atomic, InputRef, Lineage, RunDir, RunResult, RunStatus, Store, StoreError, TimingRecord,
+};
 use pareto::pareto_front;
 use plan::Point;
+
+/// Why a sweep failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    /// The executor refused the runs (a plan over the limits).
+    #[error(transparent)]
+    Exec(#[from] ExecError),
+    /// The store or an output failed.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+}
+
+impl SweepError {
+    /// True when the user's input (limits, paths) is at fault.
+    pub fn is_invalid_input(&self) -> bool {
+        match self {
+            SweepError::Exec(_) => true,
+            SweepError::Store(e) => e.is_invalid_input(),
+        }
+    }
+}
+
+/// What [`sweep`] did.
+#[derive(Debug, Clone)]
+pub struct Sweep {
+    /// The table rows, the reference first.
+    pub rows: Vec<Row>,
+    /// Where tradeoff.csv, .md and .svg were written.
+    pub dir: PathBuf,
+    /// The Markdown table.
+    pub markdown: String,
+}
+
+/// `repose tradeoff`: runs the planned `points` (see [`run`]), summarises
+/// them and writes tradeoff.csv / .md / .svg with one lineage record beside
+/// each (the knobs, the replicates, the base manifest file and every run id)
+/// into `out_dir` (default `<store>/tradeoff/<first 12 hex of the base id>`).
+pub fn sweep(
+    store: &Store,
+    base: &Experiment,
+    manifest: &Path,
+    points: &[Point],
+    knobs: &[plan::Knob],
+    pool: &LocalPool,
+    out_dir: Option<PathBuf>,
+) -> Result<Sweep, SweepError> {
+    let total: usize = points.iter().map(|p| p.replicates.len()).sum();
+    let done = points
+        .iter()
+        .flat_map(|p| &p.replicates)
+        .filter(|e| store.status(&e.id()) == RunStatus::Complete)
+        .count();
+    let replicates = points.first().map_or(0, |p| p.replicates.len());
+    eprintln!(
+        "tradeoff: {} points x {replicates} replicates = {total} runs ({done} already complete) on {} thread(s)",
+        points.len(),
+        pool.jobs
+    );
+    let outcomes = run(store, points, pool)?;
+    let rows = summarise(points, &outcomes);
+    let dir = out_dir.unwrap_or_else(|| store.root().join("tradeoff").join(base.id().short(12)));
+    std::fs::create_dir_all(&dir).map_err(StoreError::io(&dir))?;
+    let title = format!(
+        "What accuracy costs: {} ({})",
+        base.scene.kind(),
+        manifest.display()
+    );
+    let markdown = report::markdown(&rows, &title);
+    let outputs = [
+        (dir.join("tradeoff.csv"), report::csv(&rows)),
+        (dir.join("tradeoff.md"), markdown.clone()),
+        (dir.join("tradeoff.svg"), report::svg(&rows, &title)),
+    ];
+    let mut lineage = Lineage::new(
+        "tradeoff",
+        serde_json::json!({
+            "knobs": knobs.iter().map(|k| (k.name, k.values.clone())).collect::<Vec<_>>(),
+            "replicates": replicates,
+        }),
+    )
+    .with_input(InputRef::file(
+        "base_manifest",
+        manifest,
+        Some(store.root()),
+    )?);
+    for row in &rows {
+        for id in &row.ids {
+            lineage = lineage.with_input(InputRef::id(row.label.clone(), id));
+        }
+    }
+    for (path, text) in &outputs {
+        write_atomic(path, text.as_bytes()).map_err(StoreError::io(path))?;
+        lineage.write_beside(path)?;
+    }
+    Ok(Sweep {
+        rows,
+        dir,
+        markdown,
+    })
+}
 
 /// The outcome of one replicate.
 #[derive(Debug, Clone)]
