@@ -33,6 +33,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::manifest::{content_id, ContentId, Study};
 use crate::scenes::run_experiment;
 use crate::store::{Depth, Lineage, RunState, Store, StoreError, MCAP_FILE, RESULT_FILE};
+use crate::study::spec::DesignStudy;
 
 /// Suffix of lineage records.
 const LINEAGE_SUFFIX: &str = ".lineage.json";
@@ -307,6 +308,8 @@ fn study_ids(path: &Path) -> Result<BTreeSet<String>, AuditError> {
             if p.file_name().is_some_and(|n| n == "study.json") {
                 if let Ok(study) = Store::read_json::<Study>(p) {
                     ids.insert(content_id(&study).to_string());
+                } else if let Ok(study) = Store::read_json::<DesignStudy>(p) {
+                    ids.insert(study.id().to_string());
                 }
             }
         })?;

@@ -99,6 +99,11 @@ fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
     );
 
     let dir = study_dir(&two);
+    // Every output's lineage leads back to the study and the sealed runs, and
+    // two re-runs reproduce their results byte for byte.
+    let mut audit_out = Vec::new();
+    repose::commands::audit(&two, &dir, 2, 1, &mut audit_out)
+        .unwrap_or_else(|e| panic!("audit: {e}\n{}", String::from_utf8_lossy(&audit_out)));
     let tables = [
         ("responses.csv", dir.join("rsm/responses.csv")),
         (
