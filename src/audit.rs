@@ -31,7 +31,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::manifest::{content_id, ContentId, Study};
-use crate::scenes::run_experiment;
+use crate::scenes::run_logged;
 use crate::store::{Depth, Lineage, RunState, Store, StoreError, MCAP_FILE, RESULT_FILE};
 use crate::study::spec::DesignStudy;
 
@@ -253,9 +253,7 @@ fn rerun_one(store: &Store, id: &ContentId) -> Result<RerunCheck, AuditError> {
         .root()
         .join(format!(".audit-{}-{}", std::process::id(), id.short(12)));
     let scratch = Store::open(&scratch_root)?;
-    let outcome = scratch.run_cached(&experiment, |e, dir| {
-        run_experiment(e, Some(&dir.mcap_path()))
-    });
+    let outcome = scratch.run_cached(&experiment, run_logged);
     let same = |file: &str| -> bool {
         let old = std::fs::read(store.run_dir(id).path().join(file)).ok();
         let new = std::fs::read(scratch.run_dir(id).path().join(file)).ok();

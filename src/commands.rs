@@ -28,10 +28,9 @@ use crate::manifest::{
 use crate::scenes::plan::{plan as plan_run, Limits, OverLimit, RunPlan};
 use crate::scenes::protocol::{progress_enabled, set_quiet};
 use crate::scenes::responses::listing;
-use crate::scenes::run_experiment;
+use crate::scenes::run_logged;
 use crate::store::{
-    write_atomic, CacheOutcome, Depth, RunDir, RunError, RunState, RunStatus, RunSummary, Store,
-    StoreError,
+    write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, RunSummary, Store, StoreError,
 };
 use crate::study::spec::{is_design_study, read_design_study, DesignStudy};
 use crate::study::{self, StudyError};
@@ -363,9 +362,7 @@ pub fn run(
             })?;
     }
     let dir = store.run_dir(&id);
-    let (result, outcome) = match store.run_cached(&experiment, |e, dir| {
-        run_experiment(e, Some(&dir.mcap_path()))
-    }) {
+    let (result, outcome) = match store.run_cached(&experiment, run_logged) {
         Ok(done) => done,
         Err(RunError::Invalid(errors)) => {
             return Err(CommandError::Manifest {
@@ -858,9 +855,7 @@ fn run_batch_and_report(
         limits: *limits,
     };
     set_quiet(true);
-    let outcome = run_batch(&dir, &study, &store, &settings, |e, run_dir| {
-        run_experiment(e, Some(&run_dir.mcap_path()))
-    })?;
+    let outcome = run_batch(&dir, &study, &store, &settings, run_logged)?;
     writeln!(
         out,
         "{} samples: {} complete before, {} computed, {} failed",
@@ -1015,9 +1010,7 @@ pub fn verify(
         limits: *limits,
     };
     set_quiet(true);
-    let outcome = run_verify(&dir, &study, &store, &settings, candidates, |e, run_dir| {
-        run_experiment(e, Some(&run_dir.mcap_path()))
-    })?;
+    let outcome = run_verify(&dir, &study, &store, &settings, candidates, run_logged)?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(out, "  table: {}", outcome.table.display())?;
     let unmeasured = outcome.not_measurable();
@@ -1079,13 +1072,7 @@ pub fn rsm(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, store) = open_design_study(store_root, study_path)?;
-    let report = study::run_rsm(
-        store_root,
-        &study,
-        &store,
-        pool,
-        &|e: &Experiment, dir: &RunDir| run_experiment(e, Some(&dir.mcap_path())),
-    )?;
+    let report = study::run_rsm(store_root, &study, &store, pool, &run_logged)?;
     if json {
         print_json(&report, out)?;
     } else {
@@ -1098,8 +1085,7 @@ pub fn rsm(
         }
         writeln!(
             out,
-            "
-written: {}",
+            "\nwritten: {}",
             report.rsm.dir.parent().unwrap_or(&report.rsm.dir).display()
         )?;
     }
@@ -1131,13 +1117,7 @@ pub fn screen(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, store) = open_design_study(store_root, study_path)?;
-    let outcome = study::run_screen(
-        store_root,
-        &study,
-        &store,
-        pool,
-        &|e: &Experiment, dir: &RunDir| run_experiment(e, Some(&dir.mcap_path())),
-    )?;
+    let outcome = study::run_screen(store_root, &study, &store, pool, &run_logged)?;
     if json {
         print_json(&outcome, out)
     } else {

@@ -55,6 +55,15 @@ pub enum SceneError {
     Log(#[from] LogError),
 }
 
+/// Runs the experiment with its log at the run directory's `run.mcap`: the
+/// runner every command and stage hands to the store and the executor.
+pub fn run_logged(
+    exp: &Experiment,
+    dir: &crate::store::RunDir,
+) -> Result<crate::store::RunResult, SceneError> {
+    run_experiment(exp, Some(&dir.mcap_path()))
+}
+
 /// Runs the experiment's scene and returns its result; with `log`, also writes
 /// the run's MCAP log there (atomically: the file appears only complete, and
 /// only when the run succeeds). A failed run's error is what the store records

@@ -17,10 +17,10 @@ use std::path::{Path, PathBuf};
 
 use crate::exec::{run_incomplete, ExecError, LocalPool, Ran};
 use crate::manifest::{ContentId, Experiment};
-use crate::scenes::run_experiment;
+use crate::scenes::run_logged;
 use crate::stats::summary::{difference_ci, mean_ci, MeanCi};
 use crate::store::{
-    write_atomic, InputRef, Lineage, RunDir, RunResult, RunStatus, Store, StoreError, TimingRecord,
+    write_atomic, InputRef, Lineage, RunResult, RunStatus, Store, StoreError, TimingRecord,
 };
 use pareto::pareto_front;
 use plan::Point;
@@ -153,8 +153,7 @@ pub fn run(
         .iter()
         .flat_map(|p| p.replicates.iter().cloned())
         .collect();
-    let runner = |e: &Experiment, dir: &RunDir| run_experiment(e, Some(&dir.mcap_path()));
-    let Ran { failures, .. } = run_incomplete(&all, store, pool, &runner)?;
+    let Ran { failures, .. } = run_incomplete(&all, store, pool, &run_logged)?;
     let mut flat: Vec<Outcome> = all
         .iter()
         .enumerate()
