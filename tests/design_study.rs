@@ -272,3 +272,31 @@ fn replicate_seeds_are_distinct_and_deterministic() {
         packing_seed(2, SeedStage::Design, 0, 0)
     );
 }
+
+#[test]
+fn a_full_factorial_study_runs_its_levels_in_standard_order_in_coded_units() {
+    let levels = json!({"A": [0.2, 0.6], "B": [0.1, 0.3, 0.5], "C": [0.3, 0.7], "D": [0.05, 0.4]});
+    let v = common::edit(
+        smoke(),
+        "/design",
+        Some(json!({"kind": "full_factorial", "levels": levels})),
+    );
+    let study = parse(v);
+    study.validate().unwrap();
+    let coded = repose::study::rsm::coded_design(&study).unwrap();
+    assert_eq!(coded.len(), 2 * 3 * 2 * 2);
+    // The first factor changes fastest.
+    assert_eq!(coded[0], vec![-1.0, -1.0, -1.0, -1.0]);
+    assert_eq!(coded[1], vec![1.0, -1.0, -1.0, -1.0]);
+    // The middle level codes to 0 within rounding (0.3 is not exact in binary).
+    assert!(coded[2][1].abs() < 1e-15 && coded[2][0] == -1.0 && coded[2][2] == -1.0);
+    assert_eq!(coded[23], vec![1.0, 1.0, 1.0, 1.0]);
+}
+
+#[test]
+fn the_box_behnken_study_has_29_points_with_centres_last() {
+    let study = parse(common::example("cai2024-quick/study.json"));
+    let coded = repose::study::rsm::coded_design(&study).unwrap();
+    assert_eq!(coded.len(), 29);
+    assert!(coded[24..].iter().all(|r| r.iter().all(|x| *x == 0.0)));
+}
