@@ -107,6 +107,8 @@ pub struct RsmOutcome {
     pub runs: usize,
     /// Runs cached before the stage.
     pub cached: usize,
+    /// Replicates lacking a response (failed or unmeasurable runs).
+    pub incomplete: usize,
     /// Per response.
     pub analyses: Vec<ResponseAnalysis>,
     /// The desirability optimum (when the study has targets).
@@ -279,6 +281,7 @@ where
             .collect(),
         runs: runs.total,
         cached: runs.cached,
+        incomplete: runs.incomplete(),
         analyses,
         optimum,
         optimum_actual,
@@ -290,6 +293,19 @@ where
         &lineage_of("summary"),
     )?;
     Ok(outcome)
+}
+
+/// A sentence on replicates without every response, or nothing.
+pub fn incomplete_note(incomplete: usize) -> String {
+    if incomplete == 0 {
+        String::new()
+    } else {
+        format!(
+            " {incomplete} replicate(s) lack a response: their runs failed or could not \
+             measure it (the status column of responses.csv says why); the analysis \
+             uses the rest."
+        )
+    }
 }
 
 fn label(label: &str, address: &str) -> String {
@@ -547,8 +563,8 @@ fn anova_markdown_body(a: &ResponseAnalysis) -> String {
 
 fn summary_markdown(o: &RsmOutcome) -> String {
     let mut md = format!(
-        "# {} — response surface ({} runs, {} were in the store)\n\nStudy id {}.\n\n| Factor | Label | Address | Low (−1) | High (+1) |\n|---|---|---|---:|---:|\n",
-        o.study, o.runs, o.cached, o.study_id
+        "# {} — response surface ({} runs, {} were in the store)\n\nStudy id {}.{}\n\n| Factor | Label | Address | Low (−1) | High (+1) |\n|---|---|---|---:|---:|\n",
+        o.study, o.runs, o.cached, o.study_id, incomplete_note(o.incomplete)
     );
     for (n, l, a, lo, hi) in &o.factors {
         md.push_str(&format!("| {n} | {l} | `{a}` | {lo} | {hi} |\n"));

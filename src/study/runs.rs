@@ -80,6 +80,15 @@ impl Runs {
         out
     }
 
+    /// Replicates that lack at least one response (a failed or unmeasurable
+    /// run; their status in the table says why).
+    pub fn incomplete(&self) -> usize {
+        self.replicates
+            .iter()
+            .filter(|r| !r.problems.is_empty())
+            .count()
+    }
+
     /// The response table as CSV: point, replicate, the shown columns, the
     /// packing seed, one id column per scene, one column per response, and a
     /// status (`ok` or the problems).

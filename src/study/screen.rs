@@ -63,6 +63,8 @@ pub struct Screen {
     pub runs: usize,
     /// Runs cached before the stage.
     pub cached: usize,
+    /// Replicates lacking a response (failed or unmeasurable runs).
+    pub incomplete: usize,
 }
 
 /// Runs the screening (see the module docs) and writes its outputs.
@@ -147,7 +149,11 @@ where
                     }
                 })
                 .collect();
-            let anova = one_way_anova(&groups).ok();
+            // Levels whose runs all failed drop out of the test (the table
+            // shows them with n = 0 and their runs' errors).
+            let measured: Vec<Vec<f64>> =
+                groups.iter().filter(|g| !g.is_empty()).cloned().collect();
+            let anova = one_way_anova(&measured).ok();
             let p = anova.as_ref().map(|a| a.p);
             effects.push(Effect {
                 factor: (*name).clone(),
@@ -169,6 +175,7 @@ where
         effects,
         runs: runs.total,
         cached: runs.cached,
+        incomplete: runs.incomplete(),
     };
     let lineage = dir
         .lineage(
@@ -181,24 +188,28 @@ where
             .effects
             .iter()
             .filter(|e| &e.response == response)
-            .map(|e| LevelPanel {
-                factor: format!("{} ({})", e.factor, e.label),
-                unit: String::new(),
-                response: response.clone(),
-                levels: e.levels.iter().map(|l| l.value).collect(),
-                means: e
-                    .levels
-                    .iter()
-                    .map(|l| l.mean.unwrap_or(f64::NAN))
-                    .collect(),
-                ci_half: e
-                    .levels
-                    .iter()
-                    .map(|l| l.ci95_half_width.unwrap_or(0.0))
-                    .collect(),
-                note: e
-                    .p
-                    .map_or("ANOVA: n/a".into(), |p| format!("one-way ANOVA p = {p:.3}")),
+            .filter(|e| e.levels.iter().any(|l| l.mean.is_some()))
+            .map(|e| {
+                let shown: Vec<&Level> = e.levels.iter().filter(|l| l.mean.is_some()).collect();
+                let missing = e.levels.len() - shown.len();
+                let p =
+                    e.p.map_or("ANOVA: n/a".into(), |p| format!("one-way ANOVA p = {p:.3}"));
+                LevelPanel {
+                    factor: e.factor.clone(),
+                    unit: String::new(),
+                    response: response.clone(),
+                    levels: shown.iter().map(|l| l.value).collect(),
+                    means: shown.iter().filter_map(|l| l.mean).collect(),
+                    ci_half: shown
+                        .iter()
+                        .map(|l| l.ci95_half_width.unwrap_or(0.0))
+                        .collect(),
+                    note: if missing > 0 {
+                        format!("{p}; {missing} level(s) unmeasured")
+                    } else {
+                        p
+                    },
+                }
             })
             .collect();
         let svg = level_means(
@@ -262,8 +273,12 @@ fn levels_csv(s: &Screen) -> String {
 /// The screening summary in Markdown.
 pub fn markdown(study: &DesignStudy, s: &Screen) -> String {
     let mut md = format!(
-        "# {} — one-factor screening ({} runs, {} were in the store; α = {})\n\n",
-        study.name, s.runs, s.cached, s.alpha
+        "# {} — one-factor screening ({} runs, {} were in the store; α = {}).{}\n\n",
+        study.name,
+        s.runs,
+        s.cached,
+        s.alpha,
+        super::rsm::incomplete_note(s.incomplete)
     );
     md.push_str("| Factor | Response | Level means ± 95 % CI | F | p | Significant |\n|---|---|---|---:|---:|---|\n");
     for e in &s.effects {

@@ -56,6 +56,8 @@ pub struct Verification {
     pub runs: usize,
     /// Runs cached before the stage.
     pub cached: usize,
+    /// Replicates lacking a response (failed or unmeasurable runs).
+    pub incomplete: usize,
 }
 
 /// Verifies the optimum of `rsm` and the study's named points (see the
@@ -145,6 +147,7 @@ where
         checks,
         runs: runs.total,
         cached: runs.cached,
+        incomplete: runs.incomplete(),
     };
     let lineage = dir
         .lineage(
@@ -201,10 +204,11 @@ fn csv(v: &Verification) -> String {
 pub fn markdown(study: &DesignStudy, v: &Verification) -> String {
     let names = study.factor_names();
     let mut md = format!(
-        "# {} — verification ({} runs, {} were in the store)\n\n| Point | {} |\n|---|{}\n",
+        "# {} — verification ({} runs, {} were in the store).{}\n\n| Point | {} |\n|---|{}\n",
         study.name,
         v.runs,
         v.cached,
+        super::rsm::incomplete_note(v.incomplete),
         names.join(" | "),
         "---:|".repeat(names.len())
     );
