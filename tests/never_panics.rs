@@ -71,6 +71,12 @@ fn exercise(text: &str) {
     if let Ok(s) = parse_study(text) {
         let _ = s.id();
     }
+    if let Ok(s) = serde_json::from_str::<repose::study::spec::DesignStudy>(text) {
+        let _ = s.id();
+        if s.validate().is_ok() {
+            let _ = repose::study::rsm::coded_design(&s);
+        }
+    }
 }
 
 proptest! {
