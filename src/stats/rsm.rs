@@ -363,11 +363,16 @@ impl RsmFit {
     /// The same polynomial expanded in actual units: substituting
     /// x_coded = (x − centre)/half_range with centre = (low + high)/2 and
     /// half_range = (high − low)/2 for each factor's `(low, high)` in
-    /// `ranges`. One (term name, coefficient) per term, in term order; a
-    /// coefficient is in units of y per product of its factors' units.
+    /// `ranges` (the actual values coded −1 and +1; low ≠ high). One (term
+    /// name, coefficient) per term, in term order; a coefficient is in units
+    /// of y per product of its factors' units.
     pub fn actual_coefficients(&self, ranges: &[(f64, f64)]) -> Vec<(String, f64)> {
         let k = self.terms[0].powers.len();
         assert_eq!(ranges.len(), k, "one (low, high) per factor");
+        assert!(
+            ranges.iter().all(|(low, high)| low != high),
+            "a factor's low and high levels differ"
+        );
         // x_coded = a·x + b per factor.
         let affine: Vec<(f64, f64)> = ranges
             .iter()
