@@ -79,26 +79,6 @@ fn settings(jobs: usize) -> LocalPool {
     }
 }
 
-/// Every file below `dir` (relative path → bytes), for byte-identity checks.
-fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for entry in std::fs::read_dir(&d).unwrap() {
-            let p = entry.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.push((
-                    p.strip_prefix(dir).unwrap().to_path_buf(),
-                    std::fs::read(&p).unwrap(),
-                ));
-            }
-        }
-    }
-    out.sort();
-    out
-}
 
 fn sha256(path: &Path) -> String {
     hex::encode(Sha256::digest(std::fs::read(path).unwrap()))
@@ -144,9 +124,9 @@ fn sample_writes_one_valid_manifest_per_point_and_reruns_byte_identically() {
     assert_eq!(lineage.inputs[0].sha256, s.id().to_string());
     assert_eq!(sha256(&dir.study_file()), s.id().to_string());
 
-    let first = snapshot(dir.path());
+    let first = common::snapshot(dir.path());
     sample(&dir, &s, &SampleSettings::default()).unwrap();
-    assert_eq!(first, snapshot(dir.path()));
+    assert_eq!(first, common::snapshot(dir.path()));
 }
 
 #[test]
@@ -203,14 +183,14 @@ fn batch_runs_every_sample_and_a_rerun_computes_nothing() {
         assert_eq!(input.sha256, sha256(&store.root().join(&input.id_or_path)));
     }
 
-    let before = snapshot(dir.path());
+    let before = common::snapshot(dir.path());
     let again = Fake::new(&[]);
     let out = batch(&dir, &s, &store, &settings(1), |e, d| again.run(e, d)).unwrap();
     assert_eq!((out.cached, out.computed), (12, 0));
     assert_eq!(again.calls.load(Ordering::SeqCst), 0);
     assert_eq!(
         before,
-        snapshot(dir.path()),
+        common::snapshot(dir.path()),
         "a rerun reproduces the table byte for byte"
     );
 }
@@ -371,11 +351,11 @@ fn train_and_search_recover_the_fake_response_and_rerun_byte_identically() {
         assert_eq!(row.passes(), (truth - measured).abs() / measured <= 0.05);
     }
 
-    let first = snapshot(dir.path());
+    let first = common::snapshot(dir.path());
     train_study(&dir, &s, &options).unwrap();
     search(&dir, &s, &SearchSettings::with_seed(7)).unwrap();
     verify(&dir, &s, &store, &settings(1), 2, |e, d| fake.run(e, d)).unwrap();
-    assert_eq!(first, snapshot(dir.path()));
+    assert_eq!(first, common::snapshot(dir.path()));
 }
 
 #[test]
@@ -457,7 +437,7 @@ fn a_damaged_run_is_recomputed_by_the_next_batch_not_trusted() {
     sample(&dir, &s, &SampleSettings::default()).unwrap();
     let first = Fake::new(&[]);
     batch(&dir, &s, &store, &settings(1), |e, d| first.run(e, d)).unwrap();
-    let before = snapshot(dir.path());
+    let before = common::snapshot(dir.path());
 
     let e3 = repose::manifest::read_experiment(&experiment_path(&dir, 3)).unwrap();
     let e7 = repose::manifest::read_experiment(&experiment_path(&dir, 7)).unwrap();
@@ -485,7 +465,7 @@ fn a_damaged_run_is_recomputed_by_the_next_batch_not_trusted() {
     assert_eq!(seen, [3, 7]);
     assert_eq!(
         before,
-        snapshot(dir.path()),
+        common::snapshot(dir.path()),
         "the table and its lineage are as before the damage"
     );
 }
