@@ -1047,7 +1047,19 @@ pub fn study_pool(jobs: usize, limits: &Limits) -> LocalPool {
     }
 }
 
+/// The design study at `path` and the store; a readable JSON file without a
+/// `factors` object is refused with what the stage needs (an unreadable or
+/// malformed one gets the reader's error).
 fn open_design_study(store_root: &Path, path: &Path) -> Result<(DesignStudy, Store), CommandError> {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    if serde_json::from_str::<serde_json::Value>(&text).is_ok() && !is_design_study(&text) {
+        return Err(CommandError::Usage(format!(
+            "{}: not a design study (it has no `factors` object); screen, rsm and \
+             design-study verify need one (see experiments/cai2024-quick/study.json); \
+             he2019 calibration studies run with `repose calibrate`",
+            path.display()
+        )));
+    }
     let study = read_design_study(path).map_err(manifest_error(path))?;
     let store = open_store(store_root)?;
     set_quiet(true);

@@ -79,7 +79,6 @@ fn settings(jobs: usize) -> LocalPool {
     }
 }
 
-
 fn sha256(path: &Path) -> String {
     hex::encode(Sha256::digest(std::fs::read(path).unwrap()))
 }

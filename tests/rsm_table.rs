@@ -166,3 +166,14 @@ fn bad_table_options_name_what_is_wrong() {
     let e = run(&["--factors", "A,B,C,D", "--ranges", "A=0.2:0.6,Z=0:1"]);
     assert!(e.contains("no range for factor `B`"), "{e}");
 }
+
+#[test]
+fn a_study_without_factors_is_refused_with_what_the_stage_needs() {
+    let tmp = tempfile::tempdir().unwrap();
+    for command in ["rsm", "screen"] {
+        let o = common::repose(tmp.path(), &[command, "experiments/he2019/study.json"]);
+        assert_eq!(o.status.code(), Some(2));
+        let e = common::stderr(&o);
+        assert!(e.contains("not a design study") && e.contains("repose calibrate"), "{e}");
+    }
+}
