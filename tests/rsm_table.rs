@@ -174,6 +174,9 @@ fn a_study_without_factors_is_refused_with_what_the_stage_needs() {
         let o = common::repose(tmp.path(), &[command, "experiments/he2019/study.json"]);
         assert_eq!(o.status.code(), Some(2));
         let e = common::stderr(&o);
-        assert!(e.contains("not a design study") && e.contains("repose calibrate"), "{e}");
+        assert!(
+            e.contains("not a design study") && e.contains("repose calibrate"),
+            "{e}"
+        );
     }
 }
