@@ -32,7 +32,7 @@ use crate::scenes::run_logged;
 use crate::store::{
     write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, RunSummary, Store, StoreError,
 };
-use crate::study::spec::{is_design_study, read_design_study, DesignStudy};
+use crate::study::spec::{is_design_study, parse_design_study, read_design_study, DesignStudy};
 use crate::study::{self, StudyError};
 use crate::tradeoff as tradeoff_sweep;
 use crate::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
@@ -1051,7 +1051,12 @@ pub fn study_pool(jobs: usize, limits: &Limits) -> LocalPool {
 /// `factors` object is refused with what the stage needs (an unreadable or
 /// malformed one gets the reader's error).
 fn open_design_study(store_root: &Path, path: &Path) -> Result<(DesignStudy, Store), CommandError> {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let text = std::fs::read_to_string(path).map_err(|source| {
+        manifest_error(path)(ManifestError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    })?;
     if serde_json::from_str::<serde_json::Value>(&text).is_ok() && !is_design_study(&text) {
         return Err(CommandError::Usage(format!(
             "{}: not a design study (it has no `factors` object); screen, rsm and \
@@ -1060,7 +1065,7 @@ fn open_design_study(store_root: &Path, path: &Path) -> Result<(DesignStudy, Sto
             path.display()
         )));
     }
-    let study = read_design_study(path).map_err(manifest_error(path))?;
+    let study = parse_design_study(&text).map_err(manifest_error(path))?;
     let store = open_store(store_root)?;
     set_quiet(true);
     Ok((study, store))

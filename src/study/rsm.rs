@@ -205,16 +205,14 @@ where
                 .collect()
         })
     });
+    // The response table is hashed once; every output's lineage names it.
+    let table_input = dir.input("responses", &stage.join("responses.csv"))?;
     let lineage_of = |what: &str| {
-        let mut l = dir.lineage(
+        dir.lineage(
             "rsm",
             serde_json::json!({ "model": "full quadratic", "output": what, "optimiser_starts": OPTIMISER_STARTS }),
-        );
-        l = l.with_input(
-            dir.input("responses", &stage.join("responses.csv"))
-                .expect("the table was just written"),
-        );
-        l
+        )
+        .with_input(table_input.clone())
     };
     let hold: Vec<f64> = optimum
         .as_ref()
@@ -269,15 +267,7 @@ where
         factors: study
             .factors
             .iter()
-            .map(|(n, f)| {
-                (
-                    n.clone(),
-                    label(&f.label, &f.address),
-                    f.address.clone(),
-                    f.min,
-                    f.max,
-                )
-            })
+            .map(|(n, f)| (n.clone(), f.display_name(), f.address.clone(), f.min, f.max))
             .collect(),
         runs: runs.total,
         cached: runs.cached,
@@ -305,14 +295,6 @@ pub fn incomplete_note(incomplete: usize) -> String {
              measure it (the status column of responses.csv says why); the analysis \
              uses the rest."
         )
-    }
-}
-
-fn label(label: &str, address: &str) -> String {
-    if label.is_empty() {
-        address.to_string()
-    } else {
-        label.to_string()
     }
 }
 
@@ -383,7 +365,7 @@ fn contour_grid(study: &DesignStudy, a: &ResponseAnalysis, hold: &[f64]) -> Cont
     }
     let factor = |k: usize| {
         let f = &study.factors[&names[k]];
-        format!("{} = {}", names[k], label(&f.label, &f.address))
+        format!("{} = {}", names[k], f.display_name())
     };
     ContourGrid {
         x_label: factor(i),

@@ -157,11 +157,7 @@ where
             let p = anova.as_ref().map(|a| a.p);
             effects.push(Effect {
                 factor: (*name).clone(),
-                label: if f.label.is_empty() {
-                    f.address.clone()
-                } else {
-                    f.label.clone()
-                },
+                label: f.display_name(),
                 response: response.clone(),
                 levels,
                 f: anova.as_ref().map(|a| a.f),

@@ -118,6 +118,24 @@ pub struct Factor {
     pub label: String,
 }
 
+impl Factor {
+    /// The name reports show: the label, or the address without one.
+    pub fn display_name(&self) -> String {
+        display_name(&self.label, &self.address)
+    }
+}
+
+impl ScreenFactor {
+    /// The name reports show: the label, or the address without one.
+    pub fn display_name(&self) -> String {
+        display_name(&self.label, &self.address)
+    }
+}
+
+fn display_name(label: &str, address: &str) -> String {
+    if label.is_empty() { address } else { label }.to_string()
+}
+
 /// Where a response comes from: a study scene and one of its scene kind's
 /// named responses (`repose responses SCENE`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -670,7 +688,12 @@ pub fn read_design_study(path: &Path) -> Result<DesignStudy, crate::manifest::Ma
             path: path.to_path_buf(),
             source,
         })?;
-    let study: DesignStudy = serde_json::from_str(&text)?;
+    parse_design_study(&text)
+}
+
+/// Parses and validates a design study's JSON text.
+pub fn parse_design_study(text: &str) -> Result<DesignStudy, crate::manifest::ManifestError> {
+    let study: DesignStudy = serde_json::from_str(text)?;
     study
         .validate()
         .map_err(crate::manifest::ManifestError::Invalid)?;
