@@ -14,6 +14,9 @@
 //!   (Type III) sums of squares, lack of fit against pure error, R², adjusted
 //!   and predicted R², coefficient of variation and adequate precision.
 //! - [`oneway`]: one-way analysis of variance of groups of observations.
+//! - [`sensitivity`]: yan2015's parameter sensitivity matrix analysis: column
+//!   norms (Eq. 17), normalised norms and the cross-correlation of parameters
+//!   (Eq. 18), with the null vector when the parameters are collinear.
 //!
 //! The fits and analyses of variance check their inputs before any
 //! arithmetic: a non-finite value, slices of different lengths, too few
@@ -27,6 +30,7 @@ pub mod metrics;
 pub mod oneway;
 pub mod regression;
 pub mod rsm;
+pub mod sensitivity;
 pub mod summary;
 
 /// Why a statistic could not be computed from the data given.

@@ -40,6 +40,7 @@ pub mod normal_jkr;
 pub mod rolling_cdt;
 pub mod rolling_epsd;
 pub mod rolling_none;
+pub mod sensitivity;
 pub mod tangential_mindlin;
 
 use crate::dem::lanes::{Real, Vec3L, MAX_LANES};
