@@ -68,13 +68,17 @@ pub enum CrossCorrelation {
 /// `s` (rows: observations, columns: parameters), computed through the
 /// singular value decomposition of S (see the module docs).
 ///
-/// Panics if the rows have different lengths or a value is not finite.
+/// A matrix without columns gives an empty `Full`. Panics if the rows have
+/// different lengths or a value is not finite.
 pub fn cross_correlation(s: &[Vec<f64>]) -> CrossCorrelation {
     let k = columns(s);
     assert!(
         s.iter().flatten().all(|v| v.is_finite()),
         "cross_correlation: a sensitivity is not finite"
     );
+    if k == 0 {
+        return CrossCorrelation::Full(Vec::new());
+    }
     // Pad with zero rows to at least k: SᵀS is unchanged and the SVD then
     // returns all k right singular vectors, null directions included.
     let n = s.len().max(k);
@@ -82,9 +86,6 @@ pub fn cross_correlation(s: &[Vec<f64>]) -> CrossCorrelation {
     let svd = m.svd(false, true);
     let v_t = svd.v_t.expect("V was requested");
     let sigma = svd.singular_values;
-    if k == 0 {
-        return CrossCorrelation::Full(Vec::new());
-    }
     let max = sigma.max();
     let (min_at, min) = sigma.argmin();
     let rank = sigma
@@ -93,10 +94,10 @@ pub fn cross_correlation(s: &[Vec<f64>]) -> CrossCorrelation {
         .count();
     if rank < k || min < RANK_TOLERANCE * max {
         let mut v: Vec<f64> = v_t.row(min_at).iter().copied().collect();
-        let largest =
-            v.iter()
-                .copied()
-                .fold(0.0, |a: f64, x| if x.abs() > a.abs() { x } else { a });
+        let largest = v
+            .iter()
+            .copied()
+            .fold(0.0, |a: f64, x| if x.abs() > a.abs() { x } else { a });
         if largest < 0.0 {
             v.iter_mut().for_each(|x| *x = -*x);
         }

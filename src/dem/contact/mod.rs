@@ -28,6 +28,9 @@
 //! Slots whose formula has branches the lanes cannot share (JKR's Newton
 //! solve) keep a scalar method, and the trait's default runs it lane by lane.
 //!
+//! [`sensitivity`] differentiates the Hertz laws analytically with respect to
+//! the calibrated parameters (yan2015 "Level 3"), checked against [`evaluate`].
+//!
 //! Sign conventions for one contact between body *i* and its partner *j* (a
 //! particle or a wall): `normal` is the unit vector from *j* towards *i*, the
 //! overlap `δ` is positive when the bodies interpenetrate, and every returned

@@ -65,6 +65,23 @@
 //! through its sign: the a-priori states that differ only in ω give equal
 //! rows. That is a property of these laws, not an omission here.
 //!
+//! # What yan2015's states do with these laws
+//!
+//! With δt = δn the ratio of spring force to Coulomb cap,
+//! 8G*aδt / (μs (4/3)E*aδn) = 6G*/(E* μs), is the same at every state, and
+//! so is the ratio of the EPSD elastic torque to its cap, 6G*/(E* μr)
+//! (6G*/E* = 1.286 for ν = 0.25): for μs < 6G*/E* all 81 states slide, and
+//! for μr < 6G*/E* EPSD sits at its cap at all of them — yan2015's own
+//! values (μs = 0.5, μr = 0.05) do both. Then the torque is
+//! L(μs·arm − μr R*) (for EPSD and CDT; L μs·arm without rolling), which is
+//! proportional to E and free of e: its e column is zero and its scaled E
+//! column is exactly μs·∂τ/∂μs + μr·∂τ/∂μr (Euler's theorem), so the torque
+//! sensitivity matrix alone has rank 2. The force never depends on μr (its
+//! μr column is zero), but its √E normal dashpot separates E from the
+//! frictions, so force and torque rows together are of full rank. Larger
+//! μs (or a shorter δt) makes the spring stick, with the damping clipped at
+//! the cap at the fastest slips; then μs drops out of the sticking rows.
+//!
 //! Derivatives of the magnitudes follow ∂|v|/∂p = v·∂v/∂p / |v| (zero where
 //! |v| = 0, where the magnitude has no derivative). At a cap switch the
 //! response has a kink and the derivative given is that of the branch the
@@ -341,6 +358,7 @@ enum RollingRegime {
 /// and the smallest relative distance to a branch switch (or to τ = 0, where
 /// |τ| has a kink), for the finite-difference test.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(not(test), allow(dead_code))] // read by the tests only
 struct Branches {
     tangential: Tangential,
     rolling: RollingRegime,
@@ -390,7 +408,7 @@ fn analyse(spec: &PairSpec, state: &ContactState) -> (Sensitivity, Branches) {
     let a = (r_star * delta_n).sqrt();
     let root = (a * m_star).sqrt();
     let dpsi = damping_ratio_derivative(spec.restitution);
-    let (e, mu_s, mu_r, modulus) = (0, 1, 2, 3);
+    let [e, mu_s, mu_r, modulus] = Parameter::ALL.map(Parameter::index);
     let only = |k: usize, v: f64| {
         let mut d = [0.0; 4];
         d[k] = v;
