@@ -606,3 +606,383 @@ pub fn lack_of_fit(fit: &NllsFit, x: &[Vec<f64>], y: &[f64]) -> Option<LackOfFit
         p_value: f_survival(ratio, df_lack_of_fit as f64, df_pure_error as f64),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stats::assert_rel;
+
+    /// Reference numbers come from /tmp/nlls/ref.py (scipy 1.17.1, numpy
+    /// 2.4.6), which builds the same data as [`power_law_data`]:
+    ///
+    /// ```python
+    /// E=[0.05,0.45,0.85]; MS=[0.05,0.15,0.25,0.5]; MR=[0.05,0.25,0.45]
+    /// rows=[]; y=[]; k=0
+    /// for e in E:
+    ///   for ms in MS:
+    ///     for mr in MR:
+    ///       for r in range(4):
+    ///         rows.append([e,ms,mr])
+    ///         y.append(40.0*e**-0.05*ms**0.3*mr**0.1*(1+0.2*ms*ms)*(1+0.02*np.sin(1.3*k+0.7))); k+=1
+    /// X=np.array(rows).T; y=np.array(y); n=len(y); p=4
+    /// def f(X,A,b,c,d): return A*X[0]**b*X[1]**c*X[2]**d
+    /// def jac(X,A,b,c,d):
+    ///     v=f(X,A,b,c,d); return np.column_stack([v/A, v*np.log(X[0]), v*np.log(X[1]), v*np.log(X[2])])
+    /// popt,pcov=curve_fit(f,X,y,p0=[30,0,0,0],jac=jac,absolute_sigma=False,
+    ///                     ftol=1e-15,xtol=1e-15,gtol=1e-15,maxfev=100000)
+    /// se=np.sqrt(np.diag(pcov)); tq=stats.t.ppf(0.975,n-p)
+    /// lo=popt-tq*se; hi=popt+tq*se; corr=pcov/np.outer(se,se)
+    /// res=y-f(X,*popt); sse=res@res; s2=sse/(n-p); r2=1-sse/np.sum((y-y.mean())**2)
+    /// ```
+    ///
+    /// The (1 + 0.2 μs²) factor is a deliberate departure from the power law
+    /// so that lack of fit is detectable; the sine is deterministic "noise"
+    /// that differs between the 4 replicates of each of the 36 points.
+    fn power_law_data() -> (Vec<Vec<f64>>, Vec<f64>) {
+        let mut x = Vec::new();
+        let mut y = Vec::new();
+        let mut k = 0;
+        for e in [0.05, 0.45, 0.85] {
+            for ms in [0.05, 0.15, 0.25, 0.5] {
+                for mr in [0.05, 0.25, 0.45] {
+                    for _ in 0..4 {
+                        x.push(vec![e, ms, mr]);
+                        y.push(
+                            40.0 * f64::powf(e, -0.05)
+                                * f64::powf(ms, 0.3)
+                                * f64::powf(mr, 0.1)
+                                * (1.0 + 0.2 * ms * ms)
+                                * (1.0 + 0.02 * (1.3 * k as f64 + 0.7).sin()),
+                        );
+                        k += 1;
+                    }
+                }
+            }
+        }
+        (x, y)
+    }
+
+    fn factors() -> Vec<String> {
+        ["e", "mu_s", "mu_r"].map(String::from).to_vec()
+    }
+
+    /// Compares a correlation matrix with its reference; entries the
+    /// reference gives as rounding-level zeros (|r| < 1e-12: the full
+    /// factorial makes the exponents' gradient columns orthogonal) are
+    /// checked as |r| ≤ 1e-9, the rest with [`assert_rel`].
+    fn assert_correlation(got: &[Vec<f64>], reference: &[f64]) {
+        let k = got.len();
+        for i in 0..k {
+            for j in 0..k {
+                let e = reference[i * k + j];
+                let what = format!("correlation[{i}][{j}]");
+                if e.abs() < 1e-12 {
+                    assert!(got[i][j].abs() <= 1e-9, "{what}: {} vs ~0", got[i][j]);
+                } else {
+                    assert_rel(&what, &[got[i][j]], &[e]);
+                }
+            }
+        }
+    }
+
+    fn check_power_law(f: &NllsFit) {
+        assert_eq!(f.names, ["A", "e", "mu_s", "mu_r"]);
+        assert_eq!((f.observations, f.dof), (144, 140));
+        // popt
+        assert_rel(
+            "estimates",
+            &f.estimates,
+            &[
+                42.42207771073159,
+                -0.04983689983383159,
+                0.32430600729427256,
+                0.10054197299686561,
+            ],
+        );
+        // np.sqrt(np.diag(pcov))
+        assert_rel(
+            "standard errors",
+            &f.standard_errors,
+            &[
+                0.18500209284869684,
+                0.0011557862310063048,
+                0.0020237850115989793,
+                0.0016503327533323698,
+            ],
+        );
+        // stats.t.ppf(0.975, 140)
+        assert_rel("t quantile", &[f.t_quantile], &[1.9770537196570985]);
+        // popt - tq*se, popt + tq*se
+        assert_rel(
+            "ci low",
+            &f.ci_low,
+            &[
+                42.05631863492073,
+                -0.05212195130097107,
+                0.3203048756093045,
+                0.0972791764882179,
+            ],
+        );
+        assert_rel(
+            "ci high",
+            &f.ci_high,
+            &[
+                42.78783678654246,
+                -0.047551848366692115,
+                0.32830713897924063,
+                0.10380476950551332,
+            ],
+        );
+        // pcov/np.outer(se,se)
+        assert_correlation(
+            &f.correlation,
+            &[
+                1.0,
+                0.3896443381122488,
+                0.6237864915257806,
+                0.591420299039262,
+                0.3896443381122488,
+                1.0000000000000002,
+                -5.980059889122894e-16,
+                9.477588777986125e-17,
+                0.6237864915257806,
+                -5.980059889122894e-16,
+                1.0000000000000002,
+                1.2827819965307802e-16,
+                0.591420299039262,
+                9.477588777986125e-17,
+                1.2827819965307802e-16,
+                1.0,
+            ],
+        );
+        // pcov[0, :] (the other off-diagonals are rounding-level zeros,
+        // checked through the correlations)
+        assert_rel(
+            "covariance row 0",
+            &f.covariance[0],
+            &[
+                0.03422577435839785,
+                8.331487128636536e-05,
+                0.00023354844615034522,
+                0.00018056949644532197,
+            ],
+        );
+        // sse, sse/(n-p), r2
+        assert_rel(
+            "SSE, s², R²",
+            &[f.sse, f.s2, f.r2],
+            &[23.042449316168508, 0.1645889236869179, 0.9960531051922814],
+        );
+        let (_, y) = power_law_data();
+        for i in 0..y.len() {
+            assert!((f.fitted[i] + f.residuals[i] - y[i]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn power_law_from_log_linear_start_matches_curve_fit() {
+        let (x, y) = power_law_data();
+        let f = fit_power_law(&x, &y, &factors()).unwrap();
+        check_power_law(&f);
+    }
+
+    #[test]
+    fn power_law_from_other_starts_matches_curve_fit() {
+        let (x, y) = power_law_data();
+        let model = PowerLaw { factors: factors() };
+        for start in [
+            [30.0, 0.0, 0.0, 0.0],
+            [80.0, 0.5, -0.5, 0.5],
+            [5.0, -0.3, 1.0, 0.0],
+        ] {
+            let f = fit(&model, &x, &y, &start, &LmSettings::default()).unwrap();
+            check_power_law(&f);
+        }
+    }
+
+    #[test]
+    fn lack_of_fit_matches_numpy() {
+        // groups={}; [groups.setdefault(tuple(r),[]).append(i) for i,r in enumerate(rows)]
+        // sspe=sum(np.sum((y[g]-y[g].mean())**2) for g in groups.values())
+        // dfpe=n-len(groups); dflof=len(groups)-p; sslof=sse-sspe
+        // F=(sslof/dflof)/(sspe/dfpe); stats.f.sf(F,dflof,dfpe)
+        let (x, y) = power_law_data();
+        let f = fit_power_law(&x, &y, &factors()).unwrap();
+        let lof = lack_of_fit(&f, &x, &y).unwrap();
+        assert_eq!((lof.df_lack_of_fit, lof.df_pure_error), (32, 108));
+        assert_rel(
+            "SS_lof, SS_pe, F, p",
+            &[
+                lof.ss_lack_of_fit,
+                lof.ss_pure_error,
+                lof.ratio,
+                lof.p_value,
+            ],
+            &[
+                7.541627154891017,
+                15.50082216127749,
+                1.6420413951552293,
+                0.03139618065784975,
+            ],
+        );
+        // Without replicates there is no pure error.
+        let distinct: Vec<usize> = (0..x.len()).step_by(4).collect();
+        let x1: Vec<Vec<f64>> = distinct.iter().map(|&i| x[i].clone()).collect();
+        let y1: Vec<f64> = distinct.iter().map(|&i| y[i]).collect();
+        let f1 = fit_power_law(&x1, &y1, &factors()).unwrap();
+        assert_eq!(lack_of_fit(&f1, &x1, &y1), None);
+    }
+
+    #[test]
+    fn flow_decay_matches_curve_fit() {
+        // t=np.array([0.25*(i+1) for i in range(24)])
+        // fr=np.array([50.0/(1+(0.8*ti)**1.5)*(1+0.03*np.sin(2.1*i+0.4)) for i,ti in enumerate(t)])
+        // def g(t,F0,K,m): return F0/(1+(K*t)**m)
+        // def gj(t,F0,K,m):
+        //     u=(K*t)**m; return np.column_stack([1/(1+u), -F0/(1+u)**2*m*u/K, -F0/(1+u)**2*u*np.log(K*t)])
+        // popt,pcov=curve_fit(g,t,fr,p0=[fr.max(),1.0,2.0],jac=gj,absolute_sigma=False,
+        //                     ftol=1e-15,xtol=1e-15,gtol=1e-15,maxfev=100000)
+        // se=np.sqrt(np.diag(pcov)); tq=stats.t.ppf(0.975,21); corr=pcov/np.outer(se,se)
+        let t: Vec<f64> = (0..24).map(|i| 0.25 * (i + 1) as f64).collect();
+        let fr: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| {
+                50.0 / (1.0 + f64::powf(0.8 * t, 1.5)) * (1.0 + 0.03 * (2.1 * i as f64 + 0.4).sin())
+            })
+            .collect();
+        let f = fit_flow_decay(&t, &fr).unwrap();
+        assert_eq!(f.names, ["FR0", "K", "n"]);
+        assert_eq!(f.dof, 21);
+        assert_rel(
+            "estimates",
+            &f.estimates,
+            &[50.91734653487737, 0.8225902028065734, 1.4803560120363177],
+        );
+        assert_rel(
+            "standard errors",
+            &f.standard_errors,
+            &[
+                0.5869625364768873,
+                0.017232133536757732,
+                0.02228466931217014,
+            ],
+        );
+        assert_rel("t quantile", &[f.t_quantile], &[2.0796138447276795]);
+        assert_rel(
+            "ci low",
+            &f.ci_low,
+            &[49.69669111768356, 0.7867540193293359, 1.4340125052095507],
+        );
+        assert_rel(
+            "ci high",
+            &f.ci_high,
+            &[52.13800195207118, 0.8584263862838108, 1.5266995188630847],
+        );
+        assert_correlation(
+            &f.correlation,
+            &[
+                0.9999999999999999,
+                0.937616880747213,
+                -0.7790037586722176,
+                0.937616880747213,
+                1.0,
+                -0.8504637515043612,
+                -0.7790037586722176,
+                -0.8504637515043612,
+                1.0,
+            ],
+        );
+        // sse, 1-sse/np.sum((fr-fr.mean())**2)
+        assert_rel(
+            "SSE, R²",
+            &[f.sse, f.r2],
+            &[2.8934400432938037, 0.9991196130637494],
+        );
+    }
+
+    #[test]
+    fn fits_refuse_bad_input() {
+        let model = PowerLaw {
+            factors: vec!["e".to_string()],
+        };
+        let x = vec![vec![0.1], vec![0.2]];
+        assert_eq!(
+            fit(&model, &x, &[1.0, 2.0], &[1.0, 0.5], &LmSettings::default()),
+            Err(StatsError::TooFewObservations {
+                observations: 2,
+                parameters: 2
+            })
+        );
+        assert_eq!(
+            fit_flow_decay(&[1.0, 2.0, 3.0], &[3.0, 2.0, 1.0]),
+            Err(StatsError::TooFewObservations {
+                observations: 3,
+                parameters: 3
+            })
+        );
+        let x = vec![vec![0.1], vec![0.2], vec![0.0], vec![0.4]];
+        assert_eq!(
+            fit_power_law(&x, &[1.0, 2.0, 3.0, 4.0], &["e".to_string()]),
+            Err(StatsError::NonPositive {
+                what: "factor `e` (column 0 of x)".to_string(),
+                index: 2,
+                value: 0.0
+            })
+        );
+        let x = vec![vec![0.1], vec![0.2], vec![0.3], vec![0.4]];
+        assert_eq!(
+            fit_power_law(&x, &[1.0, -2.0, 3.0, 4.0], &["e".to_string()]),
+            Err(StatsError::NonPositive {
+                what: "y".to_string(),
+                index: 1,
+                value: -2.0
+            })
+        );
+        let err = fit_power_law(&x, &[1.0, 2.0, f64::NAN, 4.0], &["e".to_string()]).unwrap_err();
+        assert_eq!(err.to_string(), "non-finite value NaN in y at index 2");
+        let x = vec![vec![0.1], vec![f64::NAN], vec![0.3], vec![0.4]];
+        let err = fit(
+            &model,
+            &x,
+            &[1.0, 2.0, 3.0, 4.0],
+            &[1.0, 0.5],
+            &LmSettings::default(),
+        )
+        .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "non-finite value NaN in row 1 of x at index 0"
+        );
+        assert!(matches!(
+            fit_flow_decay(&[0.0, 1.0, 2.0, 3.0], &[4.0, 3.0, 2.0, 1.0]),
+            Err(StatsError::NonPositive { index: 0, .. })
+        ));
+        // An iteration limit too small to converge.
+        let (x, y) = power_law_data();
+        let settings = LmSettings {
+            max_iterations: 2,
+            ..LmSettings::default()
+        };
+        let model = PowerLaw { factors: factors() };
+        assert!(matches!(
+            fit(&model, &x, &y, &[5.0, -0.3, 1.0, 0.0], &settings),
+            Err(StatsError::NotConverged { iterations: 2, .. })
+        ));
+        // A factor constant across all observations: its exponent and A are
+        // not separately determined.
+        let x: Vec<Vec<f64>> = (0..6).map(|i| vec![0.5, 0.1 * (i + 1) as f64]).collect();
+        let y = [1.0, 1.3, 1.5, 1.6, 1.8, 1.9];
+        let model = PowerLaw {
+            factors: vec!["e".to_string(), "mu_s".to_string()],
+        };
+        assert_eq!(
+            fit(&model, &x, &y, &[2.0, 0.0, 0.3], &LmSettings::default()),
+            Err(StatsError::Singular {
+                what: "JᵀJ at the solution: parameter `e` is not determined by the data \
+                       (its gradient column is a linear combination of the others')"
+                    .to_string()
+            })
+        );
+    }
+}

@@ -111,3 +111,129 @@ pub fn pca(rows: &[Vec<f64>], columns: &[String]) -> Result<Pca, StatsError> {
         eigenvectors,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stats::assert_rel;
+
+    fn names() -> Vec<String> {
+        ["a", "b", "c", "d"].map(String::from).to_vec()
+    }
+
+    #[test]
+    fn pca_matches_numpy_eigh() {
+        // M as below; Z=(M-M.mean(0))/M.std(0,ddof=1)
+        // w,V=np.linalg.eigh(Z.T@Z); o=np.argsort(w)[::-1]; w=w[o]; V=V[:,o]
+        // each column V[:,k] negated when its largest-|.| entry is negative;
+        // explained = w/w.sum()
+        let m = vec![
+            vec![0.3, 12.0, 1.1, 5.0],
+            vec![0.5, 15.0, 0.9, 4.2],
+            vec![0.2, 9.0, 1.4, 6.1],
+            vec![0.7, 20.0, 0.8, 3.9],
+            vec![0.4, 11.0, 1.2, 5.5],
+            vec![0.6, 18.0, 1.0, 4.0],
+            vec![0.1, 7.0, 1.5, 6.8],
+            vec![0.8, 21.0, 0.7, 3.1],
+        ];
+        let p = pca(&m, &names()).unwrap();
+        assert_eq!(p.columns, names());
+        assert_rel(
+            "means",
+            &p.means,
+            &[0.45000000000000007, 14.125, 1.075, 4.825],
+        );
+        assert_rel(
+            "std devs",
+            &p.std_devs,
+            &[
+                0.24494897427831783,
+                5.19443383412888,
+                0.28157719063467174,
+                1.2487136238088035,
+            ],
+        );
+        assert_rel(
+            "eigenvalues",
+            &p.eigenvalues,
+            &[
+                27.31791861724353,
+                0.443045084460183,
+                0.15185214496149999,
+                0.08718415333478786,
+            ],
+        );
+        assert_rel(
+            "explained",
+            &p.explained,
+            &[
+                0.9756399506158403,
+                0.015823038730720818,
+                0.0054232908914821415,
+                0.003113719761956709,
+            ],
+        );
+        let vectors = [
+            [
+                -0.4993274855845688,
+                -0.5008318816351564,
+                0.49821383754302223,
+                0.5016198366873421,
+            ],
+            [
+                0.5389082667469874,
+                0.43791857895332453,
+                0.6297066041663278,
+                0.34824530278033916,
+            ],
+            [
+                0.5572763134047802,
+                -0.4688647507732652,
+                -0.44095606717944,
+                0.5245633449050194,
+            ],
+            [
+                -0.3869018644172276,
+                0.580999647183726,
+                -0.4010116102653486,
+                0.5932419790568195,
+            ],
+        ];
+        for (k, v) in vectors.iter().enumerate() {
+            assert_rel(&format!("eigenvector {k}"), &p.eigenvectors[k], v);
+        }
+    }
+
+    #[test]
+    fn pca_refuses_bad_input() {
+        let rows = vec![
+            vec![1.0, 2.0, 3.0, 4.0],
+            vec![2.0, 2.0, 1.0, 5.0],
+            vec![3.0, 2.0, 2.0, 7.0],
+        ];
+        assert_eq!(
+            pca(&rows, &names()),
+            Err(StatsError::ConstantColumn {
+                column: "b".to_string()
+            })
+        );
+        assert_eq!(
+            pca(&rows[..1], &names()),
+            Err(StatsError::TooFewObservations {
+                observations: 1,
+                parameters: 1
+            })
+        );
+        let mut bad = rows.clone();
+        bad[2][3] = f64::NAN;
+        assert_eq!(
+            pca(&bad, &names()).unwrap_err().to_string(),
+            "non-finite value NaN in row 2 at index 3"
+        );
+        assert!(matches!(
+            pca(&rows, &names()[..3]),
+            Err(StatsError::LengthMismatch { .. })
+        ));
+    }
+}
