@@ -559,7 +559,8 @@ pub struct LackOfFit {
     pub ss_pure_error: f64,
     /// Degrees of freedom of pure error: observations − distinct x rows.
     pub df_pure_error: usize,
-    /// F = (SS_lof/df_lof) / (SS_pe/df_pe) (infinite when SS_pe = 0).
+    /// F = (SS_lof/df_lof) / (SS_pe/df_pe) (infinite when only SS_pe = 0,
+    /// NaN when both are 0).
     pub ratio: f64,
     /// P(F(df_lof, df_pe) ≥ ratio): small values mean the model misses
     /// systematic variation.
@@ -612,8 +613,8 @@ mod tests {
     use super::*;
     use crate::stats::assert_rel;
 
-    /// Reference numbers come from /tmp/nlls/ref.py (scipy 1.17.1, numpy
-    /// 2.4.6), which builds the same data as [`power_law_data`]:
+    /// Reference numbers are from scipy 1.17.1 / numpy 2.4.6, with the same
+    /// data as [`power_law_data`] built and fitted by:
     ///
     /// ```python
     /// E=[0.05,0.45,0.85]; MS=[0.05,0.15,0.25,0.5]; MR=[0.05,0.25,0.45]
@@ -774,8 +775,8 @@ mod tests {
             &[23.042449316168508, 0.1645889236869179, 0.9960531051922814],
         );
         let (_, y) = power_law_data();
-        for i in 0..y.len() {
-            assert!((f.fitted[i] + f.residuals[i] - y[i]).abs() < 1e-12);
+        for ((fitted, residual), y) in f.fitted.iter().zip(&f.residuals).zip(&y) {
+            assert!((fitted + residual - y).abs() < 1e-12);
         }
     }
 
