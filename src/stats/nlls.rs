@@ -852,7 +852,34 @@ mod tests {
                 50.0 / (1.0 + f64::powf(0.8 * t, 1.5)) * (1.0 + 0.03 * (2.1 * i as f64 + 0.4).sin())
             })
             .collect();
-        let f = fit_flow_decay(&t, &fr).unwrap();
+        let x: Vec<Vec<f64>> = t.iter().map(|&t| vec![t]).collect();
+        // The data-driven start of fit_flow_decay and two explicit starts
+        // must all reach the curve_fit solution.
+        let from_data = fit_flow_decay(&t, &fr).unwrap();
+        for f in [
+            from_data,
+            fit(
+                &FlowDecay,
+                &x,
+                &fr,
+                &[20.0, 3.0, 1.0],
+                &LmSettings::default(),
+            )
+            .unwrap(),
+            fit(
+                &FlowDecay,
+                &x,
+                &fr,
+                &[100.0, 0.2, 3.0],
+                &LmSettings::default(),
+            )
+            .unwrap(),
+        ] {
+            check_flow_decay(&f);
+        }
+    }
+
+    fn check_flow_decay(f: &NllsFit) {
         assert_eq!(f.names, ["FR0", "K", "n"]);
         assert_eq!(f.dof, 21);
         assert_rel(
