@@ -17,17 +17,23 @@
 //! - [`sensitivity`]: yan2015's parameter sensitivity matrix analysis: column
 //!   norms (Eq. 17), normalised norms and the cross-correlation of parameters
 //!   (Eq. 18), with the null vector when the parameters are collinear.
+//! - [`nlls`]: nonlinear least squares by Levenberg–Marquardt with analytic
+//!   gradients, the covariance s²·(JᵀJ)⁻¹ of the estimates (as
+//!   `scipy.optimize.curve_fit` reports it), t confidence intervals and lack
+//!   of fit against pure error; with the yan2015 power law (Eq. 19, started
+//!   from its log-linear least-squares fit) and flow-rate decay (Eq. 20).
+//! - [`pca`]: principal component analysis of the auto-scaled data matrix
+//!   (yan2015 Eq. 13–16): eigenvalues, explained fractions and loadings.
 //!
 //! The fits and analyses of variance check their inputs before any
 //! arithmetic: a non-finite value, slices of different lengths, too few
 //! observations for the parameters and an aliased design are each a
 //! [`StatsError`] rather than a NaN in the output.
-//!
-//! Nonlinear least squares and principal component analysis (for the yan2015
-//! calibration) belong here too and are a later addition.
 
 pub mod metrics;
+pub mod nlls;
 pub mod oneway;
+pub mod pca;
 pub mod regression;
 pub mod rsm;
 pub mod sensitivity;
@@ -96,6 +102,43 @@ pub enum StatsError {
     EmptyGroup {
         /// Index of the empty group.
         index: usize,
+    },
+    /// A value that must be positive (it is logged, or raised to a fitted
+    /// power) is zero or negative.
+    #[error("non-positive value {value} in {what} at index {index} (it must be > 0)")]
+    NonPositive {
+        /// Which input: `y`, `factor `e` (column 0 of x)`, `t`.
+        what: String,
+        /// Index of the value within it (the observation).
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// An iterative fit stopped at its iteration limit before meeting its
+    /// convergence tolerances; a better start or a larger limit may help.
+    #[error(
+        "no convergence after {iterations} iterations \
+         (last sum of squared residuals {sse})"
+    )]
+    NotConverged {
+        /// Iterations (trial steps) taken.
+        iterations: usize,
+        /// Sum of squared residuals at the best point reached.
+        sse: f64,
+    },
+    /// A column of a data matrix has zero variance, so it cannot be scaled
+    /// to unit variance (and carries no information).
+    #[error("column `{column}` is constant (zero variance)")]
+    ConstantColumn {
+        /// The column's name.
+        column: String,
+    },
+    /// A matrix that must be inverted is singular (to rounding).
+    #[error("singular matrix: {what}")]
+    Singular {
+        /// Which matrix, and why it is singular where known (for a nonlinear
+        /// fit: the parameter not determined by the data at the solution).
+        what: String,
     },
 }
 
