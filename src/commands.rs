@@ -1125,6 +1125,52 @@ pub fn rsm_table(
     }
 }
 
+/// `repose sensitivity STUDY`: yan2015's three levels (see
+/// [`crate::study::sensitivity`]); prints the summary (or everything as
+/// JSON) and fails when a run of the named points failed.
+pub fn sensitivity(
+    store_root: &Path,
+    study_path: &Path,
+    pool: &LocalPool,
+    levels: study::sensitivity::Levels,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, store) = open_design_study(store_root, study_path)?;
+    let outcome = study::run_sensitivity(store_root, &study, &store, pool, &run_logged, levels)?;
+    if json {
+        print_json(&outcome, out)?;
+    } else {
+        let summary = std::fs::read_to_string(outcome.dir.join("sensitivity.md"))
+            .map_err(StoreError::io(&outcome.dir))?;
+        write!(out, "{summary}")?;
+        if let Some(v) = &outcome.verification {
+            writeln!(out)?;
+            write!(out, "{}", study::verify::markdown(&study, v))?;
+        }
+        writeln!(out, "\nwritten: {}", outcome.dir.display())?;
+    }
+    Ok(())
+}
+
+/// `repose sensitivity --table FILE`: the level-1 power-law fit of one
+/// column of any CSV table; `--json` prints the whole fit at full precision.
+pub fn sensitivity_table(
+    path: &Path,
+    response: &str,
+    factors: &[String],
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let fit = study::sensitivity::level1::fit_table(path, response, factors)?;
+    if json {
+        print_json(&fit, out)
+    } else {
+        write!(out, "{}", study::sensitivity::level1::table_markdown(&fit))?;
+        Ok(())
+    }
+}
+
 /// `repose screen STUDY`: the one-factor tests (see [`crate::study::screen`]).
 pub fn screen(
     store_root: &Path,

@@ -116,6 +116,13 @@ enum Command {
     /// optimum and its verification. With --table, the same analysis of any
     /// CSV table.
     Rsm(RsmArgs),
+    /// yan2015's three levels of parameter sensitivity on a design study: the
+    /// design's runs, power laws by nonlinear least squares with confidence
+    /// intervals (level 1), PCA of the contact-law sensitivity matrices with
+    /// each response (level 2), norms and cross-correlations of the contact
+    /// law's sensitivities over a-priori states (level 3, no runs). With
+    /// --table, the level-1 power-law fit of any CSV table.
+    Sensitivity(SensitivityArgs),
     /// Re-simulate the search's cluster centres in the calibration and
     /// verification scenes and compare with the measured angles (he2019 Table 3);
     /// for a design study, the optimum and named points (as the end of `rsm`).
@@ -345,6 +352,31 @@ struct RsmArgs {
     #[arg(long)]
     jobs: Option<usize>,
     /// Print the whole analysis as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(clap::Args)]
+struct SensitivityArgs {
+    /// Design study manifest (absent with --table).
+    #[arg(required_unless_present = "table", conflicts_with = "table")]
+    study: Option<PathBuf>,
+    /// Fit the power law of one column of this CSV table instead.
+    #[arg(long, requires_all = ["factors", "response"])]
+    table: Option<PathBuf>,
+    /// With --table: the factor columns (every value > 0), comma-separated.
+    #[arg(long, value_delimiter = ',')]
+    factors: Vec<String>,
+    /// With --table: the response column (every value > 0).
+    #[arg(long)]
+    response: Option<String>,
+    /// Which levels to compute: 1, 2, 3, comma-separated [default: all].
+    #[arg(long, value_delimiter = ',', value_parser = clap::value_parser!(u8).range(1..=3))]
+    level: Vec<u8>,
+    /// Runs at once, each single-threaded [default: the number of CPUs].
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Print the whole analysis as JSON on stdout (full precision).
     #[arg(long)]
     json: bool,
 }
@@ -604,6 +636,37 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             ),
             (None, None) => Err(CommandError::Usage(
                 "rsm: give a study manifest or --table FILE".into(),
+            )),
+        },
+        Command::Sensitivity(args) => match (&args.table, &args.study) {
+            (Some(table), _) => commands::sensitivity_table(
+                table,
+                args.response.as_deref().unwrap_or_default(),
+                &args.factors,
+                args.json,
+                &mut out,
+            ),
+            (None, Some(study)) => {
+                let levels = if args.level.is_empty() {
+                    repose::study::sensitivity::Levels::ALL
+                } else {
+                    repose::study::sensitivity::Levels {
+                        one: args.level.contains(&1),
+                        two: args.level.contains(&2),
+                        three: args.level.contains(&3),
+                    }
+                };
+                commands::sensitivity(
+                    &cli.store,
+                    study,
+                    &commands::study_pool(default_jobs(args.jobs), &limits),
+                    levels,
+                    args.json,
+                    &mut out,
+                )
+            }
+            (None, None) => Err(CommandError::Usage(
+                "sensitivity: give a study manifest or --table FILE".into(),
             )),
         },
         Command::Verify {

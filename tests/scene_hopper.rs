@@ -104,10 +104,12 @@ fn smoke_manifest_runs_healthy_with_plausible_angles() {
     // is ~940 coarse spheres, about four layers high under a falling stream,
     // which leaves it flatter, and its crater has only 3-4 surface points per
     // flank. A heap in 8-40 deg and a crater in 20-60 deg are what a working
-    // scene gives; a spread layer is not measurable (the run fails) and a
+    // scene gives; a spread layer is not measurable (the angle is left out) and a
     // broken contact law or window would give near 0 or near 90.
     assert!(theta > 8.0 && theta < 40.0, "theta {theta}");
     assert!(alpha > 20.0 && alpha < 60.0, "alpha {alpha}");
+    assert_eq!(m(r, "upper_angle_measured"), 1.0);
+    assert_eq!(m(r, "bottom_angle_measured"), 1.0);
     for name in ["upper_angle", "bottom_angle"] {
         for fit in ["xz_left", "xz_right", "yz_left", "yz_right"] {
             let a = m(r, &format!("{name}_{fit}_deg"));

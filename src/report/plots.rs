@@ -650,6 +650,99 @@ pub fn level_means(panels: &[LevelPanel], title: &str) -> Result<String, PlotErr
     Ok(svg)
 }
 
+/// One series of [`curves`]: measured points and the fitted model drawn
+/// through them, in one colour.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Curve {
+    /// Legend text.
+    pub label: String,
+    /// Measured (x, y) points, drawn as dots.
+    pub points: Vec<(f64, f64)>,
+    /// The model's (x, y) values, drawn as a line (may be empty).
+    pub fit: Vec<(f64, f64)>,
+}
+
+/// Palette of [`curves`] (Tableau 10, colour-blind friendly), cycled.
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(0x4e, 0x79, 0xa7),
+    RGBColor(0xf2, 0x8e, 0x2b),
+    RGBColor(0xe1, 0x57, 0x59),
+    RGBColor(0x59, 0xa1, 0x4f),
+    RGBColor(0xb0, 0x7a, 0xa1),
+    RGBColor(0x76, 0xb7, 0xb2),
+];
+
+/// Several measured series with their fitted models on one pair of axes
+/// (e.g. flow rate against time with yan2015 Eq. 20 through each run), with
+/// a legend. `x_label` and `y_label` include their units.
+pub fn curves(
+    series: &[Curve],
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+) -> Result<String, PlotError> {
+    if series.iter().all(|c| c.points.is_empty()) {
+        return Err(PlotError::Empty {
+            what: "curves: points".to_string(),
+        });
+    }
+    for (i, c) in series.iter().enumerate() {
+        for (k, (x, y)) in c.points.iter().chain(&c.fit).enumerate() {
+            finite(|| format!("curve {i} ({}): x {k}", c.label), *x)?;
+            finite(|| format!("curve {i} ({}): y {k}", c.label), *y)?;
+        }
+    }
+    let all = || series.iter().flat_map(|c| c.points.iter().chain(&c.fit));
+    let (x_lo, x_hi) = extent(all().map(|p| p.0));
+    let (y_lo, y_hi) = extent(all().map(|p| p.1));
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (720, 480)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, (FONT, 18))
+            .margin(16)
+            .x_label_area_size(44)
+            .y_label_area_size(64)
+            .build_cartesian_2d(padded(x_lo, x_hi), padded(y_lo.min(0.0), y_hi))?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .label_style((FONT, 12))
+            .light_line_style(BLACK.mix(0.04))
+            .draw()?;
+        for (i, c) in series.iter().enumerate() {
+            let colour = PALETTE[i % PALETTE.len()];
+            chart.draw_series(
+                c.points
+                    .iter()
+                    .map(|&(x, y)| Circle::new((x, y), 2, colour.mix(0.7).filled())),
+            )?;
+            chart
+                .draw_series(LineSeries::new(
+                    c.fit.iter().copied(),
+                    colour.stroke_width(2),
+                ))?
+                .label(c.label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .label_font((FONT, 12))
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK.mix(0.3))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()?;
+        root.present()?;
+    }
+    Ok(svg)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -54,8 +54,13 @@
 //!   heap on the plate), each the mean of the four fits of the xz and yz
 //!   ortho-slices, each fit reported with its angle, R² and number of points,
 //!   and the number of fits whose R² is below [`R2_FLOOR`]; the windows are
-//!   documented in the `angles` submodule. θ is the headline angle. A run whose final snapshot has
-//!   no measurable α or θ fails with a "not measurable" error naming it.
+//!   documented in the `angles` submodule. θ is the headline angle.
+//!   `upper_angle_measured` and `bottom_angle_measured` are 1 or 0: an
+//!   angle the final snapshot cannot show (a heap lower than three diameters,
+//!   spread over the plate by slippery or bouncy particles; a crater without
+//!   enough surface points) is left out with the reason in the warnings, and
+//!   the run keeps everything else it measured (the other angle, the flow).
+//!   A design study then misses that response at that point, not the run.
 //! - discharged particles against time (trace `discharged`, from the
 //!   opening) and yan2015's flow rate FR(t) = discharged by t / t at
 //!   t = 1, 2, 3, 4 s after the opening ([`FLOW_RATE_TIMES_S`]), reported only
@@ -147,14 +152,6 @@ pub enum HopperError {
     /// The discharge trace could not be evaluated.
     #[error("hopper discharge: {0}")]
     Discharge(MeasureError),
-    /// An angle of the final snapshot is not measurable.
-    #[error("hopper: {which} {source}")]
-    Angle {
-        /// Which angle.
-        which: &'static str,
-        /// Why (starts with "not measurable").
-        source: MeasureError,
-    },
 }
 
 lab_error_conversions!(HopperError, "hopper");
@@ -228,17 +225,8 @@ fn run_hopper(
 
     let w = sim.world();
     let p = &w.particles;
-    let alpha =
-        angles::upper_angle(&p.position, &p.radius, &geo).map_err(|source| HopperError::Angle {
-            which: "upper angle α (the crater in the hopper)",
-            source,
-        })?;
-    let theta = angles::bottom_angle(&p.position, &p.radius, &geo).map_err(|source| {
-        HopperError::Angle {
-            which: "bottom angle θ (the heap on the plate)",
-            source,
-        }
-    })?;
+    let alpha = angles::upper_angle(&p.position, &p.radius, &geo);
+    let theta = angles::bottom_angle(&p.position, &p.radius, &geo);
     let census = sampler.census(&sim);
     let removed = sampler.removed();
     let last_discharge = sampler.last_discharge_s();
@@ -284,9 +272,28 @@ fn run_hopper(
         ),
     );
     put("angle_fit_r2_floor", R2_FLOOR);
-    angles::record(&mut result.measurements, "upper_angle", &alpha);
-    angles::record(&mut result.measurements, "bottom_angle", &theta);
-    result.headline_angle_deg = Some(theta.mean_deg);
+    for (name, which, angle) in [
+        (
+            "upper_angle",
+            "upper angle α (the crater in the hopper)",
+            &alpha,
+        ),
+        (
+            "bottom_angle",
+            "bottom angle θ (the heap on the plate)",
+            &theta,
+        ),
+    ] {
+        result.measurements.insert(
+            format!("{name}_measured"),
+            f64::from(u8::from(angle.is_ok())),
+        );
+        match angle {
+            Ok(a) => angles::record(&mut result.measurements, name, a),
+            Err(e) => result.warnings.push(format!("{which} {e}")),
+        }
+    }
+    result.headline_angle_deg = theta.as_ref().ok().map(|t| t.mean_deg);
     Ok(result)
 }
 

@@ -344,6 +344,99 @@ pub fn response(result: &RunResult, kind: &str, name: &str) -> Result<f64, Respo
     }
 }
 
+/// The measurement keys of the individual observations whose mean a
+/// response is, when it is one: the hopper's α and θ are each the mean of
+/// four ortho-slice fits (xz and yz slices, left and right flanks), and
+/// yan2015 fits every one of them, not the mean.
+fn part_keys(kind: &str, name: &str) -> Option<[&'static str; 4]> {
+    match (kind, name) {
+        ("hopper", "alpha_deg") => Some([
+            "upper_angle_xz_left_deg",
+            "upper_angle_xz_right_deg",
+            "upper_angle_yz_left_deg",
+            "upper_angle_yz_right_deg",
+        ]),
+        ("hopper", "theta_deg") => Some([
+            "bottom_angle_xz_left_deg",
+            "bottom_angle_xz_right_deg",
+            "bottom_angle_yz_left_deg",
+            "bottom_angle_yz_right_deg",
+        ]),
+        _ => None,
+    }
+}
+
+/// The individual observations of response `name` in a run: the four
+/// ortho-slice angles of a hopper's α or θ (see [`part_keys`]), or the
+/// response itself (one value) for every other response. Fails as
+/// [`response`] does.
+pub fn observations(result: &RunResult, kind: &str, name: &str) -> Result<Vec<f64>, ResponseError> {
+    let mean = response(result, kind, name)?;
+    let Some(keys) = part_keys(kind, name) else {
+        return Ok(vec![mean]);
+    };
+    keys.iter()
+        .map(|&key| {
+            result
+                .measurements
+                .get(key)
+                .copied()
+                .ok_or_else(|| ResponseError::NotMeasured {
+                    run: result.id.short(12).to_string(),
+                    kind: kind.to_string(),
+                    name: name.to_string(),
+                    key,
+                    description: "one of the four ortho-slice fits",
+                })
+        })
+        .collect()
+}
+
+/// A hopper run's flow-rate curve: FR(t) = particles discharged by t / t, s
+/// after the opening, at every sample of the `discharged` trace inside the
+/// discharge (0 < t ≤ `discharge_duration_s`), as (t, FR in 1/s). yan2015
+/// Eq. 20 is fitted to it. Fails for another kind or a run without a
+/// discharge.
+pub fn flow_rate_curve(result: &RunResult) -> Result<Vec<(f64, f64)>, ResponseError> {
+    let run = result.id.short(12).to_string();
+    if result.scene != "hopper" {
+        return Err(ResponseError::SceneMismatch {
+            run,
+            actual: result.scene.clone(),
+            kind: "hopper".into(),
+            name: "flow-rate curve".into(),
+        });
+    }
+    let missing = |key: &'static str| ResponseError::NotMeasured {
+        run: run.clone(),
+        kind: "hopper".into(),
+        name: "flow-rate curve".into(),
+        key,
+        description: "the discharged count against time, from the opening to the last \
+                      particle out",
+    };
+    let opened = *result
+        .measurements
+        .get("lid_open_s")
+        .ok_or_else(|| missing("lid_open_s"))?;
+    let duration = *result
+        .measurements
+        .get("discharge_duration_s")
+        .ok_or_else(|| missing("discharge_duration_s"))?;
+    let trace = result
+        .traces
+        .get("discharged")
+        .ok_or_else(|| missing("discharged"))?;
+    Ok(trace
+        .time_s
+        .iter()
+        .zip(&trace.values)
+        .map(|(t, n)| (t - opened, *n))
+        .filter(|(t, _)| *t > 0.0 && *t <= duration)
+        .map(|(t, n)| (t, n / t))
+        .collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -99,7 +99,7 @@ impl Default for LmSettings {
 
 /// A nonlinear least-squares fit: estimates in the units of their parameter,
 /// with the linearised inference of the module docs.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NllsFit {
     /// Parameter names, from [`Model::parameter_names`].
     pub names: Vec<String>,
@@ -547,7 +547,7 @@ pub fn fit_flow_decay(t_s: &[f64], flow_rate: &[f64]) -> Result<NllsFit, StatsEr
 
 /// Lack of fit against pure error for a fit with replicated x rows: whether
 /// the model's residual scatter exceeds the scatter between replicates.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LackOfFit {
     /// SS_lof = SSE − SS_pe (units of y squared; 0 if rounding makes it
     /// negative).

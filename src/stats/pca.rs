@@ -20,7 +20,7 @@ use nalgebra::{DMatrix, SymmetricEigen};
 use super::{check_finite, StatsError};
 
 /// A principal component analysis of auto-scaled data.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Pca {
     /// Column (variable) names, in the order of the data columns.
     pub columns: Vec<String>,

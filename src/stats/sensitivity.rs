@@ -43,7 +43,7 @@ pub fn normalised(norms: &[f64]) -> Vec<f64> {
 
 /// Eq. 18 cross-correlation of the parameters (columns) of a scaled
 /// sensitivity matrix, or why it does not exist.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum CrossCorrelation {
     /// `CC_kl = (SᵀS)⁻¹_kl / √((SᵀS)⁻¹_kk (SᵀS)⁻¹_ll)`, k × k, symmetric, with
     /// unit diagonal and entries in [−1, 1]; near ±1 means the two

@@ -9,6 +9,7 @@
 //! - [`runs`]: points × replicates × scenes → executor → response table.
 //! - [`screen`], [`rsm`], [`optimum`], [`verify`]: the stages and the joint
 //!   desirability optimum.
+//! - [`sensitivity`]: yan2015's three levels of parameter sensitivity.
 //! - [`dir`]: where a study's outputs live and how they are written.
 //!
 //! The runs stay in the store (`<store>/<id>/`), so a run shared by two
@@ -19,6 +20,7 @@ pub mod optimum;
 pub mod rsm;
 pub mod runs;
 pub mod screen;
+pub mod sensitivity;
 pub mod spec;
 pub mod verify;
 
@@ -139,4 +141,21 @@ where
 {
     let dir = dir::StudyDir::prepare(store_root, study)?;
     screen::screen(&dir, study, store, pool, runner)
+}
+
+/// `repose sensitivity STUDY`: the levels asked for (see [`sensitivity`]).
+pub fn run_sensitivity<E, F>(
+    store_root: &Path,
+    study: &DesignStudy,
+    store: &Store,
+    pool: &LocalPool,
+    runner: &F,
+    levels: sensitivity::Levels,
+) -> Result<sensitivity::SensitivityOutcome, StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let dir = dir::StudyDir::prepare(store_root, study)?;
+    sensitivity::sensitivity(&dir, study, store, pool, runner, levels)
 }

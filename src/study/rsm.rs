@@ -53,28 +53,42 @@ pub fn coded_design(study: &DesignStudy) -> Result<Vec<Vec<f64>>, StudyError> {
     })
 }
 
-/// Points of the design in actual units for the runs.
-fn design_points(study: &DesignStudy, coded: &[Vec<f64>]) -> Vec<Point> {
+/// The design's points in actual units, in run order: a full factorial's
+/// levels exactly as the study writes them (so every experiment carries the
+/// study's numbers, not a coded round trip of them), a Box–Behnken design
+/// decoded from the factor ranges.
+pub fn actual_design(study: &DesignStudy) -> Result<Vec<Vec<f64>>, StudyError> {
+    if let DesignSpec::FullFactorial { levels } = &study.design {
+        let lists: Vec<Vec<f64>> = study.factors.keys().map(|f| levels[f].clone()).collect();
+        return Ok(full_factorial(&lists)?);
+    }
     let ranges = study.ranges();
-    coded
+    Ok(coded_design(study)?
         .iter()
-        .enumerate()
-        .map(|(i, c)| {
-            let actual: Vec<f64> = c
-                .iter()
+        .map(|c| {
+            c.iter()
                 .zip(&ranges)
                 .map(|(x, r)| r.to_actual(*x))
-                .collect();
-            Point {
-                index: i as u64,
-                values: study
-                    .factors
-                    .values()
-                    .zip(&actual)
-                    .map(|(f, v)| (f.address.clone(), *v))
-                    .collect(),
-                shown: actual,
-            }
+                .collect()
+        })
+        .collect())
+}
+
+/// The runs' points of a design given in actual units: point `i` is the
+/// design's row `i` (its `sample_index`), setting every factor's address.
+pub fn design_points(study: &DesignStudy, actual: &[Vec<f64>]) -> Vec<Point> {
+    actual
+        .iter()
+        .enumerate()
+        .map(|(i, row)| Point {
+            index: i as u64,
+            values: study
+                .factors
+                .values()
+                .zip(row)
+                .map(|(f, v)| (f.address.clone(), *v))
+                .collect(),
+            shown: row.clone(),
         })
         .collect()
 }
@@ -185,7 +199,7 @@ where
         runner,
         SeedStage::Design,
         names.clone(),
-        design_points(study, &coded),
+        design_points(study, &actual_design(study)?),
         study.replicates,
     )?;
     write_table(dir, "rsm", study, &runs, &stage.join("responses.csv"))?;

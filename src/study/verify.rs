@@ -35,8 +35,8 @@ pub struct Check {
     pub mean: Option<f64>,
     /// 95 % CI half-width of the mean (n ≥ 2).
     pub ci95_half_width: Option<f64>,
-    /// The model's prediction at the point.
-    pub predicted: f64,
+    /// The model's prediction at the point (None where the model has none).
+    pub predicted: Option<f64>,
     /// The measured target, if any.
     pub target: Option<f64>,
     /// (mean − target) / target.
@@ -74,23 +74,84 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
+    let ranges = study.ranges();
+    let predict = |response: &str, actual: &[f64]| {
+        let coded: Vec<f64> = actual
+            .iter()
+            .zip(&ranges)
+            .map(|(x, r)| r.to_coded(*x))
+            .collect();
+        rsm.analyses
+            .iter()
+            .find(|a| a.response == response)
+            .map(|a| a.fit.predict(&coded))
+    };
+    let responses: Vec<String> = rsm.analyses.iter().map(|a| a.response.clone()).collect();
+    let optimum = rsm
+        .optimum_actual
+        .as_ref()
+        .map(|best| ("optimum", best.as_slice()));
+    verify_points(
+        dir, "verify", study, optimum, &responses, &predict, store, pool, runner,
+    )
+}
+
+/// The points a verification re-simulates: `optimum` (if any) at index 0,
+/// then the study's named points at indices 1, 2, … in name order, whether
+/// or not there is an optimum — so a named point draws the same packing
+/// seeds in every stage that verifies it, and its runs are shared.
+fn named_points(
+    study: &DesignStudy,
+    optimum: Option<(&str, &[f64])>,
+) -> Vec<(String, u64, Vec<f64>)> {
+    let names = study.factor_names();
+    let mut named = Vec::new();
+    if let Some((name, best)) = optimum {
+        named.push((name.to_string(), 0, best.to_vec()));
+    }
+    if let Some(plan) = &study.verification {
+        for (k, (name, values)) in plan.points.iter().enumerate() {
+            named.push((
+                name.clone(),
+                k as u64 + 1,
+                names.iter().map(|f| values[f]).collect(),
+            ));
+        }
+    }
+    named
+}
+
+/// Re-simulates `optimum` and the study's named points with
+/// `verification.replicates` packing seeds (stage [`SeedStage::Verify`]) and
+/// checks each of `responses` against its target, beside the model's
+/// prediction `predict(response, actual factor values)`; writes
+/// `<stage>/responses.csv`, `verification.csv` and `verification.md`. `None`
+/// when the study has no verification block.
+#[allow(clippy::too_many_arguments)]
+pub fn verify_points<E, F>(
+    dir: &StudyDir,
+    stage_name: &str,
+    study: &DesignStudy,
+    optimum: Option<(&str, &[f64])>,
+    responses: &[String],
+    predict: &dyn Fn(&str, &[f64]) -> Option<f64>,
+    store: &Store,
+    pool: &LocalPool,
+    runner: &F,
+) -> Result<Option<Verification>, StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
     let Some(plan) = &study.verification else {
         return Ok(None);
     };
     let names = study.factor_names();
-    let ranges = study.ranges();
-    let mut named: Vec<(String, Vec<f64>)> = Vec::new();
-    if let Some(best) = &rsm.optimum_actual {
-        named.push(("optimum".into(), best.clone()));
-    }
-    for (name, values) in &plan.points {
-        named.push((name.clone(), names.iter().map(|f| values[f]).collect()));
-    }
+    let named = named_points(study, optimum);
     let points: Vec<Point> = named
         .iter()
-        .enumerate()
-        .map(|(i, (_, actual))| Point {
-            index: i as u64,
+        .map(|(_, index, actual)| Point {
+            index: *index,
             values: study
                 .factors
                 .values()
@@ -100,7 +161,7 @@ where
             shown: actual.clone(),
         })
         .collect();
-    let stage = dir.stage("verify")?;
+    let stage = dir.stage(stage_name)?;
     let runs = run_points(
         study,
         store,
@@ -111,29 +172,24 @@ where
         points,
         plan.replicates,
     )?;
-    write_table(dir, "verify", study, &runs, &stage.join("responses.csv"))?;
+    write_table(dir, stage_name, study, &runs, &stage.join("responses.csv"))?;
     let mut checks = Vec::new();
-    for a in &rsm.analyses {
-        let values = runs.by_point(&a.response);
-        for (k, (name, actual)) in named.iter().enumerate() {
-            let coded: Vec<f64> = actual
-                .iter()
-                .zip(&ranges)
-                .map(|(x, r)| r.to_coded(*x))
-                .collect();
+    for response in responses {
+        let values = runs.by_point(response);
+        for (k, (name, _, actual)) in named.iter().enumerate() {
             let summary = mean_ci(&values[k]);
             let mean = summary
                 .map(|s| s.mean)
                 .or_else(|| values[k].first().copied());
-            let target = study.targets.get(&a.response);
+            let target = study.targets.get(response);
             let relative_error = mean.zip(target).map(|(m, t)| (m - t.value) / t.value);
             checks.push(Check {
                 point: name.clone(),
-                response: a.response.clone(),
+                response: response.clone(),
                 n: values[k].len(),
                 mean,
                 ci95_half_width: summary.map(|s| s.half_width),
-                predicted: a.fit.predict(&coded),
+                predicted: predict(response, actual),
                 target: target.map(|t| t.value),
                 relative_error,
                 pass: relative_error
@@ -143,7 +199,7 @@ where
         }
     }
     let outcome = Verification {
-        points: named,
+        points: named.into_iter().map(|(n, _, v)| (n, v)).collect(),
         checks,
         runs: runs.total,
         cached: runs.cached,
@@ -151,7 +207,7 @@ where
     };
     let lineage = dir
         .lineage(
-            "verify",
+            stage_name,
             serde_json::json!({ "replicates": plan.replicates }),
         )
         .with_input(dir.input("responses", &stage.join("responses.csv"))?);
@@ -191,7 +247,7 @@ fn csv(v: &Verification) -> String {
             Cell::Integer(c.n as u64),
             num(c.mean),
             num(c.ci95_half_width),
-            Cell::Number(c.predicted),
+            num(c.predicted),
             num(c.target),
             num(c.relative_error),
             Cell::Text(c.pass.map_or(String::new(), |p| p.to_string())),
@@ -224,12 +280,12 @@ pub fn markdown(study: &DesignStudy, v: &Verification) -> String {
             _ => "not measured".into(),
         };
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {:.2} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
             c.point,
             c.response,
             c.n,
             sim,
-            c.predicted,
+            c.predicted.map_or(String::new(), |p| format!("{p:.2}")),
             c.target.map_or(String::new(), |t| format!("{t}")),
             c.relative_error
                 .map_or(String::new(), |e| format!("{:+.2} %", 100.0 * e)),

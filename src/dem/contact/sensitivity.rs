@@ -239,7 +239,7 @@ impl PairSpec {
 /// An a-priori contact state (yan2015 §4.2.3): what the contact looks like at
 /// the instant its forces are evaluated (see the module docs for the
 /// directions).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ContactState {
     /// Normal overlap δn, m (> 0: the spheres touch).
     pub normal_overlap_m: f64,

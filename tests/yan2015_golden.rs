@@ -1,0 +1,267 @@
+//! The yan2015 smoke study end to end with real DEM runs
+//! (experiments/yan2015-smoke/study.json): `repose sensitivity` runs the
+//! reduced full factorial (2 × 2 × 2 points, one packing seed each) in the
+//! hopper, fits the power laws and the flow-rate curves (level 1), the PCA
+//! of the sensitivity matrices (level 2), the contact-law norms and
+//! cross-correlations (level 3), and re-simulates the paper's example point
+//! with 2 seeds. Once with one worker and once with two: the stores must
+//! agree byte for byte, the analysis tables must match golden/yan2015_smoke/
+//! (ids, seeds and counts exactly, floats within [`TOL`]), and the level-3
+//! tables — deterministic functions of the contact laws, no simulation —
+//! byte for byte.
+//!
+//! `REPOSE_BLESS=1 cargo test --release --test yan2015_golden` rewrites the
+//! pinned files (after the determinism check); review their diff in the
+//! commit. About 2 minutes of CPU per store.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use repose::commands::{sensitivity, study_pool};
+use repose::scenes::plan::Limits;
+use repose::study::sensitivity::Levels;
+use repose::study::spec::read_design_study;
+
+const STUDY: &str = "experiments/yan2015-smoke/study.json";
+const GOLDEN_DIR: &str = "golden/yan2015_smoke";
+
+/// Relative tolerance of floating-point cells of the run-based tables. On
+/// one platform the study is bit-identical (this test checks one and two
+/// workers byte for byte), so any difference is a change of behaviour; the
+/// band absorbs last-digit libm differences in the analysis between
+/// platforms (a DEM run amplifies last-bit differences: where libm differs,
+/// re-bless and review the diff).
+const TOL: f64 = 1e-9;
+
+/// Columns compared exactly: ids, seeds, indices, counts, names, statuses.
+const EXACT: [&str; 12] = [
+    "point",
+    "replicate",
+    "packing_seed",
+    "hopper_id",
+    "status",
+    "response",
+    "parameter",
+    "observations",
+    "missing_runs",
+    "dof",
+    "equation",
+    "component",
+];
+
+fn study_dir(store: &Path) -> PathBuf {
+    let path = common::root().join(STUDY);
+    let study = read_design_study(&path).unwrap();
+    store
+        .join("studies")
+        .join(format!("{}-{}", study.name, study.id().short(12)))
+}
+
+/// `repose sensitivity STUDY --jobs <jobs>` into `store`; returns the summary.
+fn run(store: &Path, jobs: usize) -> String {
+    let mut out = Vec::new();
+    sensitivity(
+        store,
+        &common::root().join(STUDY),
+        &study_pool(jobs, &Limits::default()),
+        Levels::ALL,
+        false,
+        &mut out,
+    )
+    .unwrap_or_else(|e| panic!("sensitivity failed: {e}\n{}", String::from_utf8_lossy(&out)));
+    String::from_utf8(out).unwrap()
+}
+
+#[test]
+fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
+    let tmp = tempfile::tempdir().unwrap();
+    let one = tmp.path().join("one-worker");
+    let two = tmp.path().join("two-workers");
+    let summary = run(&two, 2);
+    eprintln!("{summary}");
+    run(&one, 1);
+    // Every file of the two stores — study outputs, lineage, manifests, each
+    // run's result.json and MCAP log — is byte-identical.
+    common::assert_same_stores(&one, &two);
+    for level in ["Level 1", "Level 2", "Level 3", "yan2015_example"] {
+        assert!(summary.contains(level), "{level} missing:\n{summary}");
+    }
+
+    // A second call reads every level back from the store.
+    let mut out = Vec::new();
+    sensitivity(
+        &two,
+        &common::root().join(STUDY),
+        &study_pool(2, &Limits::default()),
+        Levels::ALL,
+        true,
+        &mut out,
+    )
+    .unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    let stages = json["stages"].as_array().unwrap();
+    assert_eq!(stages.len(), 3);
+    assert!(stages.iter().all(|s| s["cached"] == true), "{stages:?}");
+    assert_eq!(json["cached_runs"], json["runs"]);
+
+    let dir = study_dir(&two).join("sensitivity");
+    let mut audit_out = Vec::new();
+    repose::commands::audit(&two, &study_dir(&two), 2, 1, &mut audit_out)
+        .unwrap_or_else(|e| panic!("audit: {e}\n{}", String::from_utf8_lossy(&audit_out)));
+    for svg in [
+        "level1/alpha_deg.svg",
+        "level1/theta_deg.svg",
+        "level1/flow_curves.svg",
+    ] {
+        let text = std::fs::read_to_string(dir.join(svg)).unwrap();
+        assert!(text.contains("<svg"), "{svg}");
+    }
+    // 8 design points × 1 replicate, α and θ measured in every run (four
+    // ortho-slice angles each enter the fits).
+    let responses = std::fs::read_to_string(dir.join("responses.csv")).unwrap();
+    assert_eq!(responses.lines().count(), 1 + 8, "{responses}");
+    let observations = std::fs::read_to_string(dir.join("level1/observations.csv")).unwrap();
+    assert_eq!(
+        observations
+            .lines()
+            .filter(|l| l.contains(",theta_deg,"))
+            .count(),
+        8 * 4
+    );
+
+    let run_tables = [
+        ("responses.csv", dir.join("responses.csv")),
+        ("estimates.csv", dir.join("level1/estimates.csv")),
+        ("fits.csv", dir.join("level1/fits.csv")),
+        ("flow_curves.csv", dir.join("level1/flow_curves.csv")),
+        ("pca.csv", dir.join("level2/pca.csv")),
+        ("verification.csv", dir.join("noise/verification.csv")),
+    ];
+    let exact_tables = [
+        ("norms.csv", dir.join("level3/norms.csv")),
+        (
+            "cross_correlation.csv",
+            dir.join("level3/cross_correlation.csv"),
+        ),
+    ];
+    let golden = common::root().join(GOLDEN_DIR);
+    if common::blessing() {
+        std::fs::create_dir_all(&golden).unwrap();
+        for (name, path) in run_tables.iter().chain(&exact_tables) {
+            std::fs::copy(path, golden.join(name)).unwrap();
+        }
+        return;
+    }
+    for (name, path) in &run_tables {
+        let now = std::fs::read_to_string(path).unwrap();
+        common::compare_golden(GOLDEN_DIR, name, &now, &EXACT, TOL);
+    }
+    for (name, path) in &exact_tables {
+        let now = std::fs::read_to_string(path).unwrap();
+        let pinned = std::fs::read_to_string(golden.join(name)).unwrap();
+        assert!(
+            now == pinned,
+            "{name} differs from {GOLDEN_DIR}/{name}: level 3 is a deterministic function \
+             of the contact laws; if the laws changed on purpose, rerun with REPOSE_BLESS=1"
+        );
+    }
+
+    // `--table` fits the same power law from any CSV: θ's observations give
+    // the level-1 estimates again, at full precision in JSON.
+    let theta: Vec<&str> = observations
+        .lines()
+        .enumerate()
+        .filter(|(i, l)| *i == 0 || l.contains(",theta_deg,"))
+        .map(|(_, l)| l)
+        .collect();
+    let table = tmp.path().join("theta.csv");
+    std::fs::write(&table, theta.join("\n") + "\n").unwrap();
+    let o = common::repose(
+        tmp.path(),
+        &[
+            "sensitivity",
+            "--table",
+            table.to_str().unwrap(),
+            "--response",
+            "value",
+            "--factors",
+            "e,mu_r,mu_s",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let fit: serde_json::Value = serde_json::from_str(&common::stdout(&o)).unwrap();
+    let level1: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("level1/level1.json")).unwrap()).unwrap();
+    let theta_fit = level1["fits"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["response"] == "theta_deg")
+        .unwrap();
+    assert_eq!(fit["fit"]["estimates"], theta_fit["fit"]["estimates"]);
+    assert_eq!(fit["fit"]["ci_low"], theta_fit["fit"]["ci_low"]);
+    assert_eq!(fit["fit"]["correlation"], theta_fit["fit"]["correlation"]);
+}
+
+#[test]
+fn level_three_alone_runs_no_simulation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = common::repose(
+        tmp.path(),
+        &[
+            "sensitivity",
+            "experiments/yan2015-quick/study.json",
+            "--level",
+            "3",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(&common::stdout(&o)).unwrap();
+    assert_eq!(json["runs"], 0);
+    let sets = json["level3"]["Ok"]["sets"].as_array().unwrap();
+    // The base set and 36 design points, force and torque each.
+    assert_eq!(sets.len(), 2 * 37);
+    // No run directory was created: only the study's outputs.
+    let entries: Vec<_> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(entries, vec![std::ffi::OsString::from("studies")]);
+}
+
+#[test]
+fn the_table_fit_names_bad_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let table = tmp.path().join("t.csv");
+    std::fs::write(&table, "a,b,y\n1,2,3\n2,1,4\n3,3,5\n0,2,6\n4,4,7\n5,1,8\n").unwrap();
+    let fit = |response: &str, factors: &str| {
+        common::repose(
+            tmp.path(),
+            &[
+                "sensitivity",
+                "--table",
+                table.to_str().unwrap(),
+                "--response",
+                response,
+                "--factors",
+                factors,
+            ],
+        )
+    };
+    let o = fit("y", "a,b");
+    assert_eq!(o.status.code(), Some(2), "{}", common::stderr(&o));
+    assert!(
+        common::stderr(&o).contains("factor `a`"),
+        "{}",
+        common::stderr(&o)
+    );
+    let o = fit("y", "b,c");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(common::stderr(&o).contains("'c'") || common::stderr(&o).contains("c"));
+    let o = fit("y", "b");
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    assert!(common::stdout(&o).contains("Parameter correlations"));
+}
