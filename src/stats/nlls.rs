@@ -39,7 +39,7 @@
 //! x) and lack of fit, as for the response surfaces in
 //! [`rsm`](super::rsm).
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 
 use nalgebra::{DMatrix, DVector};
 
@@ -577,7 +577,9 @@ pub fn lack_of_fit(fit: &NllsFit, x: &[Vec<f64>], y: &[f64]) -> Option<LackOfFit
     if x.len() != n || fit.observations != n {
         return None;
     }
-    let mut groups: HashMap<Vec<u64>, Vec<usize>> = HashMap::new();
+    // A BTreeMap, not a HashMap: the sum over groups must run in the same
+    // order on every call, or SS_pe differs in its last bits between runs.
+    let mut groups: BTreeMap<Vec<u64>, Vec<usize>> = BTreeMap::new();
     for (i, row) in x.iter().enumerate() {
         groups
             .entry(row.iter().map(|v| v.to_bits()).collect())
