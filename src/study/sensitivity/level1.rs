@@ -129,11 +129,16 @@ pub fn level1(
                 .filter(|o| &o.response == response)
                 .map(|o| (o.x.clone(), o.value))
                 .unzip();
-            let fitted = fit_power_law(&x, &y, factors);
-            let lof = fitted.as_ref().ok().and_then(|f| lack_of_fit(f, &x, &y));
-            let (fit, problem) = match fitted {
-                Ok(f) => (Some(f), None),
-                Err(e) => (None, Some(e.to_string())),
+            let (fit, lof, problem) = if y.is_empty() {
+                (None, None, Some("no run measured it".to_string()))
+            } else {
+                match fit_power_law(&x, &y, factors) {
+                    Ok(f) => {
+                        let lof = lack_of_fit(&f, &x, &y);
+                        (Some(f), lof, None)
+                    }
+                    Err(e) => (None, None, Some(e.to_string())),
+                }
             };
             ResponseFit {
                 response: response.clone(),
