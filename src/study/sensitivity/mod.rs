@@ -36,6 +36,7 @@ pub mod level2;
 pub mod level3;
 pub mod parameters;
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
@@ -397,13 +398,18 @@ fn gather(
     let mut curves = Vec::new();
     for rep in &runs.replicates {
         let x = runs.points[rep.point].shown.clone();
+        // Each run's result is read once, whatever number of responses it has.
+        let results: BTreeMap<&String, Option<RunResult>> = rep
+            .ids
+            .iter()
+            .map(|(scene, id)| (scene, load(store, id)))
+            .collect();
         for (k, (name, rr)) in study.responses.iter().enumerate() {
             let kind = study.scenes[&rr.scene].kind();
-            let values = rep
-                .ids
+            let values = results
                 .get(&rr.scene)
-                .and_then(|id| load(store, id))
-                .and_then(|res| observations(&res, kind, &rr.response).ok());
+                .and_then(Option::as_ref)
+                .and_then(|res| observations(res, kind, &rr.response).ok());
             match values {
                 Some(v) => obs.extend(v.into_iter().enumerate().map(|(part, value)| Observation {
                     point: rep.point,
@@ -416,11 +422,11 @@ fn gather(
                 None => missing[k].1 += 1,
             }
         }
-        for (scene, id) in &rep.ids {
-            if study.scenes[scene].kind() != "hopper" {
+        for (scene, result) in &results {
+            if study.scenes[*scene].kind() != "hopper" {
                 continue;
             }
-            if let Some(samples) = load(store, id).and_then(|r| flow_rate_curve(&r).ok()) {
+            if let Some(samples) = result.as_ref().and_then(|r| flow_rate_curve(r).ok()) {
                 curves.push(CurveInput {
                     point: rep.point,
                     replicate: rep.replicate,
