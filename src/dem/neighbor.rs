@@ -567,6 +567,35 @@ impl<H: Copy + Default + Send + Sync> NeighborList<H> {
         self.row_start[i] as usize..self.row_start[i + 1] as usize
     }
 
+    /// Drops the listed pairs for which `excluded(i, j)` is true, keeping the
+    /// order, the rows and the history of the others (e.g. the member spheres
+    /// of one rigid clump, which never touch each other). Call it after every
+    /// [`rebuild`](Self::rebuild); a dropped pair has no history to lose
+    /// (it is never evaluated). O(pairs), serial.
+    pub fn exclude(&mut self, excluded: impl Fn(usize, usize) -> bool) {
+        let mut kept = 0usize;
+        let rows = self.row_start.len().saturating_sub(1);
+        let mut start = 0usize;
+        for i in 0..rows {
+            let end = self.row_start[i + 1] as usize;
+            self.row_start[i] = kept as u32;
+            for k in start..end {
+                let [a, b] = self.pairs[k];
+                if !excluded(a as usize, b as usize) {
+                    self.pairs[kept] = self.pairs[k];
+                    self.history[kept] = self.history[k];
+                    kept += 1;
+                }
+            }
+            start = end;
+        }
+        if rows > 0 {
+            self.row_start[rows] = kept as u32;
+        }
+        self.pairs.truncate(kept);
+        self.history.truncate(kept);
+    }
+
     /// CSR offsets of the rows: the pairs whose first particle is `i` are
     /// `pairs()[offsets[i]..offsets[i + 1]]` (len = particles + 1).
     #[inline]

@@ -31,6 +31,8 @@
 //!
 //! Measurements, and what was tried and not kept, are in `docs/performance.md`.
 
+use crate::dem::clump::bodies::{Bodies, ClumpInit};
+use crate::dem::clump::template::ClumpShape;
 use crate::dem::contact::normal_hertz::Hertz;
 use crate::dem::contact::normal_jkr::Jkr;
 use crate::dem::contact::rolling_cdt::ConstantDirectionalTorque;
@@ -58,8 +60,11 @@ pub use tiles::blocks_for as sweep_blocks;
 /// Everything the engine simulates: particles, walls, the domain and the clock.
 #[derive(Clone, Debug)]
 pub struct World {
-    /// The spheres.
+    /// The spheres (in a world with clumps: the bodies' member spheres).
     pub particles: Particles,
+    /// The rigid clumps, when the world has them ([`World::with_clumps`]):
+    /// then every particle is a member of a body and moves with it.
+    pub bodies: Option<Bodies>,
     /// Analytic walls.
     pub walls: Vec<Wall>,
     /// The simulation box (periodic axes, and where particles may go).
@@ -77,9 +82,35 @@ impl World {
             particles,
             walls,
             domain,
+            bodies: None,
             time_s: 0.0,
             step: 0,
         }
+    }
+
+    /// A world of rigid clumps of the given shapes (no particles yet: add
+    /// them with [`push_clump`](Self::push_clump) or
+    /// [`Simulation::insert_clumps`]). Its simulation moves bodies, not
+    /// spheres (see [`crate::dem::clump`]).
+    pub fn with_clumps(walls: Vec<Wall>, domain: Domain, shapes: Vec<ClumpShape>) -> Self {
+        Self {
+            bodies: Some(Bodies::new(shapes)),
+            ..Self::new(Particles::default(), walls, domain)
+        }
+    }
+
+    /// Adds a clump of density `density_kg_m3` before the simulation is
+    /// built; returns its body id. Errors when the world has no clumps or
+    /// the shape index is unknown.
+    pub fn push_clump(&mut self, init: &ClumpInit, density_kg_m3: f64) -> Result<u32, SetupError> {
+        let bodies = self.bodies.as_mut().ok_or(SetupError::NoClumps)?;
+        if init.shape >= bodies.shapes.len() {
+            return Err(SetupError::ClumpShape {
+                shape: init.shape,
+                count: bodies.shapes.len(),
+            });
+        }
+        Ok(bodies.push(init, density_kg_m3, &mut self.particles))
     }
 }
 
@@ -178,6 +209,20 @@ pub enum SetupError {
     /// The initial state is already unhealthy (e.g. overlapping particles).
     #[error(transparent)]
     Health(HealthError),
+    /// Clumps were inserted into a world built without them.
+    #[error("this world has no clumps: build it with World::with_clumps to insert clumps")]
+    NoClumps,
+    /// Spheres were inserted into a world of clumps.
+    #[error("this world moves clumps: insert clumps (a sphere is a one-member clump shape)")]
+    SpheresInClumpWorld,
+    /// A clump names a shape the world does not have.
+    #[error("clump shape = {shape}: the world has {count} shapes (0..{count})")]
+    ClumpShape {
+        /// The shape index given.
+        shape: usize,
+        /// Number of shapes.
+        count: usize,
+    },
 }
 
 /// Statistics of the last force evaluation (and two running totals).
@@ -310,23 +355,50 @@ impl Simulation {
         self.kernel.stats()
     }
 
-    /// Adds particles (the caller guarantees they do not overlap); returns their ids.
-    pub fn insert(&mut self, new: &[ParticleInit]) -> Result<Vec<u32>, HealthError> {
+    /// Adds particles (the caller guarantees they do not overlap); returns
+    /// their ids. A world of clumps takes clumps only
+    /// ([`insert_clumps`](Self::insert_clumps)).
+    pub fn insert(&mut self, new: &[ParticleInit]) -> Result<Vec<u32>, SetupError> {
+        if self.world.bodies.is_some() {
+            return Err(SetupError::SpheresInClumpWorld);
+        }
         let ids = new
             .iter()
             .map(|p| self.world.particles.push(p, self.density_kg_m3))
             .collect();
-        self.kernel.particles_changed(&mut self.world, None)?;
+        self.kernel
+            .particles_changed(&mut self.world, None)
+            .map_err(SetupError::Health)?;
         Ok(ids)
     }
 
-    /// Removes the particles for which `keep` is false (e.g. discharged ones).
+    /// Adds clumps to a world of clumps (the caller guarantees they do not
+    /// overlap); returns their body ids.
+    pub fn insert_clumps(&mut self, new: &[ClumpInit]) -> Result<Vec<u32>, SetupError> {
+        let ids = new
+            .iter()
+            .map(|c| self.world.push_clump(c, self.density_kg_m3))
+            .collect::<Result<Vec<_>, _>>()?;
+        self.kernel
+            .particles_changed(&mut self.world, None)
+            .map_err(SetupError::Health)?;
+        Ok(ids)
+    }
+
+    /// Removes the particles for which `keep` is false (e.g. discharged
+    /// ones); returns how many particles went. In a world of clumps a body
+    /// goes with all its members as soon as `keep` is false for one of them
+    /// (its first member through an outlet takes the body along, before
+    /// another member could leave the domain).
     pub fn retain(
         &mut self,
         keep: impl Fn(&Particles, usize) -> bool,
     ) -> Result<usize, HealthError> {
         let p = &self.world.particles;
-        let mask: Vec<bool> = (0..p.len()).map(|i| keep(p, i)).collect();
+        let mut mask: Vec<bool> = (0..p.len()).map(|i| keep(p, i)).collect();
+        if let Some(bodies) = &mut self.world.bodies {
+            mask = body_mask(bodies, p, &mask);
+        }
         let removed = mask.iter().filter(|k| !**k).count();
         if removed > 0 {
             self.world.particles.retain_indices(&mask);
@@ -370,6 +442,25 @@ fn with_body_force<N: NormalModel, R: RollingModel, G: BodyForce>(
     } else {
         Ok(Box::new(Stepper::<N, R, G, Open>::new(world, setup, body)?))
     }
+}
+
+/// Removes from `bodies` every body one of whose members `mask` drops, and
+/// returns the particle mask that drops all those bodies' members.
+fn body_mask(bodies: &mut Bodies, p: &Particles, mask: &[bool]) -> Vec<bool> {
+    let body_of = |i: usize| {
+        bodies
+            .body_of_member(p.id[i])
+            .expect("every particle is a member")
+    };
+    let mut keep_body = vec![true; bodies.len()];
+    for (i, &k) in mask.iter().enumerate() {
+        if !k {
+            keep_body[body_of(i)] = false;
+        }
+    }
+    let particle_mask = (0..p.len()).map(|i| keep_body[body_of(i)]).collect();
+    bodies.retain_indices(&keep_body);
+    particle_mask
 }
 
 /// The larger ratio; on ties the lower index (so reductions are order-independent).

@@ -1,6 +1,8 @@
 //! One monomorphised kernel: the state and stages of a simulation with fixed
 //! effects.
 
+mod rigid;
+
 use super::pair_kernel::{Motion, PairFound, PairKernel, Sphere};
 use super::particle_runs::ParticleRecords;
 use super::team::{run_jobs, Team, JOBS_PER_MEMBER};
@@ -53,6 +55,8 @@ pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boun
     energy_reference: Option<f64>,
     energy_check: bool,
     rebuilds_since_sort: u32,
+    /// Where the clumps' members are (`None`: a world of free spheres).
+    rigid: Option<rigid::RigidIndex>,
     _boundary: std::marker::PhantomData<B>,
 }
 
@@ -129,14 +133,17 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             energy_reference: None,
             energy_check: !N::ADHESIVE,
             rebuilds_since_sort: 0,
+            rigid: world.bodies.as_ref().map(|_| rigid::RigidIndex::default()),
             _boundary: std::marker::PhantomData,
         };
         stepper
             .sort_and_rebuild(world)
             .map_err(SetupError::Neighbor)?;
         stepper.records.pack(&world.particles, stepper.dt);
+        stepper.rigid_pack(world);
         stepper.join_team();
         stepper.forces(world, false).map_err(SetupError::Health)?;
+        stepper.rigid_collect(world, false);
         stepper.rest_team();
         Ok(stepper)
     }
@@ -283,8 +290,16 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             let p = &world.particles;
             self.neighbors
                 .rebuild(&p.position, &p.radius, &p.id, &world.domain)
+                .map(|()| self.exclude_members())
         };
         result.map_err(|e| self.neighbor_failure(world, e))
+    }
+
+    /// Drops the pairs of members of one clump from the neighbour list.
+    fn exclude_members(&mut self) {
+        if let Some(index) = &self.rigid {
+            self.neighbors.exclude(|i, j| index.same_body(i, j));
+        }
     }
 
     fn neighbor_failure(&self, world: &World, e: NeighborError) -> HealthError {
@@ -310,8 +325,13 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             .cell_order(&p.position, &p.radius, &world.domain)?;
         p.permute(&order);
         self.records.permute(&order);
+        if let (Some(index), Some(bodies)) = (&mut self.rigid, &world.bodies) {
+            index.refresh(bodies, p);
+        }
         self.neighbors
-            .rebuild(&p.position, &p.radius, &p.id, &world.domain)
+            .rebuild(&p.position, &p.radius, &p.id, &world.domain)?;
+        self.exclude_members();
+        Ok(())
     }
 
     /// Pair forces into the per-particle sums (started at the body force)
@@ -523,9 +543,20 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             if g.y < 0.0 { lo.y } else { hi.y },
             if g.z < 0.0 { lo.z } else { hi.z },
         );
-        let potential: f64 = (0..p.len())
-            .map(|i| -p.mass[i] * g.dot(&(p.position[i] - floor)))
-            .sum();
+        let (kinetic, potential): (f64, f64) = match &world.bodies {
+            None => (
+                p.kinetic_energy_j(),
+                (0..p.len())
+                    .map(|i| -p.mass[i] * g.dot(&(p.position[i] - floor)))
+                    .sum(),
+            ),
+            Some(bodies) => (
+                bodies.kinetic_energy_j(),
+                (0..bodies.len())
+                    .map(|b| -bodies.mass[b] * g.dot(&(bodies.position[b] - floor)))
+                    .sum(),
+            ),
+        };
         let coef = &self.particle_particle;
         let elastic: f64 = self
             .neighbors
@@ -549,7 +580,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                 ))
             })
             .sum();
-        p.kinetic_energy_j() + potential + elastic + wall_elastic
+        kinetic + potential + elastic + wall_elastic
     }
 
     fn check_energy(&mut self, world: &World) -> Result<(), HealthError> {
@@ -588,6 +619,9 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     /// The step loop of [`Kernel::advance`] (see there), on the team
     /// [`join_team`](Self::join_team) made.
     fn steps(&mut self, world: &mut World, steps: u64) -> Result<(), HealthError> {
+        if self.rigid.is_some() {
+            return self.rigid_steps(world, steps);
+        }
         let mut drifted: Option<bool> = None;
         for s in 0..steps {
             let moved = match drifted {
@@ -811,8 +845,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Step
         self.sort_and_rebuild(world)
             .map_err(|e| self.neighbor_failure(world, e))?;
         self.records.pack(&world.particles, self.dt);
+        self.rigid_pack(world);
         self.join_team();
         let result = self.forces(world, false).map(|_| ());
+        self.rigid_collect(world, false);
         self.rest_team();
         result
     }

@@ -1,0 +1,4 @@
+//! Clumps: rigid bodies made of overlapping member spheres.
+pub mod bodies;
+pub mod rotation;
+pub mod template;
