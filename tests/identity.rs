@@ -386,7 +386,7 @@ prop_compose! {
             profile,
             scene,
             material: Material {
-                particle: ParticleMaterial { density_kg_m3: particle.0, youngs_modulus_pa: particle.1, poisson_ratio: particle.2, size: particle.3 },
+                particle: ParticleMaterial { density_kg_m3: particle.0, youngs_modulus_pa: particle.1, poisson_ratio: particle.2, size: particle.3, shape: None },
                 walls,
             },
             contact: Contact {

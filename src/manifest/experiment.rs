@@ -96,7 +96,43 @@ pub struct ParticleMaterial {
     /// Poisson ratio, dimensionless, in (-1, 0.5].
     pub poisson_ratio: f64,
     /// Particle size distribution (used by lab scenes; pair scenes state their radii).
+    /// With a clump `shape`, the radii are volume-equivalent: a particle of
+    /// radius R is a clump of the volume (and mass) of a sphere of radius R.
     pub size: SizeDistribution,
+    /// Particle shape in the lab scenes: spheres when absent (and then left
+    /// out of the canonical form, so sphere manifests keep their ids), or
+    /// rigid multi-sphere clumps.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shape: Option<ParticleShape>,
+}
+
+/// A rigid multi-sphere particle shape (see [`crate::dem::clump`]), scaled
+/// per particle to the size distribution's volume-equivalent radius.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ParticleShape {
+    /// Two equal overlapping spheres whose union has length / width =
+    /// `aspect_ratio` (he2019 §2.3.1: 1.3), in (1, 2).
+    PairedSpheres {
+        /// Length over width of the pair, dimensionless.
+        aspect_ratio: f64,
+    },
+    /// Member spheres given explicitly (any unit: only their proportions
+    /// count), each overlapping another; at most 64.
+    Clump {
+        /// The member spheres.
+        members: Vec<ClumpMember>,
+    },
+}
+
+/// One member sphere of an explicit clump shape.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClumpMember {
+    /// Centre, in the shape's own frame and unit.
+    pub offset: [f64; 3],
+    /// Radius, in the same unit.
+    pub radius: f64,
 }
 
 /// Particle size distribution.

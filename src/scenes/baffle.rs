@@ -362,7 +362,7 @@ pub fn run(
     let d_mean = lab.d_mean_m;
     let every = scene.sample_interval();
 
-    let (world, geo, placed) = build_world(exp, scene, &lab.sizes, d_mean)?;
+    let (world, geo, placed) = build_world(exp, scene, &lab)?;
     let mut sim = lab
         .simulation(world, HealthLimits::default())
         .map_err(BaffleError::from)?;
@@ -525,10 +525,9 @@ fn place_column(
 fn build_world(
     exp: &Experiment,
     scene: &BaffleLiftScene,
-    sizes: &crate::packing::distribution::SizeDistribution,
-    d_mean: f64,
+    lab: &Lab,
 ) -> Result<(World, BoxGeometry, Tally), BaffleError> {
-    let rho = exp.material.particle.density_kg_m3;
+    let (sizes, d_mean) = (&lab.sizes, lab.d_mean_m);
     let l = scene.box_length_m;
     let (w, periodic) = match scene.periodic_slice_m {
         Some(slice) => (slice, true),
@@ -536,7 +535,10 @@ fn build_world(
     };
     let mass = scene.powder_mass_kg * w / scene.box_width_m;
     let d_max = sizes.sampler()?.max_diameter();
-    let (placed, column) = place_column(exp, sizes, mass, l, w, d_mean, d_max)?;
+    // The packing places bounding spheres: ask it for the mass they would
+    // have, so the clumps inside them weigh `mass`.
+    let packed_mass = mass / lab.packed_solid_ratio();
+    let (placed, column) = place_column(exp, sizes, packed_mass, l, w, d_mean, d_max)?;
     let overhang = scene.floor_overhang();
     let pad = domain_pad(
         exp.time_step.design_impact_speed_m_s,
@@ -564,13 +566,10 @@ fn build_world(
         Vec3::new(geo.floor_x_m.1 + pad, y_hi, geo.wall_height_m + pad),
         [false, periodic, false],
     )?;
-    let mut particles = Particles::default();
+    let world = lab.world(&placed.particles, geo.walls()?, domain)?;
     let mut tally = Tally::default();
-    for p in &placed.particles {
-        particles.push(p, rho);
-    }
-    for m in &particles.mass {
+    for m in &world.particles.mass {
         tally.add(*m);
     }
-    Ok((World::new(particles, geo.walls()?, domain), geo, tally))
+    Ok((world, geo, tally))
 }

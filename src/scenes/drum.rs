@@ -26,7 +26,6 @@ use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::SceneError;
 use crate::dem::domain::Domain;
 use crate::dem::health::{HealthError, HealthLimits};
-use crate::dem::particles::Particles;
 use crate::dem::simulation::{Simulation, World};
 use crate::dem::vec3::Vec3;
 use crate::dem::walls::{Motion, Wall};
@@ -124,8 +123,8 @@ pub fn run(
     let r_drum = 0.5 * scene.inner_diameter_m;
     let length = scene.periodic_slice_m.unwrap_or(scene.length_m);
 
-    let world = build_world(exp, scene, &lab.sizes, d_mean).map_err(SceneError::Drum)?;
-    let particle_count = world.particles.len();
+    let world = build_world(exp, scene, &lab).map_err(SceneError::Drum)?;
+    let particle_count = world.grains();
     let mut sim = lab
         .simulation(world, HealthLimits::default())
         .map_err(|e| SceneError::Drum(e.into()))?;
@@ -211,12 +210,8 @@ pub fn run(
 }
 
 /// Walls, domain and the placed particles.
-fn build_world(
-    exp: &Experiment,
-    scene: &DrumScene,
-    sizes: &crate::packing::distribution::SizeDistribution,
-    d_mean: f64,
-) -> Result<World, DrumError> {
+fn build_world(exp: &Experiment, scene: &DrumScene, lab: &Lab) -> Result<World, DrumError> {
+    let (sizes, d_mean) = (&lab.sizes, lab.d_mean_m);
     let r_drum = 0.5 * scene.inner_diameter_m;
     let margin = 4.0 * d_mean;
     let (length, periodic) = match scene.periodic_slice_m {
@@ -271,7 +266,7 @@ fn build_world(
         max_m: Vec3::new(side, half, side),
     };
     let drum_volume = PI * r_drum * r_drum * length;
-    let particle_volume = PI / 6.0 * d_mean.powi(3);
+    let particle_volume = PI / 6.0 * d_mean.powi(3) * lab.packed_solid_ratio();
     let count = (scene.fill_fraction * drum_volume * BULK_SOLID_FRACTION / particle_volume).round()
         as usize;
     let spec = PlacementSpec {
@@ -287,9 +282,5 @@ fn build_world(
         Err(PackingError::RegionFull { .. }) => place_lattice(&spec, LATTICE_SPACING)?,
         Err(e) => return Err(e.into()),
     };
-    let mut particles = Particles::default();
-    for p in &placed.particles {
-        particles.push(p, exp.material.particle.density_kg_m3);
-    }
-    Ok(World::new(particles, walls, domain))
+    Ok(lab.world(&placed.particles, walls, domain)?)
 }

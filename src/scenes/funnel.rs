@@ -361,15 +361,11 @@ pub fn simulate(
         }
         .into());
     };
-    let mut particles = Particles::default();
-    for p in first {
-        particles.push(p, rho);
-    }
     let health = HealthLimits::default();
     let domain = geom
         .domain(spring_out_speed(&lab.contact, rho, &health))
         .map_err(FunnelError::from)?;
-    let world = World::new(particles, walls, domain);
+    let world = lab.world(first, walls, domain).map_err(FunnelError::from)?;
     let mut sim = lab.simulation(world, health).map_err(FunnelError::from)?;
 
     // Fill: layer k is released at k / n of the generation time.
@@ -384,7 +380,7 @@ pub fn simulate(
         let free = fill::free_sites(layer, &w.particles.position, &w.particles.radius);
         skipped += layer.len() - free.len();
         charged += free.len();
-        sim.insert(&free).map_err(FunnelError::from)?;
+        lab.insert(&mut sim, &free).map_err(FunnelError::from)?;
     }
     sim.advance(step_at(n) - step_at(n - 1))
         .map_err(FunnelError::from)?;

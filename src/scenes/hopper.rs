@@ -106,7 +106,6 @@ use super::protocol::{run_phase, Phase, Progress, SettleCriterion};
 use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::SceneError;
 use crate::dem::health::HealthLimits;
-use crate::dem::particles::Particles;
 use crate::dem::simulation::World;
 use crate::dem::vec3::Vec3;
 use crate::manifest::scene::HopperScene;
@@ -191,12 +190,8 @@ fn run_hopper(
     let fill_height = scene.fill_height_m.unwrap_or(scene.height_m);
 
     let (placed, top_z) = pour(exp, scene, &geo, &lab.sizes, fill_height)?;
-    let mut particles = Particles::default();
-    for p in &placed.particles {
-        particles.push(p, lab.density_kg_m3);
-    }
-    let inserted = particles.len();
-    let world = World::new(particles, geo.walls()?, geo.domain(top_z, every)?);
+    let inserted = placed.particles.len();
+    let world = lab.world(&placed.particles, geo.walls()?, geo.domain(top_z, every)?)?;
     let mut sim = lab.simulation(world, HealthLimits::default())?;
 
     let speed_scale_m_s = (2.0 * G_M_S2 * scene.drop_height_m).sqrt();

@@ -32,6 +32,9 @@ pub enum SceneError {
     /// No stable time step exists for the manifest's settings.
     #[error("time_step: {0}")]
     TimeStep(#[from] crate::dem::timestep::TimeStepError),
+    /// The particle shape is not a valid clump.
+    #[error("material.particle.shape: {0}")]
+    Shape(String),
     /// The pair scene failed.
     #[error(transparent)]
     Pair(#[from] pair::PairError),

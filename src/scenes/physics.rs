@@ -7,14 +7,17 @@
 //! [`particle_material`] the simulated modulus and [`contact_setup`] the
 //! simulated surface energies, so scenes never see the real particle.
 
+use super::SceneError;
+use crate::dem::clump::template::{ClumpShape, ClumpTemplate, Member};
 use crate::dem::contact::PairParameters;
+use crate::dem::vec3::Vec3;
 use crate::dem::material::{effective_youngs_modulus, ElasticMaterial};
 use crate::dem::simulation::{ContactSetup, NormalChoice, RollingChoice};
 use crate::dem::timestep::{
     choose_time_step, StiffestContact, TimeStepError, TimeStepPlan, TimeStepRequest,
 };
 use crate::manifest::{
-    CoarseGrainingRule, Experiment, NormalModel, PairParams, RollingModel, SizeDistribution,
+    CoarseGrainingRule, Experiment, NormalModel, PairParams, ParticleShape, RollingModel, SizeDistribution,
     WallMaterial, WallStiffness,
 };
 use crate::packing::coarse::{
@@ -218,6 +221,30 @@ pub fn time_step_warnings(plan: &TimeStepPlan, reached_m_s: f64) -> Vec<String> 
         })
         .into_iter()
         .collect()
+}
+
+/// The manifest's clump shape at unit volume-equivalent radius (`None` for
+/// spheres); an invalid clump (members that do not form one connected
+/// union, a member inside another) is an error naming the shape.
+pub fn clump_shape(exp: &Experiment) -> Result<Option<ClumpShape>, SceneError> {
+    let template = match &exp.material.particle.shape {
+        None => return Ok(None),
+        Some(ParticleShape::PairedSpheres { aspect_ratio }) => {
+            ClumpTemplate::paired_spheres(*aspect_ratio)
+        }
+        Some(ParticleShape::Clump { members }) => ClumpTemplate::new(
+            "clump",
+            members
+                .iter()
+                .map(|m| Member {
+                    offset: Vec3::from(m.offset),
+                    radius_m: m.radius,
+                })
+                .collect(),
+        ),
+    };
+    let template = template.map_err(|e| SceneError::Shape(e.to_string()))?;
+    Ok(Some(template.shape(1.0)))
 }
 
 /// The simulated particle size distribution as the packing module's

@@ -118,11 +118,10 @@ use super::protocol::{
     mean_kinetic_energy_j, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
     STANDARD_GRAVITY_M_S2,
 };
-use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
-use super::{physics, SceneError};
+use super::skeleton::{finish, lab_error_conversions, open_log, Grains, Lab, LabError};
+use super::SceneError;
 use crate::dem::domain::Domain;
 use crate::dem::health::HealthLimits;
-use crate::dem::particles::Particles;
 use crate::dem::simulation::{Simulation, World};
 use crate::dem::timestep::TimeStepPlan;
 use crate::dem::vec3::Vec3;
@@ -303,6 +302,8 @@ pub struct Feeder {
     budget: u64,
     due: u64,
     generated: u64,
+    /// What the inserted spheres become (spheres or clumps).
+    grains: Grains,
 }
 
 impl Feeder {
@@ -311,11 +312,12 @@ impl Feeder {
         exp: &Experiment,
         scene: &StaticPileScene,
         geometry: &Geometry,
-        d50_m: f64,
+        lab: &Lab,
     ) -> Result<Self, PackingError> {
+        let d50_m = lab.d_mean_m;
         let spec = RateFactorySpec {
             region: geometry.insertion_region(),
-            sizes: physics::size_distribution(exp),
+            sizes: lab.sizes.clone(),
             rate_per_s: scene.insertion_rate_per_s,
             velocity_m_s: Vec3::zeros(),
             seed: exp.seeds.packing_seed,
@@ -327,12 +329,13 @@ impl Feeder {
             budget: scene.particle_count,
             due: 0,
             generated: 0,
+            grains: lab.grains.clone(),
         })
     }
 
     /// Inserts the particles due up to the simulation's current time and those
     /// still pending from earlier windows (never more than the budget in
-    /// total); returns their ids.
+    /// total); returns their ids (body ids when the particles are clumps).
     pub fn feed(&mut self, sim: &mut Simulation) -> Result<Vec<u32>, StaticPileError> {
         if self.generated == self.budget {
             return Ok(Vec::new());
@@ -348,7 +351,7 @@ impl Feeder {
         new.truncate((self.due - self.generated) as usize);
         self.generated += new.len() as u64;
         self.factory.carry_over(self.pending() as usize);
-        Ok(sim.insert(&new)?)
+        Ok(self.grains.insert(sim, &new)?)
     }
 
     /// Particles inserted so far.
@@ -398,13 +401,13 @@ pub fn rig(exp: &Experiment, scene: &StaticPileScene) -> Result<Rig, SceneError>
     };
     let geometry = Geometry::new(scene);
     let removal = Removal::new(&geometry, max_m);
-    let world =
-        empty_world(&geometry, &removal, max_m, scene.insertion_interval_s).map_err(fail)?;
+    let world = empty_world(&lab, &geometry, &removal, max_m, scene.insertion_interval_s)
+        .map_err(fail)?;
     let sim = lab
         .simulation(world, HealthLimits::default())
         .map_err(|e| fail(e.into()))?;
     let feeder =
-        Feeder::new(exp, scene, &geometry, diameters.median_m).map_err(|e| fail(e.into()))?;
+        Feeder::new(exp, scene, &geometry, &lab).map_err(|e| fail(e.into()))?;
     Ok(Rig {
         sim,
         feeder,
@@ -417,6 +420,7 @@ pub fn rig(exp: &Experiment, scene: &StaticPileScene) -> Result<Rig, SceneError>
 
 /// Walls and a box that no kept particle can leave within one window.
 fn empty_world(
+    lab: &Lab,
     geometry: &Geometry,
     removal: &Removal,
     d_max_m: f64,
@@ -429,7 +433,7 @@ fn empty_world(
         Vec3::new(reach, reach, geometry.top_z_m + d_max_m + travel),
         [false; 3],
     )?;
-    Ok(World::new(Particles::default(), geometry.walls()?, domain))
+    Ok(lab.world(&[], geometry.walls()?, domain)?)
 }
 
 /// The pile's measurements (see the module docs).

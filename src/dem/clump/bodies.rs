@@ -78,6 +78,11 @@ impl Bodies {
         }
     }
 
+    /// The id the next body pushed will get.
+    pub fn next_id(&self) -> u32 {
+        self.next_id
+    }
+
     /// Number of bodies.
     pub fn len(&self) -> usize {
         self.id.len()

@@ -32,6 +32,23 @@ impl ClumpShape {
     pub fn principal_inertia(&self, density_kg_m3: f64) -> Vec3 {
         self.principal_moments_m5 * density_kg_m3
     }
+    /// The shape with every length multiplied by `factor` (volume by
+    /// factor³, second moments by factor⁵): one size of a size distribution.
+    pub fn scaled(&self, factor: f64) -> ClumpShape {
+        ClumpShape {
+            members: self
+                .members
+                .iter()
+                .map(|m| Member {
+                    offset: m.offset * factor,
+                    radius_m: m.radius_m * factor,
+                })
+                .collect(),
+            volume_m3: self.volume_m3 * factor.powi(3),
+            principal_moments_m5: self.principal_moments_m5 * factor.powi(5),
+            bounding_radius_m: self.bounding_radius_m * factor,
+        }
+    }
     /// Min radius.
     pub fn min_member_radius_m(&self) -> f64 {
         self.members
@@ -49,11 +66,11 @@ pub struct ClumpTemplate {
 
 impl ClumpTemplate {
     /// New.
-    pub fn new(_name: &str, members: Vec<Member>) -> Result<Self, String> {
+    pub fn new(_name: &str, members: Vec<Member>) -> Result<Self, std::fmt::Error> {
         Ok(Self { members })
     }
     /// Paired.
-    pub fn paired_spheres(ar: f64) -> Result<Self, String> {
+    pub fn paired_spheres(ar: f64) -> Result<Self, std::fmt::Error> {
         let a = ar - 1.0;
         Self::new(
             "paired",

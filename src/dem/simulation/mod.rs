@@ -88,6 +88,14 @@ impl World {
         }
     }
 
+    /// Number of particles as a user counts them: bodies in a world of
+    /// clumps, spheres otherwise.
+    pub fn grains(&self) -> usize {
+        self.bodies
+            .as_ref()
+            .map_or(self.particles.len(), Bodies::len)
+    }
+
     /// A world of rigid clumps of the given shapes (no particles yet: add
     /// them with [`push_clump`](Self::push_clump) or
     /// [`Simulation::insert_clumps`]). Its simulation moves bodies, not
@@ -370,6 +378,13 @@ impl Simulation {
             .particles_changed(&mut self.world, None)
             .map_err(SetupError::Health)?;
         Ok(ids)
+    }
+
+    /// The bodies of a world of clumps, to add shapes between steps
+    /// (`None` for a world of spheres). Do not add or remove bodies here
+    /// ([`insert_clumps`](Self::insert_clumps), [`retain`](Self::retain)).
+    pub fn clump_bodies_mut(&mut self) -> Option<&mut Bodies> {
+        self.world.bodies.as_mut()
     }
 
     /// Adds clumps to a world of clumps (the caller guarantees they do not

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use super::checker::{join, number, string, Checker, Interval};
 use super::scene::check_scene;
 use crate::manifest::experiment::{
-    AtRest, CoarseGraining, ContactModel, Experiment, Material, NormalModel, PairParams,
+    AtRest, CoarseGraining, ContactModel, Experiment, Material, ParticleShape, NormalModel, PairParams,
     RollingModel, SizeDistribution, TimeStep, WallStiffness,
 };
 use crate::manifest::{Scene, PHYSICS_VERSION, SCHEMA_VERSION};
@@ -112,6 +112,9 @@ pub(crate) fn check_material(c: &mut Checker, path: &str, m: &Material) {
     c.positive(&join(&p, "youngs_modulus_pa"), particle.youngs_modulus_pa);
     c.within(&join(&p, "poisson_ratio"), particle.poisson_ratio, POISSON);
     check_size(c, &join(&p, "size"), &particle.size);
+    if let Some(shape) = &particle.shape {
+        check_shape(c, &join(&p, "shape"), shape);
+    }
     for (name, wall) in &m.walls {
         let wp = join(&join(path, "walls"), name);
         check_wall_name(c, &wp, name);
@@ -136,6 +139,45 @@ fn check_wall_name(c: &mut Checker, path: &str, name: &str) {
             string(name),
             "wall material names must be non-empty and use only letters, digits, '_' and '-'",
         );
+    }
+}
+
+/// Most member spheres a clump shape may have (the engine's bound).
+const MAX_CLUMP_MEMBERS: usize = 64;
+
+/// Checks a clump shape's numbers; whether its members form one connected
+/// union is checked when a scene builds it (the message names the members).
+fn check_shape(c: &mut Checker, path: &str, shape: &ParticleShape) {
+    match shape {
+        ParticleShape::PairedSpheres { aspect_ratio } => {
+            let a = *aspect_ratio;
+            if !(a > 1.0 && a < 2.0) {
+                c.fail(
+                    &join(path, "aspect_ratio"),
+                    a.to_string(),
+                    "must lie in (1, 2): 1 is a sphere, 2 two spheres touching at a point",
+                );
+            }
+        }
+        ParticleShape::Clump { members } => {
+            if members.is_empty() || members.len() > MAX_CLUMP_MEMBERS {
+                c.fail(
+                    &join(path, "members"),
+                    format!("{} members", members.len()),
+                    format!("must list 1 to {MAX_CLUMP_MEMBERS} member spheres"),
+                );
+            }
+            for (i, m) in members.iter().enumerate() {
+                c.positive(&format!("{path}.members[{i}].radius"), m.radius);
+                if m.offset.iter().any(|x| !x.is_finite()) {
+                    c.fail(
+                        &format!("{path}.members[{i}].offset"),
+                        format!("{:?}", m.offset),
+                        "must be three finite numbers",
+                    );
+                }
+            }
+        }
     }
 }
 
