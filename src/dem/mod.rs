@@ -8,6 +8,7 @@
 //! body force and second kick, health checks ([`health`]); inside a run of
 //! steps the gather also performs the next kick and drift.
 
+pub mod clump;
 pub mod contact;
 pub mod domain;
 pub mod effects;

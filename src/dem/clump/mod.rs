@@ -1,0 +1,10 @@
+//! Clumps: rigid bodies made of overlapping member spheres.
+//!
+//! A clump approximates a non-spherical particle by a few spheres fixed
+//! relative to each other; contacts stay sphere–sphere while the body rolls
+//! and interlocks like the shape it approximates. This module holds the
+//! shapes ([`template`]): validated member lists, the exact mass properties of
+//! their union, and their principal-frame, volume-equivalent form that the
+//! engine integrates.
+
+pub mod template;
