@@ -31,14 +31,17 @@
 //!   ∫x, ∫x² are exact. The grid is doubled from 32 × 32 cells until the
 //!   volume, the centre (relative to the cube root of the volume) and every
 //!   inertia component (relative to the largest) change by less than
-//!   [`NUMERICAL_TOLERANCE`] between resolutions, at most up to
+//!   [`NUMERICAL_TOLERANCE`] at two successive doublings, at most up to
 //!   [`MAX_RESOLUTION`] cells a side; the finest estimate is used. The chord
 //!   length has a square-root edge at every silhouette, so the midpoint error
-//!   falls only as about h^1.5 and oscillates in sign; the error measured
-//!   against the exact two-sphere result (test
-//!   `numerical_path_matches_exact_two_sphere_result`) is below
-//!   [`NUMERICAL_ACCURACY`] relative. Deterministic: no randomness, fixed
-//!   summation order.
+//!   falls only as about h^1.5 and oscillates in sign: one small change can be
+//!   a coincidence (measured: a change of 6.9e-7 with an error of 4.5e-6),
+//!   hence two. The error is therefore a few times the tolerance, not below
+//!   it: measured against the exact two-sphere result (test
+//!   `numerical_path_matches_exact_two_sphere_result`, he2019 pairs at aspect
+//!   ratios 1.05 to 1.9 and an unequal pair on a skew axis) it is at most
+//!   2.2e-6 relative, and [`NUMERICAL_ACCURACY`] (1e-5) is the bound the
+//!   tests hold it to. Deterministic: no randomness, fixed summation order.
 //!
 //! # Principal frame
 //!
@@ -436,11 +439,18 @@ fn two_spheres(a: &Member, b: &Member) -> MassProperties {
 fn numerical(members: &[Member]) -> MassProperties {
     let mut n = START_RESOLUTION;
     let mut coarse = integrate_rays(members, n);
+    // The midpoint error oscillates in sign, so one small change can be a
+    // coincidence: two successive ones are required.
+    let mut small_changes = 0;
     loop {
         n *= 2;
         let fine = integrate_rays(members, n);
-        let converged = relative_change(&coarse, &fine) < NUMERICAL_TOLERANCE;
-        if converged || n >= MAX_RESOLUTION {
+        if relative_change(&coarse, &fine) < NUMERICAL_TOLERANCE {
+            small_changes += 1;
+        } else {
+            small_changes = 0;
+        }
+        if small_changes == 2 || n >= MAX_RESOLUTION {
             return fine;
         }
         coarse = fine;
@@ -785,6 +795,221 @@ mod tests {
         for (j, k) in [(0, 1), (0, 2), (1, 2)] {
             assert!(i[(j, k)].abs() < 1e-12 * i.amax());
             assert_eq!(i[(j, k)], i[(k, j)]);
+        }
+    }
+
+    /// Checks a shape is in its principal frame: the union of its members,
+    /// integrated afresh, has its centre at the origin and a diagonal tensor
+    /// equal to the principal moments, to `tolerance` relative.
+    fn assert_principal(shape: &ClumpShape, tolerance: f64) {
+        let props = union_mass_properties(&shape.members);
+        assert!(rel(props.volume_m3, shape.volume_m3) < tolerance);
+        assert!(props.centre.amax() < tolerance * shape.bounding_radius_m);
+        let diagonal = Matrix3::from_diagonal(&shape.principal_moments_m5);
+        let error = rel_matrix(&props.inertia_m5, &diagonal);
+        assert!(error < tolerance, "{error:e}");
+        let m = shape.principal_moments_m5;
+        assert!(m.x <= m.y && m.y <= m.z, "{m:?}");
+        // Bounding radius: the farthest member surface from the centre.
+        let farthest = shape
+            .members
+            .iter()
+            .map(|m| m.offset.norm() + m.radius_m)
+            .fold(0.0, f64::max);
+        assert_eq!(shape.bounding_radius_m, farthest);
+    }
+
+    #[test]
+    fn paired_spheres_shape_is_volume_equivalent_and_keeps_the_x_axis() {
+        let r_eq = 0.002;
+        let shape = ClumpTemplate::paired_spheres(1.3).unwrap().shape(r_eq);
+        let volume = 4.0 / 3.0 * PI * r_eq.powi(3);
+        assert!(rel(shape.volume_m3, volume) < 1e-12);
+        // Template volume: two unit spheres 0.6 apart minus their lens; the
+        // scale s makes s³ times it the equivalent sphere's volume.
+        let template_volume = 2.0 * 4.0 / 3.0 * PI - lens_volume(1.0, 1.0, 0.6);
+        let s = (volume / template_volume).cbrt();
+        for (m, sign) in shape.members.iter().zip([-1.0, 1.0]) {
+            assert!(rel(m.offset.x, sign * 0.3 * s) < 1e-14);
+            assert_eq!((m.offset.y, m.offset.z), (0.0, 0.0));
+            assert!(rel(m.radius_m, s) < 1e-14);
+        }
+        // Length / width = the aspect ratio: half-length over member radius.
+        assert!(rel(shape.bounding_radius_m / shape.min_member_radius_m(), 1.3) < 1e-14);
+        // The long axis x has the smallest moment and the two transverse ones
+        // are equal.
+        let m = shape.principal_moments_m5;
+        assert!(m.x < m.y);
+        assert!(rel(m.y, m.z) < 1e-15);
+        assert_principal(&shape, 1e-9);
+    }
+
+    #[test]
+    fn skew_pair_shape_is_rotated_onto_x() {
+        let u = nalgebra::Rotation3::from_euler_angles(0.3, -0.7, 1.1) * Vec3::x();
+        let template = template(vec![
+            member(0.1, 0.2, 0.3, 0.5),
+            Member {
+                offset: Vec3::new(0.1, 0.2, 0.3) + u,
+                radius_m: 0.8,
+            },
+        ]);
+        let shape = template.shape(1.5);
+        assert!(rel(shape.volume_m3, 4.0 / 3.0 * PI * 1.5f64.powi(3)) < 1e-12);
+        for m in &shape.members {
+            assert!(m.offset.y.abs().max(m.offset.z.abs()) < 1e-12 * shape.bounding_radius_m);
+        }
+        // The larger member is heavier, so it lies nearer the centre.
+        assert!(shape.members[1].offset.norm() < shape.members[0].offset.norm());
+        assert_principal(&shape, 1e-9);
+    }
+
+    #[test]
+    fn chiral_shape_is_rotated_not_mirrored() {
+        // Four members spanning a right-handed tetrahedron (numerical path).
+        let members = vec![
+            member(0.0, 0.0, 0.0, 0.6),
+            member(1.0, 0.0, 0.0, 0.6),
+            member(0.0, 0.8, 0.0, 0.6),
+            member(0.0, 0.0, 0.6, 0.6),
+        ];
+        let triple = |m: &[Member]| {
+            let e = |i: usize| m[i].offset - m[0].offset;
+            e(1).cross(&e(2)).dot(&e(3))
+        };
+        let template = template(members.clone());
+        let shape = template.shape(0.01);
+        let s = shape.members[0].radius_m / 0.6;
+        // A proper rotation keeps the signed volume (× s³); a mirror flips it.
+        assert!(triple(&members) > 0.0);
+        assert!(rel(triple(&shape.members), s.powi(3) * triple(&members)) < 1e-12);
+        // Re-integrated on a grid aligned with the new axes: the numerical
+        // error, not roundoff, separates the two.
+        assert_principal(&shape, NUMERICAL_ACCURACY);
+    }
+
+    #[test]
+    fn sphere_shape_gives_mass_inertia_and_radii() {
+        let (r, density) = (0.004, 2500.0);
+        let shape = template(vec![member(5.0, -1.0, 2.0, 1.0)]).shape(r);
+        assert_eq!(shape.members.len(), 1);
+        assert!(shape.members[0].offset.norm() < 1e-15);
+        assert!(rel(shape.min_member_radius_m(), r) < 1e-14);
+        assert!(rel(shape.bounding_radius_m, r) < 1e-14);
+        let mass = density * 4.0 / 3.0 * PI * r.powi(3);
+        assert!(rel(shape.mass_kg(density), mass) < 1e-14);
+        let inertia = shape.principal_inertia(density);
+        for k in 0..3 {
+            // Solid sphere: 2/5 m r².
+            assert!(rel(inertia[k], 0.4 * mass * r * r) < 1e-14);
+        }
+    }
+
+    #[test]
+    fn shape_round_trips_through_json_with_array_vectors() {
+        let shape = ClumpTemplate::paired_spheres(1.5).unwrap().shape(0.5);
+        let json = serde_json::to_string(&shape).unwrap();
+        assert!(json.contains("\"offset\":[-"), "{json}");
+        assert!(json.contains("\"principal_moments_m5\":["), "{json}");
+        let back: ClumpShape = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, shape);
+    }
+
+    #[test]
+    fn template_keeps_name_and_members() {
+        let members = vec![member(0.0, 0.0, 0.0, 1.0), member(1.0, 0.0, 0.0, 0.5)];
+        let template = ClumpTemplate::new("peanut", members.clone()).unwrap();
+        assert_eq!(template.name(), "peanut");
+        assert_eq!(template.members(), &members[..]);
+        let paired = ClumpTemplate::paired_spheres(1.25).unwrap();
+        assert_eq!(paired.name(), "paired_spheres_1.25");
+        assert_eq!(
+            paired.members(),
+            &[member(-0.25, 0.0, 0.0, 1.0), member(0.25, 0.0, 0.0, 1.0)]
+        );
+    }
+
+    fn error_message(members: Vec<Member>) -> String {
+        ClumpTemplate::new("bad", members).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn invalid_templates_are_refused_naming_field_and_value() {
+        assert_eq!(
+            error_message(vec![]),
+            "members: none given: a clump needs 1 to 64 member spheres"
+        );
+        let many = (0..65)
+            .map(|i| member(0.5 * i as f64, 0.0, 0.0, 0.3))
+            .collect();
+        assert_eq!(
+            error_message(many),
+            "members: 65 given: at most 64 member spheres are allowed"
+        );
+        // 64 is allowed.
+        let most: Vec<Member> = (0..64)
+            .map(|i| member(0.5 * i as f64, 0.0, 0.0, 0.3))
+            .collect();
+        assert!(ClumpTemplate::new("most", most).is_ok());
+        assert_eq!(
+            error_message(vec![
+                member(0.0, 0.0, 0.0, 1.0),
+                member(0.0, f64::NAN, 0.0, 1.0)
+            ]),
+            "members[1].offset = (0, NaN, 0): every component must be finite"
+        );
+        for (radius, shown) in [(-1.0, "-1"), (0.0, "0"), (f64::INFINITY, "inf")] {
+            assert_eq!(
+                error_message(vec![
+                    member(0.0, 0.0, 0.0, 1.0),
+                    member(1.0, 0.0, 0.0, 1.0),
+                    member(2.0, 0.0, 0.0, radius),
+                ]),
+                format!("members[2].radius_m = {shown}: must be finite and positive")
+            );
+        }
+        // Touching at a point (d = r_a + r_b) does not connect.
+        let expected = "members[1] is not connected to members[0]: the union of the members \
+                        must be connected (two members connect when their centre distance is \
+                        below the sum of their radii)";
+        assert_eq!(
+            error_message(vec![member(0.0, 0.0, 0.0, 1.0), member(2.0, 0.0, 0.0, 1.0)]),
+            expected
+        );
+        assert_eq!(
+            error_message(vec![
+                member(0.0, 0.0, 0.0, 1.0),
+                member(5.0, 0.0, 0.0, 1.0),
+                member(1.0, 0.0, 0.0, 1.0),
+            ]),
+            expected
+        );
+        assert_eq!(
+            error_message(vec![
+                member(0.0, 0.0, 0.0, 1.0),
+                member(0.25, 0.0, 0.0, 0.5)
+            ]),
+            "members[1] (radius_m = 0.5) lies entirely inside members[0] (radius_m = 1, centre \
+             distance 0.25): it would add nothing to the shape; remove it"
+        );
+        assert_eq!(
+            error_message(vec![
+                member(0.0, 0.0, 0.0, 0.5),
+                member(0.0, 0.0, 0.25, 1.0)
+            ]),
+            "members[0] (radius_m = 0.5) lies entirely inside members[1] (radius_m = 1, centre \
+             distance 0.25): it would add nothing to the shape; remove it"
+        );
+        for (aspect, shown) in [(1.0, "1"), (2.0, "2"), (0.5, "0.5"), (f64::NAN, "NaN")] {
+            assert_eq!(
+                ClumpTemplate::paired_spheres(aspect)
+                    .unwrap_err()
+                    .to_string(),
+                format!(
+                    "aspect_ratio = {shown}: must be finite and strictly between 1 and 2 \
+                     (1 would be a sphere, 2 two spheres touching at a point)"
+                )
+            );
         }
     }
 }
