@@ -69,7 +69,8 @@ pub const MAX_MEMBERS: usize = 64;
 pub const NUMERICAL_TOLERANCE: f64 = 1e-6;
 
 /// Finest (y, z) grid of the numerical integration, cells a side: bounds the
-/// cost (a few seconds for 64 members) when the tolerance is not met earlier.
+/// cost when the tolerance is not met earlier (16.8 million rays; measured on
+/// one core, 0.3 s for two members).
 pub const MAX_RESOLUTION: usize = 4096;
 
 /// Relative accuracy of the numerical integration, measured against the exact
@@ -558,7 +559,8 @@ fn integrate_rays(members: &[Member], n: usize) -> MassProperties {
     let centre = Vec3::new(s[1], s[2], s[3]) / volume;
     // Central second moments C = ∫(r − c)(r − c)ᵀ; inertia = tr(C)·1 − C.
     let raw = Matrix3::new(s[4], s[7], s[8], s[7], s[5], s[9], s[8], s[9], s[6]);
-    let central = raw - volume * centre * centre.transpose();
+    // c·cᵀ first (exactly symmetric), then the volume: a symmetric tensor.
+    let central = raw - centre * centre.transpose() * volume;
     MassProperties {
         volume_m3: volume,
         centre,
@@ -878,6 +880,8 @@ mod tests {
             e(1).cross(&e(2)).dot(&e(3))
         };
         let template = template(members.clone());
+        let props = template.mass_properties();
+        assert_eq!(props.inertia_m5, props.inertia_m5.transpose());
         let shape = template.shape(0.01);
         let s = shape.members[0].radius_m / 0.6;
         // A proper rotation keeps the signed volume (× s³); a mirror flips it.
@@ -1010,6 +1014,26 @@ mod tests {
                      (1 would be a sphere, 2 two spheres touching at a point)"
                 )
             );
+        }
+    }
+
+    #[test]
+    fn two_sphere_formula_clamps_the_cut_for_disjoint_contained_and_coincident_pairs() {
+        // Not reachable through `new` (it refuses these), but the closed form
+        // must not fail on them: the radical plane then lies outside a sphere.
+        let (a, b) = (member(0.0, 0.0, 0.0, 1.0), member(0.0, 3.0, 0.0, 0.5));
+        let disjoint = two_spheres(&a, &b);
+        let (va, vb) = (4.0 / 3.0 * PI, 4.0 / 3.0 * PI * 0.125);
+        assert!(rel(disjoint.volume_m3, va + vb) < 1e-14);
+        // Centre of mass 3·vb/(va + vb) along y.
+        assert!(rel(disjoint.centre.y, 3.0 * vb / (va + vb)) < 1e-14);
+        for inner in [member(0.0, 0.2, 0.0, 0.5), member(0.0, 0.0, 0.0, 0.5)] {
+            for (p, q) in [(&a, &inner), (&inner, &a)] {
+                let props = two_spheres(p, q);
+                assert!(rel(props.volume_m3, va) < 1e-14);
+                assert!(props.centre.norm() < 1e-15);
+                assert!(rel_matrix(&props.inertia_m5, &(Matrix3::identity() * 0.4 * va)) < 1e-14);
+            }
         }
     }
 }
