@@ -11,7 +11,7 @@
 //! # Mass properties of the union
 //!
 //! Members overlap, so summing sphere properties would count the overlaps twice
-//! (for he2019's paired spheres at aspect ratio 1.3 by 9 % in volume). The
+//! (for he2019's paired spheres at aspect ratio 1.3 by 39 % in volume). The
 //! union's volume, centre of mass and inertia tensor per unit density are
 //! computed instead:
 //!
@@ -295,7 +295,7 @@ impl ClumpTemplate {
     /// its centre of mass and rotated into its principal frame (module docs).
     pub fn shape(&self, equivalent_radius_m: f64) -> ClumpShape {
         let props = self.mass_properties();
-        let rotation = principal_axes(&props.inertia_m5);
+        let (rotation, moments) = principal_axes(&props.inertia_m5);
         let volume_m3 = sphere_volume(equivalent_radius_m);
         let scale = (volume_m3 / props.volume_m3).cbrt();
         let members: Vec<Member> = self
@@ -306,8 +306,7 @@ impl ClumpTemplate {
                 radius_m: scale * m.radius_m,
             })
             .collect();
-        let body_inertia = rotation.transpose() * props.inertia_m5 * rotation;
-        let principal_moments_m5 = body_inertia.diagonal() * scale.powi(5);
+        let principal_moments_m5 = moments * scale.powi(5);
         let bounding_radius_m = members
             .iter()
             .map(|m| m.offset.norm() + m.radius_m)
@@ -568,10 +567,10 @@ fn integrate_rays(members: &[Member], n: usize) -> MassProperties {
     }
 }
 
-/// Proper rotation whose columns are the principal axes of `inertia`, moments
-/// ascending (module docs: deterministic, template axes kept when the tensor
-/// is already diagonal).
-fn principal_axes(inertia: &Matrix3<f64>) -> Matrix3<f64> {
+/// Proper rotation whose columns are the principal axes of `inertia`, and the
+/// principal moments, ascending (module docs: deterministic, template axes
+/// kept when the tensor is already diagonal).
+fn principal_axes(inertia: &Matrix3<f64>) -> (Matrix3<f64>, Vec3) {
     let scale = inertia.amax();
     let off_diagonal = inertia[(0, 1)]
         .abs()
@@ -600,7 +599,8 @@ fn principal_axes(inertia: &Matrix3<f64>) -> Matrix3<f64> {
     if rotation.determinant() < 0.0 {
         rotation.column_mut(2).neg_mut();
     }
-    rotation
+    let sorted = Vec3::new(moments[order[0]], moments[order[1]], moments[order[2]]);
+    (rotation, sorted)
 }
 
 #[cfg(test)]
