@@ -195,9 +195,10 @@ struct FunnelSampler<'a> {
 impl FunnelSampler<'_> {
     /// Particles that have left the funnel: inserted less those whose centre
     /// is still above the tube's lowest point.
-    fn discharged(&self, p: &Particles) -> usize {
-        let inside = p
-            .position
+    fn discharged(&self, w: &World) -> usize {
+        let inside = w
+            .grain_centres()
+            .0
             .iter()
             .filter(|x| x.z >= self.geom.exit_z_m)
             .count();
@@ -213,7 +214,7 @@ impl Sampler for FunnelSampler<'_> {
         self.removed += sim.retain(|p, i| geom.keeps(&p.position[i]))?;
         let t = sim.world().time_s;
         self.traces.push_engine_state(sim);
-        let discharged = self.discharged(&sim.world().particles) as f64;
+        let discharged = self.discharged(sim.world()) as f64;
         self.traces.push("discharged", "1", t, discharged);
         self.traces.push("removed", "1", t, self.removed as f64);
         let angles = pile_angles(&sim.world().particles, geom).ok();
@@ -419,11 +420,11 @@ pub fn simulate(
     let settled = run_phase(&mut sim, &settle, dt, every, &mut sampler, &mut progress)?;
 
     let w = sim.world();
-    let discharged = sampler.discharged(&w.particles);
+    let discharged = sampler.discharged(w);
     let removed = sampler.removed;
     let on_platform = w
-        .particles
-        .position
+        .grain_centres()
+        .0
         .iter()
         .filter(|x| geom.on_platform(x))
         .count();

@@ -243,7 +243,9 @@ impl Lab {
     /// Mass of a sphere of the representative diameter, kg (the unit of the
     /// `at_rest` criterion, m g d).
     pub fn mean_particle_mass_kg(&self) -> f64 {
-        self.density_kg_m3 * std::f64::consts::PI / 6.0 * self.d_mean_m.powi(3)
+        self.density_kg_m3 * std::f64::consts::PI / 6.0
+            * self.d_mean_m.powi(3)
+            * self.packed_solid_ratio()
     }
 
     /// The simulation of `world` with every lab scene's settings: gravity

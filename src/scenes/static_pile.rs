@@ -585,8 +585,8 @@ impl PileSampler<'_> {
         let t = w.time_s;
         self.last_recorded_s = Some(t);
         self.traces.push_engine_state(sim);
-        let in_funnel = Census::of(&self.geometry, &w.particles.position).in_funnel as u64;
-        let discharged = w.particles.len() as u64 - in_funnel + self.removed;
+        let in_funnel = Census::of(&self.geometry, &w.grain_centres().0).in_funnel as u64;
+        let discharged = w.grains() as u64 - in_funnel + self.removed;
         self.traces
             .push("generated", "1", t, self.feeder.generated() as f64);
         self.traces
@@ -696,7 +696,7 @@ pub fn run(
     }
     let w = sim.world();
     let generated = sampler.feeder.generated();
-    let census = Census::of(&geometry, &w.particles.position);
+    let census = Census::of(&geometry, &w.grain_centres().0);
     let pile = measure_pile(&geometry, &w.particles.position, &w.particles.radius, d50).map_err(
         |source| {
             fail(StaticPileError::NoPile {

@@ -96,6 +96,22 @@ impl World {
             .map_or(self.particles.len(), Bodies::len)
     }
 
+    /// Centres (m) and radii (m) of the grains, for counting where they
+    /// are: the spheres, or in a world of clumps the bodies' centres of mass
+    /// and bounding radii (so a body is counted once, where it is).
+    pub fn grain_centres(&self) -> (Vec<Vec3>, Vec<f64>) {
+        match &self.bodies {
+            None => (self.particles.position.clone(), self.particles.radius.clone()),
+            Some(b) => (
+                b.position.clone(),
+                b.shape
+                    .iter()
+                    .map(|&s| b.shapes[s as usize].bounding_radius_m)
+                    .collect(),
+            ),
+        }
+    }
+
     /// A world of rigid clumps of the given shapes (no particles yet: add
     /// them with [`push_clump`](Self::push_clump) or
     /// [`Simulation::insert_clumps`]). Its simulation moves bodies, not
@@ -401,7 +417,8 @@ impl Simulation {
     }
 
     /// Removes the particles for which `keep` is false (e.g. discharged
-    /// ones); returns how many particles went. In a world of clumps a body
+    /// ones); returns how many grains went (particles, or in a world of
+    /// clumps bodies: see [`World::grains`]). In a world of clumps a body
     /// goes with all its members as soon as `keep` is false for one of them
     /// (its first member through an outlet takes the body along, before
     /// another member could leave the domain).
@@ -409,18 +426,18 @@ impl Simulation {
         &mut self,
         keep: impl Fn(&Particles, usize) -> bool,
     ) -> Result<usize, HealthError> {
+        let grains = self.world.grains();
         let p = &self.world.particles;
         let mut mask: Vec<bool> = (0..p.len()).map(|i| keep(p, i)).collect();
         if let Some(bodies) = &mut self.world.bodies {
             mask = body_mask(bodies, p, &mask);
         }
-        let removed = mask.iter().filter(|k| !**k).count();
-        if removed > 0 {
+        if mask.iter().any(|k| !k) {
             self.world.particles.retain_indices(&mask);
             self.kernel
                 .particles_changed(&mut self.world, Some(&mask))?;
         }
-        Ok(removed)
+        Ok(grains - self.world.grains())
     }
 }
 

@@ -103,9 +103,9 @@ impl<'a> DischargeSampler<'a> {
 
     /// Where the particles of `sim` are now.
     pub fn census(&self, sim: &Simulation) -> Census {
-        let p = &sim.world().particles;
+        let (centres, radii) = sim.world().grain_centres();
         let mut c = Census::default();
-        for (x, &r) in p.position.iter().zip(&p.radius) {
+        for (x, &r) in centres.iter().zip(&radii) {
             match self.geo.locate(*x, r) {
                 Location::Hopper => c.hopper += 1,
                 // Gone particles are removed before every census.
