@@ -2,12 +2,19 @@
 //! Each expected number names its source.
 
 use repose::dem::contact::PairParameters;
+use repose::dem::domain::Domain;
+use repose::dem::health::HealthLimits;
 use repose::dem::material::{
-    effective_youngs_modulus, harmonic, hertz_contact_time_s, hertz_max_overlap_m, ElasticMaterial,
+    effective_youngs_modulus, harmonic, hertz_contact_time_s, hertz_max_overlap_m, rayleigh_time_s,
+    ElasticMaterial,
 };
-use repose::dem::simulation::{ContactSetup, NormalChoice, RollingChoice};
+use repose::dem::particles::{ParticleInit, Particles};
+use repose::dem::simulation::{
+    ContactSetup, NormalChoice, RollingChoice, Simulation, SimulationSetup, World,
+};
 use repose::dem::timestep::{choose_time_step, StiffestContact, TimeStepRequest};
 use repose::dem::vec3::Vec3;
+use repose::manifest::experiment::DEFAULT_RAYLEIGH_FRACTION;
 use repose::scenes::pair::{run_pair, PairMeasurements, PairMode, PairTest, Partner};
 use std::f64::consts::PI;
 
@@ -280,6 +287,168 @@ fn jkr_pull_off_force_is_three_pi_gamma_r_star() {
             "{partner:?}: {got} vs {expected}"
         );
     }
+}
+
+/// Pull-off force / 3πΓR* of a JKR separation (R 0.5 mm, Γ 0.2 J/m²,
+/// E 50 MPa, restitution `e`, pulled at 0.1 mm/s) against `partner` with
+/// the step `rayleigh_fraction` × the Rayleigh time, as the `pair` scene
+/// picks it.
+fn pull_off_ratio(partner: Partner, e: f64, rayleigh_fraction: f64) -> f64 {
+    let (r, gamma) = (0.5e-3, 0.2);
+    let sphere = ElasticMaterial {
+        youngs_modulus_pa: 50e6,
+        poisson_ratio: 0.3,
+    };
+    let p = params(e, 0.5, 0.0, gamma);
+    let t = PairTest {
+        contact: ContactSetup {
+            normal: NormalChoice::Jkr,
+            rolling: RollingChoice::None,
+            clip_tensile: false,
+            particle_material: sphere,
+            particle_particle: p,
+            wall_materials: vec![(ElasticMaterial::RIGID, p)],
+        },
+        density_kg_m3: RHO,
+        radius_m: r,
+        partner,
+        normal_velocity_m_s: 0.0,
+        tangential_velocity_m_s: 0.0,
+        angular_velocity_rad_s: Vec3::zeros(),
+        gravity: false,
+        mode: PairMode::Separation {
+            pull_speed_m_s: 1e-4,
+        },
+        dt_s: rayleigh_fraction * rayleigh_time_s(r, RHO, &sphere),
+        max_time_s: 1.0,
+        skin_m: 0.05 * r,
+    };
+    let (m, _) = run_pair(&t).unwrap();
+    let r_star = match partner {
+        Partner::Particle { radius_m } => harmonic(r, radius_m),
+        Partner::Wall => r,
+    };
+    m.pull_off_force_n.unwrap() / (3.0 * PI * gamma * r_star)
+}
+
+#[test]
+fn jkr_pull_off_does_not_depend_on_the_time_step() {
+    // The pulled particle moves at exactly the pull speed and the partner is
+    // held (prescribed kinematics): the force is evaluated at the prescribed
+    // separation, so the pull-off is 3πΓR* at the scene's default step as at
+    // a quarter of it. (Resetting the particles before each step gave
+    // 0.951 and 0.989 × 3πΓR* for a particle partner at e = 0.5, 0.877 and
+    // 0.970 at e = 0.1.) What exceeds 3πΓR* (0.2 % at e = 0.5, 0.5 % at
+    // e = 0.1, the same at both steps) grows as e falls: the contact's
+    // damping force at the pull speed.
+    let partners = [Partner::Particle { radius_m: 0.5e-3 }, Partner::Wall];
+    for partner in partners {
+        for e in [0.5, 0.1] {
+            let default = pull_off_ratio(partner, e, DEFAULT_RAYLEIGH_FRACTION);
+            let fine = pull_off_ratio(partner, e, 0.05);
+            eprintln!(
+                "{partner:?}, e = {e}: pull-off / 3πΓR* = {default:.5} at \
+                 {DEFAULT_RAYLEIGH_FRACTION} T_R, {fine:.5} at 0.05 T_R"
+            );
+            assert!((default - 1.0).abs() < 0.01, "{partner:?} e {e}: {default}");
+            assert!((fine - 1.0).abs() < 0.01, "{partner:?} e {e}: {fine}");
+            assert!(
+                (default / fine - 1.0).abs() < 0.005,
+                "{partner:?} e {e}: {default} vs {fine}"
+            );
+        }
+    }
+}
+
+/// Two touching spheres (R 1 mm, 1 µm overlap along x, Hertz, e = 0.5) with
+/// the first one moving into the second at 1 mm/s.
+fn touching_pair() -> (World, SimulationSetup) {
+    let mut particles = Particles::default();
+    for x in [0.0, 2.0 * R - 1e-6] {
+        particles.push(
+            &ParticleInit {
+                position: Vec3::new(x, 0.0, 0.0),
+                velocity: Vec3::new(if x == 0.0 { 1e-3 } else { 0.0 }, 0.0, 0.0),
+                angular_velocity: Vec3::zeros(),
+                radius_m: R,
+            },
+            RHO,
+        );
+    }
+    let domain = Domain::new(Vec3::from([-0.01; 3]), Vec3::from([0.01; 3]), [false; 3]).unwrap();
+    let p = params(0.5, 0.5, 0.0, 0.0);
+    let setup = SimulationSetup {
+        contact: ContactSetup {
+            normal: NormalChoice::Hertz,
+            rolling: RollingChoice::None,
+            clip_tensile: false,
+            particle_material: SPHERE,
+            particle_particle: p,
+            wall_materials: vec![],
+        },
+        density_kg_m3: RHO,
+        gravity_m_s2: None,
+        dt_s: 1e-7,
+        skin_m: 0.05 * R,
+        health: HealthLimits::default(),
+    };
+    (World::new(particles, vec![], domain), setup)
+}
+
+#[test]
+fn a_prescribed_particle_keeps_its_velocity_and_pushes_its_partner() {
+    let (world, setup) = touching_pair();
+    let mut sim = Simulation::new(world, &setup).unwrap();
+    sim.prescribe(&[0]);
+    // The setup's force evaluation kicked it: set its velocity again.
+    let v = Vec3::new(1e-3, 0.0, 0.0);
+    sim.particles_mut().velocity[0] = v;
+    let x0 = sim.world().particles.position[0];
+    sim.advance(200).unwrap();
+    let p = &sim.world().particles;
+    let (i, j) = (
+        p.id.iter().position(|&id| id == 0).unwrap(),
+        p.id.iter().position(|&id| id == 1).unwrap(),
+    );
+    assert_eq!(p.velocity[i], v, "never kicked");
+    assert_eq!(p.angular_velocity[i], Vec3::zeros());
+    let travel = p.position[i].x - x0.x;
+    assert!(
+        (travel / (200.0 * 1e-7 * 1e-3) - 1.0).abs() < 1e-9,
+        "drifts at its velocity: {travel}"
+    );
+    assert!(
+        p.force[i].x < 0.0,
+        "receives the contact force: {:?}",
+        p.force[i]
+    );
+    assert!(
+        p.force[j].x > 0.0 && p.velocity[j].x > 0.0,
+        "the partner is pushed"
+    );
+}
+
+#[test]
+fn prescribing_no_particles_changes_no_bit() {
+    let run = |prescribe: bool| {
+        let (world, setup) = touching_pair();
+        let mut sim = Simulation::new(world, &setup).unwrap();
+        if prescribe {
+            sim.prescribe(&[0, 1]);
+            sim.prescribe(&[]);
+        }
+        sim.advance(200).unwrap();
+        let p = sim.world().particles.clone();
+        (p.position, p.velocity, p.angular_velocity, p.force)
+    };
+    let never = run(false);
+    assert_eq!(run(true), never);
+    // And the held run does differ (the test can fail).
+    let (world, setup) = touching_pair();
+    let mut sim = Simulation::new(world, &setup).unwrap();
+    sim.prescribe(&[1]);
+    sim.advance(200).unwrap();
+    assert_ne!(sim.world().particles.velocity, never.1);
 }
 
 #[test]

@@ -4,7 +4,9 @@
 //! Checked every step: non-finite state, overlap beyond a bound relative to
 //! the smaller radius, particles leaving the (non-periodic) domain, and
 //! tunnelling. Checked every [`ENERGY_CHECK_INTERVAL`] steps in a closed,
-//! undriven, non-cohesive system (no moving walls, no insertion or removal
+//! undriven, non-cohesive system (no moving walls, no particles with prescribed
+//! kinematics
+//! ([`Simulation::prescribe`](crate::dem::simulation::Simulation::prescribe)), no insertion or removal
 //! since the reference was taken, no JKR): the mechanical energy (kinetic +
 //! gravitational + Hertz elastic) must not grow by more than
 //! [`HealthLimits::energy_growth`]. A cohesive system is excluded because

@@ -279,6 +279,8 @@ trait Kernel: Send {
         world: &mut World,
         kept: Option<&[bool]>,
     ) -> Result<(), HealthError>;
+    /// Exactly the particles with ids `ids` have prescribed kinematics.
+    fn prescribe(&mut self, world: &World, ids: &[u32]);
 }
 
 /// A DEM simulation: the world and its kernel.
@@ -347,12 +349,33 @@ impl Simulation {
         &self.world
     }
 
-    /// Prescribes particle kinematics between steps (e.g. a held or pulled
-    /// particle). Do not add or remove particles here; use [`Simulation::insert`]
+    /// Sets particle state between steps (e.g. the velocity of a particle
+    /// made prescribed with [`prescribe`](Self::prescribe)). Do not add or remove particles here; use [`Simulation::insert`]
     /// and [`Simulation::retain`]. Radii and masses must not change here either:
     /// the kernel keeps factors derived from them (the half-kick factors and 1/r).
     pub fn particles_mut(&mut self) -> &mut Particles {
         &mut self.world.particles
+    }
+
+    /// Gives exactly the particles with ids `ids` prescribed kinematics
+    /// (replacing any earlier set; `&[]` ends it): the engine never kicks
+    /// them, so their velocity (m/s) and angular velocity (rad/s) stay what
+    /// they are, or what the caller sets with
+    /// [`particles_mut`](Self::particles_mut) (set them after this call: the
+    /// force evaluation of [`new`](Self::new) and [`insert`](Self::insert)
+    /// half-kicks the particles not yet prescribed), and the contact laws'
+    /// damping sees exactly these velocities; they still drift
+    /// (`x += v·dt` each step) and still receive contact forces, reported in
+    /// [`Particles::force`] and [`Particles::torque`] after each `advance`.
+    /// For driven particles (a particle pulled at a set speed, a held
+    /// partner) whose contact force is measured at the prescribed position.
+    /// Keyed by id: the set survives re-sorting, insertions and removals;
+    /// ids not (or no longer) present are ignored. Prescribed particles do
+    /// work, so the energy health check is skipped while any is prescribed.
+    /// Costs nothing per step (their kick factors are zero); without
+    /// prescribed particles a run is bit-identical to one that never called this.
+    pub fn prescribe(&mut self, ids: &[u32]) {
+        self.kernel.prescribe(&self.world, ids);
     }
 
     /// Changes wall `wall`'s motion between steps (e.g. start a drum once its

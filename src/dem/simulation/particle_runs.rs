@@ -4,6 +4,17 @@
 //! particles, `Tiles::shares`; where there are at least as many blocks as
 //! members, a member mostly finishes the particles whose forces it
 //! summed).
+//!
+//! Prescribed kinematics: the particles the caller drives itself (see
+//! [`Simulation::prescribe`](super::Simulation::prescribe)) get zero kick
+//! factors. The kick, the drift and the gather then run unchanged, with no
+//! branch per particle: a prescribed particle's velocities stay what the
+//! caller set (and so do the estimates the contact laws' damping reads), it
+//! still drifts `x += v·dt` and still receives and reports contact forces.
+//! The set is kept by particle id (sorted), so it survives the cell sort's
+//! permutations, insertions and removals; `pack` zeroes the factors again
+//! whenever it recomputes them. Without prescribed particles the factors are
+//! exactly those of before, so such a run is bit-identical.
 
 use super::pair_kernel::{Kick, Motion, Sphere};
 use super::tiles::Accumulated;
@@ -19,8 +30,11 @@ pub(super) struct ParticleRecords<H> {
     pub(super) spheres: Vec<Sphere>,
     /// Velocity estimates, mass and inverse radius, refreshed by every drift.
     pub(super) motion: Vec<Motion>,
-    /// Kick factors per particle (see [`Kick`]).
+    /// Kick factors per particle (see [`Kick`]); zero for prescribed ones.
     pub(super) kick: Vec<Kick>,
+    /// Ids of the particles with prescribed kinematics, sorted, no repeats
+    /// (see the module docs).
+    prescribed: Vec<u32>,
     /// Contact history per (particle, wall): index `p * wall_slots + w`.
     pub(super) wall_history: Vec<H>,
     /// `max(walls, 1)`, so a particle's run of wall history is never empty.
@@ -39,15 +53,17 @@ impl<H: Copy + Default> ParticleRecords<H> {
             spheres: Vec::new(),
             motion: Vec::new(),
             kick: Vec::new(),
+            prescribed: Vec::new(),
             wall_history: vec![H::default(); particles * wall_slots],
             wall_slots,
             sums: Vec::new(),
         }
     }
 
-    /// Fills the packed records and kick factors (step `dt`, s) from the
-    /// particles, with the velocities themselves as estimates (no force
-    /// history yet: at setup and after particles were added or removed).
+    /// Fills the packed records and kick factors (step `dt`, s; zero for
+    /// prescribed particles) from the particles, with the velocities
+    /// themselves as estimates (no force history yet: at setup and after
+    /// particles were added or removed).
     pub(super) fn pack(&mut self, p: &Particles, dt: f64) {
         self.spheres.clear();
         self.spheres.extend(
@@ -63,6 +79,26 @@ impl<H: Copy + Default> ParticleRecords<H> {
             m: p.mass[i],
             inv_r: 1.0 / p.radius[i],
         }));
+        self.kick_factors(p, dt);
+    }
+
+    /// Makes exactly the particles with ids `ids` (current or not, repeats
+    /// allowed) prescribed and recomputes the kick factors of `p` (step
+    /// `dt`, s); the other packed records are left as they are.
+    pub(super) fn prescribe(&mut self, ids: &[u32], p: &Particles, dt: f64) {
+        self.prescribed = ids.to_vec();
+        self.prescribed.sort_unstable();
+        self.prescribed.dedup();
+        self.kick_factors(p, dt);
+    }
+
+    /// Whether some particle id is prescribed.
+    pub(super) fn any_prescribed(&self) -> bool {
+        !self.prescribed.is_empty()
+    }
+
+    /// The kick factors of `p` for step `dt` (s), zero for prescribed ids.
+    fn kick_factors(&mut self, p: &Particles, dt: f64) {
         self.kick.clear();
         self.kick.extend(
             p.mass
@@ -70,6 +106,13 @@ impl<H: Copy + Default> ParticleRecords<H> {
                 .zip(&p.radius)
                 .map(|(&m, &r)| Kick::new(dt, m, r)),
         );
+        if self.any_prescribed() {
+            for (kick, id) in self.kick.iter_mut().zip(&p.id) {
+                if self.prescribed.binary_search(id).is_ok() {
+                    *kick = Kick::default();
+                }
+            }
+        }
     }
 
     /// Applies the permutation `order` (`order[new] = old`) of the
@@ -241,6 +284,45 @@ mod tests {
         // Drop the middle particle (old 0) and add one: empty history for it.
         records.keep(Some(&[true, false, true]), 3);
         assert_eq!(records.wall_history, vec![20, 21, 10, 11, 0, 0]);
+    }
+
+    /// The kick factors as bits, per particle.
+    fn kick_bits(records: &ParticleRecords<u32>) -> Vec<(u64, u64)> {
+        records
+            .kick
+            .iter()
+            .map(|k| (k.v.to_bits(), k.w.to_bits()))
+            .collect()
+    }
+
+    #[test]
+    fn prescribed_particles_have_zero_kick_factors_that_follow_their_ids() {
+        let dt = 1e-5;
+        let mut p = row_of_particles(3);
+        let mut records = ParticleRecords::<u32>::new(3, 0);
+        records.pack(&p, dt);
+        let free = kick_bits(&records);
+        assert!(free.iter().all(|&(v, w)| v != 0 && w != 0));
+        // Id 1 prescribed (7 is no particle's): only its factors are zero.
+        records.prescribe(&[7, 1, 1], &p, dt);
+        let zero = (0.0f64.to_bits(), 0.0f64.to_bits());
+        assert_eq!(kick_bits(&records), vec![free[0], zero, free[2]]);
+        // Through a permutation, a repack and a removal the zero stays with id 1.
+        let order = [1, 2, 0];
+        p.permute(&order);
+        records.permute(&order);
+        assert_eq!(kick_bits(&records), vec![zero, free[2], free[0]]);
+        records.pack(&p, dt);
+        assert_eq!(kick_bits(&records), vec![zero, free[2], free[0]]);
+        let kept = [true, false, true];
+        p.retain_indices(&kept);
+        records.keep(Some(&kept), 2);
+        records.pack(&p, dt);
+        assert_eq!(kick_bits(&records), vec![zero, free[0]]);
+        // Ending the prescription restores exactly the factors of before.
+        records.prescribe(&[], &p, dt);
+        assert!(!records.any_prescribed());
+        assert_eq!(kick_bits(&records), vec![free[1], free[0]]);
     }
 
     #[test]

@@ -50,7 +50,8 @@ pub(super) struct Stepper<N: NormalModel, R: RollingModel, G: BodyForce, B: Boun
     stats: StepStats,
     limits: HealthLimits,
     /// Energy check enabled (non-adhesive kernel — the JKR kernel runs only
-    /// with non-zero surface energy; skipped while any wall moves) and its
+    /// with non-zero surface energy; skipped while any wall moves or any
+    /// particle is prescribed) and its
     /// reference, J.
     energy_reference: Option<f64>,
     energy_check: bool,
@@ -584,8 +585,9 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     }
 
     fn check_energy(&mut self, world: &World) -> Result<(), HealthError> {
-        if world.walls.iter().any(|w| !w.motion().is_static()) {
-            // Driven: moving walls do work on the particles.
+        if self.records.any_prescribed() || world.walls.iter().any(|w| !w.motion().is_static()) {
+            // Driven: prescribed particles and moving walls do work on the
+            // particles.
             self.energy_reference = None;
             return Ok(());
         }
@@ -851,5 +853,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Kernel for Step
         self.rigid_collect(world, false);
         self.rest_team();
         result
+    }
+
+    fn prescribe(&mut self, world: &World, ids: &[u32]) {
+        self.records.prescribe(ids, &world.particles, self.dt);
+        self.energy_reference = None;
     }
 }
