@@ -374,6 +374,8 @@ impl Simulation {
     /// work, so the energy health check is skipped while any is prescribed.
     /// Costs nothing per step (their kick factors are zero); without
     /// prescribed particles a run is bit-identical to one that never called this.
+    /// In a world of clumps the bodies move their members, not the kicks of
+    /// the spheres: prescribing a member has no effect there.
     pub fn prescribe(&mut self, ids: &[u32]) {
         self.kernel.prescribe(&self.world, ids);
     }
