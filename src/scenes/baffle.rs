@@ -431,6 +431,7 @@ pub fn run(
         exp,
         &sim,
         &lab.plan,
+        &lab.grains,
         traces,
         log_file,
         placed.count,
@@ -535,10 +536,7 @@ fn build_world(
     };
     let mass = scene.powder_mass_kg * w / scene.box_width_m;
     let d_max = sizes.sampler()?.max_diameter();
-    // The packing places bounding spheres: ask it for the mass they would
-    // have, so the clumps inside them weigh `mass`.
-    let packed_mass = mass / lab.packed_solid_ratio();
-    let (placed, column) = place_column(exp, sizes, packed_mass, l, w, d_mean, d_max)?;
+    let (placed, column) = place_column(exp, sizes, mass, l, w, d_mean, d_max)?;
     let overhang = scene.floor_overhang();
     let pad = domain_pad(
         exp.time_step.design_impact_speed_m_s,

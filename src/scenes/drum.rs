@@ -123,7 +123,7 @@ pub fn run(
     let r_drum = 0.5 * scene.inner_diameter_m;
     let length = scene.periodic_slice_m.unwrap_or(scene.length_m);
 
-    let (world, shortfall) = build_world(exp, scene, &lab).map_err(SceneError::Drum)?;
+    let world = build_world(exp, scene, &lab).map_err(SceneError::Drum)?;
     let particle_count = world.grains();
     let mut sim = lab
         .simulation(world, HealthLimits::default())
@@ -187,12 +187,12 @@ pub fn run(
         exp,
         &sim,
         &lab.plan,
+        &lab.grains,
         traces,
         log_file,
         particle_count,
         settled.settled,
     )?;
-    result.warnings.extend(shortfall);
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };
@@ -211,13 +211,8 @@ pub fn run(
 }
 
 /// Walls, domain and the placed particles.
-/// The drum, its domain and its bed; with clumps also a warning when the
-/// fill region could not hold every bounding sphere (see below).
-fn build_world(
-    exp: &Experiment,
-    scene: &DrumScene,
-    lab: &Lab,
-) -> Result<(World, Option<String>), DrumError> {
+/// The drum, its domain and its bed.
+fn build_world(exp: &Experiment, scene: &DrumScene, lab: &Lab) -> Result<World, DrumError> {
     let (sizes, d_mean) = (&lab.sizes, lab.d_mean_m);
     let r_drum = 0.5 * scene.inner_diameter_m;
     let margin = 4.0 * d_mean;
@@ -273,7 +268,7 @@ fn build_world(
         max_m: Vec3::new(side, half, side),
     };
     let drum_volume = PI * r_drum * r_drum * length;
-    let particle_volume = PI / 6.0 * d_mean.powi(3) * lab.packed_solid_ratio();
+    let particle_volume = PI / 6.0 * d_mean.powi(3);
     let count = (scene.fill_fraction * drum_volume * BULK_SOLID_FRACTION / particle_volume).round()
         as usize;
     let spec = PlacementSpec {
@@ -284,32 +279,10 @@ fn build_world(
         clearance_m: 0.05 * d_mean,
         velocity_m_s: Vec3::zeros(),
     };
-    let mut shortfall = None;
     let placed = match place_random(&spec) {
         Ok(p) => p,
-        Err(PackingError::RegionFull { .. }) => match place_lattice(&spec, LATTICE_SPACING) {
-            // Clumps are placed by their bounding spheres, which fill the
-            // inscribed square less densely than the clumps will fill the
-            // drum: in a small drum the lattice may hold fewer. Run the bed
-            // it holds and say so, rather than refuse the shape.
-            Err(PackingError::RegionFull { placed, .. }) if lab.grains.clump.is_some() => {
-                shortfall = Some(format!(
-                    "drum fill: the fill region holds the bounding spheres of {placed} of \
-                     {count} clumps; the bed has {placed} (fill fraction {:.3} instead of {})",
-                    scene.fill_fraction * placed as f64 / count as f64,
-                    scene.fill_fraction
-                ));
-                place_lattice(
-                    &PlacementSpec {
-                        target: FillTarget::Count(placed),
-                        ..spec
-                    },
-                    LATTICE_SPACING,
-                )?
-            }
-            other => other?,
-        },
+        Err(PackingError::RegionFull { .. }) => place_lattice(&spec, LATTICE_SPACING)?,
         Err(e) => return Err(e.into()),
     };
-    Ok((lab.world(&placed.particles, walls, domain)?, shortfall))
+    Ok(lab.world(&placed.particles, walls, domain)?)
 }

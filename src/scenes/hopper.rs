@@ -232,6 +232,7 @@ fn run_hopper(
         exp,
         &sim,
         &lab.plan,
+        &lab.grains,
         traces,
         log_file,
         inserted,

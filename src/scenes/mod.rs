@@ -11,6 +11,7 @@
 pub mod baffle;
 pub mod drum;
 pub mod funnel;
+pub mod grains;
 pub mod hopper;
 pub mod pair;
 pub mod physics;

@@ -24,14 +24,11 @@ use std::path::Path;
 use super::physics::{self, STANDARD_GRAVITY_M_S2};
 use super::protocol::Traces;
 use super::SceneError;
-use crate::dem::clump::bodies::{Bodies, ClumpInit};
+pub use super::grains::Grains;
 use crate::dem::clump::template::ClumpShape;
 use crate::dem::domain::{Domain, DomainError};
-use crate::dem::particles::{ParticleInit, Particles};
+use crate::dem::particles::ParticleInit;
 use crate::dem::walls::Wall;
-use nalgebra::{Quaternion, UnitQuaternion};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use crate::dem::health::{HealthError, HealthLimits};
 use crate::dem::simulation::{ContactSetup, SetupError, Simulation, SimulationSetup, World};
 use crate::dem::timestep::TimeStepPlan;
@@ -163,21 +160,6 @@ pub struct Lab {
     pub grains: Grains,
 }
 
-/// What a lab scene's particles are — spheres, or rigid clumps of one shape
-/// — and how the spheres a scene places or inserts become them. Scenes
-/// place spheres ([`Lab::sizes`]); with clumps those are the clumps'
-/// bounding spheres, and each becomes a clump of the shape filling it.
-#[derive(Clone, Debug)]
-pub struct Grains {
-    /// The clump shape at unit volume-equivalent radius, when the particles
-    /// are clumps (`material.particle.shape`); `None` for spheres.
-    pub clump: Option<ClumpShape>,
-    /// Particle density, kg/m³.
-    density_kg_m3: f64,
-    /// The packing seed (clump orientations are drawn from their own stream of it).
-    packing_seed: u64,
-}
-
 impl Lab {
     /// The set-up of `exp` with the scene's `wall_materials` (names of the
     /// manifest's wall materials, material 0 first). A size distribution that
@@ -191,15 +173,11 @@ impl Lab {
     ) -> Result<Self, SceneError> {
         let contact = physics::contact_setup(exp, wall_materials);
         let clump = physics::clump_shape(exp)?;
-        // Clumps are packed by their bounding spheres: the scenes place and
-        // space those, so they never overlap whatever their orientation.
-        let bounding = clump.as_ref().map_or(1.0, |c| c.bounding_radius_m);
-        let sizes = physics::size_distribution(exp).scaled(bounding);
+        let sizes = physics::size_distribution(exp);
         let (d_min_m, d_mean_m) = physics::diameter_bounds(&sizes).map_err(packing)?;
-        // The smallest contact partner: the smallest member sphere.
-        let smallest = clump
-            .as_ref()
-            .map_or(1.0, |c| c.min_member_radius_m() / c.bounding_radius_m);
+        // The smallest contact partner: the smallest member sphere (the
+        // unit shape's members are per unit volume-equivalent radius).
+        let smallest = clump.as_ref().map_or(1.0, ClumpShape::min_member_radius_m);
         let plan = physics::time_step(exp, &contact, 0.5 * d_min_m * smallest)?;
         Ok(Self {
             contact,
@@ -208,11 +186,11 @@ impl Lab {
             d_mean_m,
             plan,
             density_kg_m3: exp.material.particle.density_kg_m3,
-            grains: Grains {
+            grains: Grains::new(
                 clump,
-                density_kg_m3: exp.material.particle.density_kg_m3,
-                packing_seed: exp.seeds.packing_seed,
-            },
+                exp.material.particle.density_kg_m3,
+                exp.seeds.packing_seed,
+            ),
         })
     }
 
@@ -235,17 +213,10 @@ impl Lab {
         self.grains.insert(sim, placed)
     }
 
-    /// See [`Grains::packed_solid_ratio`].
-    pub fn packed_solid_ratio(&self) -> f64 {
-        self.grains.packed_solid_ratio()
-    }
-
     /// Mass of a sphere of the representative diameter, kg (the unit of the
     /// `at_rest` criterion, m g d).
     pub fn mean_particle_mass_kg(&self) -> f64 {
-        self.density_kg_m3 * std::f64::consts::PI / 6.0
-            * self.d_mean_m.powi(3)
-            * self.packed_solid_ratio()
+        self.density_kg_m3 * std::f64::consts::PI / 6.0 * self.d_mean_m.powi(3)
     }
 
     /// The simulation of `world` with every lab scene's settings: gravity
@@ -262,114 +233,6 @@ impl Lab {
         };
         Simulation::new(world, &setup)
     }
-}
-
-impl Grains {
-    /// The world of the scene's `walls` and `domain` holding the particles
-    /// `placed` by the scene: spheres as placed or, with a clump shape, in
-    /// each placed sphere (the clump's bounding sphere, see
-    /// [`sizes`](Self::sizes)) a clump of its shape at a random orientation.
-    pub fn world(
-        &self,
-        placed: &[ParticleInit],
-        walls: Vec<Wall>,
-        domain: Domain,
-    ) -> Result<World, SetupError> {
-        let Some(_) = &self.clump else {
-            let mut particles = Particles::default();
-            for p in placed {
-                particles.push(p, self.density_kg_m3);
-            }
-            return Ok(World::new(particles, walls, domain));
-        };
-        let mut world = World::with_clumps(walls, domain, Vec::new());
-        for p in placed {
-            let bodies = world.bodies.as_mut().expect("a world of clumps");
-            let init = self.clump_in(p, bodies);
-            world.push_clump(&init, self.density_kg_m3)?;
-        }
-        Ok(world)
-    }
-
-    /// Solid volume per packed volume of one particle: 1 for spheres, the
-    /// clump's volume over its bounding sphere's for clumps (the scenes
-    /// pack bounding spheres; a fill given as a mass or a solid volume is
-    /// divided by this to count them).
-    pub fn packed_solid_ratio(&self) -> f64 {
-        self.clump
-            .as_ref()
-            .map_or(1.0, |c| c.volume_m3 / (4.0 / 3.0 * std::f64::consts::PI * c.bounding_radius_m.powi(3)))
-    }
-
-    /// Inserts the particles `placed` into `sim` as [`world`](Self::world)
-    /// would hold them; returns their ids (particle ids of spheres, body
-    /// ids of clumps).
-    pub fn insert(
-        &self,
-        sim: &mut Simulation,
-        placed: &[ParticleInit],
-    ) -> Result<Vec<u32>, SetupError> {
-        if self.clump.is_none() {
-            return sim.insert(placed);
-        }
-        let mut inits = Vec::with_capacity(placed.len());
-        for p in placed {
-            let bodies = sim.clump_bodies_mut().ok_or(SetupError::NoClumps)?;
-            inits.push(self.clump_in(p, bodies));
-        }
-        sim.insert_clumps(&inits)
-    }
-
-    /// The clump that fills the bounding sphere `p`: its shape (added to
-    /// `bodies` when its size is new), at a uniformly random orientation
-    /// drawn from the packing seed's orientation stream at the position of
-    /// the body id it will get (so it does not depend on how the scene
-    /// batches its insertions).
-    fn clump_in(&self, p: &ParticleInit, bodies: &mut Bodies) -> ClumpInit {
-        let unit = self.clump.as_ref().expect("called with a clump shape");
-        let equivalent = p.radius_m / unit.bounding_radius_m;
-        let shape = match bodies
-            .shapes
-            .iter()
-            .position(|s| s.volume_m3 == unit.volume_m3 * equivalent.powi(3))
-        {
-            Some(k) => k,
-            None => {
-                bodies.shapes.push(unit.scaled(equivalent));
-                bodies.shapes.len() - 1
-            }
-        };
-        ClumpInit {
-            shape,
-            position: p.position,
-            orientation: random_orientation(self.packing_seed, bodies.next_id()),
-            velocity: p.velocity,
-            angular_velocity: p.angular_velocity,
-        }
-    }
-
-}
-
-/// The ChaCha8 stream of the packing seed that orients clumps (the packing
-/// itself draws from stream 0).
-const ORIENTATION_STREAM: u64 = 0x636c_756d_70;
-
-/// The orientation of clump `body` (its body id) under `seed`: uniform over
-/// all rotations (Shoemake's three-uniform construction), each body from
-/// its own place in the stream.
-fn random_orientation(seed: u64, body: u32) -> UnitQuaternion<f64> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(ORIENTATION_STREAM);
-    rng.set_word_pos(u128::from(body) * 8);
-    let (u1, u2, u3): (f64, f64, f64) = (rng.random(), rng.random(), rng.random());
-    let tau = 2.0 * std::f64::consts::PI;
-    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
-    UnitQuaternion::from_quaternion(Quaternion::new(
-        b * (tau * u3).cos(),
-        a * (tau * u2).sin(),
-        a * (tau * u2).cos(),
-        b * (tau * u3).sin(),
-    ))
 }
 
 /// Opens the run's MCAP log at `path` (none without a path), particles
@@ -395,7 +258,8 @@ pub fn open_log(
 /// Ends a lab run: closes its MCAP log, if it has one (the file appears only
 /// now, complete), and starts the result with the experiment, the kernel that
 /// ran, the sampled traces, the warnings about the time step `plan` (contacts
-/// faster than it resolves, see [`physics::time_step_warnings`]) and the
+/// faster than it resolves, see [`physics::time_step_warnings`]) and about the
+/// clump placement of `grains`, and the
 /// shared measurements (see the module docs) from `sim`'s final state,
 /// `particles` and whether the `settle` phase `settled`. The scene then adds
 /// its own measurements and its headline angle. A scene that finishes its log
@@ -404,6 +268,7 @@ pub fn finish(
     exp: &Experiment,
     sim: &Simulation,
     plan: &TimeStepPlan,
+    grains: &Grains,
     traces: Traces,
     log: Option<RunLog>,
     particles: usize,
@@ -415,6 +280,7 @@ pub fn finish(
     let mut result = RunResult::new(exp, sim.kernel_name());
     result.traces = traces.into_map();
     result.warnings = physics::time_step_warnings(plan, sim.stats().max_approach_speed_m_s);
+    result.warnings.extend(grains.warnings());
     let w = sim.world();
     for (key, value) in [
         ("particles", particles as f64),

@@ -302,8 +302,9 @@ pub struct Feeder {
     budget: u64,
     due: u64,
     generated: u64,
-    /// What the inserted spheres become (spheres or clumps).
-    grains: Grains,
+    /// What the inserted spheres become (spheres or clumps), and how their
+    /// placement went.
+    pub grains: Grains,
 }
 
 impl Feeder {
@@ -711,12 +712,14 @@ pub fn run(
     let rest_ratio = mean_kinetic_energy_j(&sim) / (mass * STANDARD_GRAVITY_M_S2 * d50);
     let traces = std::mem::take(&mut sampler.traces);
     let removed = sampler.removed;
+    let grains = sampler.feeder.grains.clone();
     drop(sampler);
 
     let mut result = finish(
         exp,
         &sim,
         &plan,
+        &grains,
         traces,
         log_file,
         generated as usize,
