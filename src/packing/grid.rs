@@ -34,6 +34,28 @@ impl Grid {
         self.spheres.push((p, r));
     }
 
+    /// The deepest overlap, m, of a sphere at `p` with radius `r` with the
+    /// stored spheres (sum of the radii less the centre distance; 0 when it
+    /// touches none).
+    pub(crate) fn deepest_overlap(&self, p: &Vec3, r: f64) -> f64 {
+        let [i, j, k] = self.key(p);
+        let mut deepest: f64 = 0.0;
+        for di in -1..=1 {
+            for dj in -1..=1 {
+                for dk in -1..=1 {
+                    let Some(list) = self.cells.get(&[i + di, j + dj, k + dk]) else {
+                        continue;
+                    };
+                    for &s in list {
+                        let (q, rq) = self.spheres[s];
+                        deepest = deepest.max(r + rq - (q - p).norm());
+                    }
+                }
+            }
+        }
+        deepest
+    }
+
     /// True when a sphere at `p` with radius `r` would overlap a stored sphere
     /// (centre distance below the sum of the radii).
     pub(crate) fn overlaps(&self, p: &Vec3, r: f64) -> bool {

@@ -14,9 +14,9 @@
 //! and stay inside the domain. A clump reaches beyond its equivalent sphere
 //! (paired spheres of aspect 1.3: 15 % of R at each end), so in a dense
 //! layout the first draw may poke into a neighbour; the trials turn it into
-//! the gaps. When no trial fits, the one with the fewest overlapping
-//! members is used and counted, and the run's warnings say how many; the
-//! engine's overlap bound still guards the run.
+//! the gaps. When no trial fits, the one whose deepest overlap is smallest
+//! is used and counted, and the run's warnings say how many and how deep;
+//! the engine's overlap bound still guards the run.
 //!
 //! Why not pack the clumps' bounding spheres instead: they hold only 66 %
 //! of the solid of the same layout (paired spheres of aspect 1.3), so a
@@ -37,7 +37,7 @@ use rand_chacha::ChaCha8Rng;
 use std::cell::Cell;
 
 /// Orientations tried per clump before the least-overlapping one is taken.
-pub const ORIENTATION_TRIALS: u32 = 100;
+pub const ORIENTATION_TRIALS: u32 = 400;
 
 /// The ChaCha8 stream of the packing seed that orients clumps (the packing
 /// itself draws from stream 0).
@@ -58,6 +58,8 @@ pub struct Grains {
     packing_seed: u64,
     /// Clumps placed with overlapping members (no trial fitted), so far.
     misfits: Cell<u64>,
+    /// The deepest of their overlaps, relative to the member's radius.
+    deepest: Cell<f64>,
 }
 
 impl Grains {
@@ -69,6 +71,7 @@ impl Grains {
             density_kg_m3,
             packing_seed,
             misfits: Cell::new(0),
+            deepest: Cell::new(0.0),
         }
     }
 
@@ -125,7 +128,8 @@ impl Grains {
                 format!(
                     "particle shape: {misfits} clumps found no orientation free of overlaps \
                      in {ORIENTATION_TRIALS} tries and started overlapping a neighbour or wall \
-                     (a layout too dense for the shape)"
+                     by up to {:.3} of a member radius (a layout too dense for the shape)",
+                    self.deepest.get()
                 )
             })
             .into_iter()
@@ -168,30 +172,37 @@ impl Grains {
             let mut rng = ChaCha8Rng::seed_from_u64(self.packing_seed);
             rng.set_stream(ORIENTATION_STREAM);
             rng.set_word_pos(u128::from(body) * WORDS_PER_BODY);
-            let mut best: Option<(usize, UnitQuaternion<f64>)> = None;
+            // The trial whose deepest overlap, relative to the member's
+            // radius, is smallest; the first free of overlaps ends the search.
+            let mut best: Option<(f64, UnitQuaternion<f64>)> = None;
             for _ in 0..ORIENTATION_TRIALS {
                 let q = uniform_rotation(&mut rng);
-                let clashes = members
+                let depth = members
                     .iter()
-                    .filter(|m| {
+                    .map(|m| {
                         let x = p.position + q.transform_vector(&m.offset);
-                        !domain.contains(x)
-                            || grid.overlaps(&x, m.radius_m)
-                            || placed_walls
-                                .iter()
-                                .any(|w| w.contact(x, m.radius_m, 0.0).is_some())
+                        if !domain.contains(x) {
+                            return f64::INFINITY;
+                        }
+                        let walls = placed_walls
+                            .iter()
+                            .filter_map(|w| w.contact(x, m.radius_m, 0.0))
+                            .map(|c| c.overlap_m)
+                            .fold(0.0, f64::max);
+                        grid.deepest_overlap(&x, m.radius_m).max(walls) / m.radius_m
                     })
-                    .count();
-                if best.is_none_or(|(fewest, _)| clashes < fewest) {
-                    best = Some((clashes, q));
+                    .fold(0.0, f64::max);
+                if best.is_none_or(|(least, _)| depth < least) {
+                    best = Some((depth, q));
                 }
-                if clashes == 0 {
+                if depth <= 0.0 {
                     break;
                 }
             }
-            let (clashes, q) = best.expect("at least one trial");
-            if clashes > 0 {
+            let (depth, q) = best.expect("at least one trial");
+            if depth > 0.0 {
                 self.misfits.set(self.misfits.get() + 1);
+                self.deepest.set(self.deepest.get().max(depth));
             }
             for m in members {
                 grid.insert(p.position + q.transform_vector(&m.offset), m.radius_m);
