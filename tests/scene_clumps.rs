@@ -32,8 +32,7 @@ fn every_lab_scene_runs_its_smoke_manifest_with_paired_spheres_and_logs_the_memb
         .map(|&(scene, headline)| {
             let exp = smoke_clumps(scene);
             let log = tmp.path().join(format!("{scene}.mcap"));
-            let r = run_experiment(&exp, Some(&log))
-                .unwrap_or_else(|e| panic!("{scene}: {e}"));
+            let r = run_experiment(&exp, Some(&log)).unwrap_or_else(|e| panic!("{scene}: {e}"));
             let angle = r.measurements[headline];
             assert!(
                 angle.is_finite() && angle > 5.0 && angle < 80.0,

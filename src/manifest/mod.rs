@@ -19,9 +19,9 @@ use serde_json::Value;
 
 pub use canonical::{canonical_json, content_id, ContentId};
 pub use experiment::{
-    AtRest, ClumpMember, CoarseGraining, CoarseGrainingRule, Contact, ContactModel, Experiment, Material,
-    NormalModel, PairParams, ParticleMaterial, ParticleShape, Profile, RollingModel, Seeds, SizeDistribution,
-    TimeStep, WallMaterial, WallStiffness, PAIR_PARAM_FIELDS,
+    AtRest, ClumpMember, CoarseGraining, CoarseGrainingRule, Contact, ContactModel, Experiment,
+    Material, NormalModel, PairParams, ParticleMaterial, ParticleShape, Profile, RollingModel,
+    Seeds, SizeDistribution, TimeStep, WallMaterial, WallStiffness, PAIR_PARAM_FIELDS,
 };
 pub use scene::{PairMode, PairScene, Partner, Scene};
 pub use study::{Design, DesignKind, ParameterRange, Slot, Study, TargetScene};

@@ -431,13 +431,13 @@ pub fn run(
         exp,
         &sim,
         &lab.plan,
-        &lab.grains,
         traces,
         log_file,
         placed.count,
         settled.settled,
     )
     .map_err(BaffleError::from)?;
+    result.warnings.extend(lab.grains.warnings());
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

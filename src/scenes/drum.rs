@@ -187,12 +187,12 @@ pub fn run(
         exp,
         &sim,
         &lab.plan,
-        &lab.grains,
         traces,
         log_file,
         particle_count,
         settled.settled,
     )?;
+    result.warnings.extend(lab.grains.warnings());
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

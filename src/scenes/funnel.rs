@@ -430,16 +430,8 @@ pub fn simulate(
         .count();
     let traces = std::mem::take(&mut sampler.traces);
     // `run` finishes the log, after measuring the pile.
-    let mut result = finish(
-        exp,
-        &sim,
-        &lab.plan,
-        &lab.grains,
-        traces,
-        None,
-        charged,
-        settled.settled,
-    )?;
+    let mut result = finish(exp, &sim, &lab.plan, traces, None, charged, settled.settled)?;
+    result.warnings.extend(lab.grains.warnings());
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

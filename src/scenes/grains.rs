@@ -41,7 +41,7 @@ pub const ORIENTATION_TRIALS: u32 = 400;
 
 /// The ChaCha8 stream of the packing seed that orients clumps (the packing
 /// itself draws from stream 0).
-const ORIENTATION_STREAM: u64 = 0x636c_756d_70;
+const ORIENTATION_STREAM: u64 = 0x0063_6c75_6d70;
 
 /// Words of the stream reserved per body: 3 uniforms (2 words each) per trial.
 const WORDS_PER_BODY: u128 = 8 * ORIENTATION_TRIALS as u128;
@@ -114,7 +114,8 @@ impl Grains {
             return sim.insert(placed);
         }
         let w = sim.world();
-        let (existing, walls, domain, t) = (w.particles.clone(), w.walls.clone(), w.domain, w.time_s);
+        let (existing, walls, domain, t) =
+            (w.particles.clone(), w.walls.clone(), w.domain, w.time_s);
         let bodies = sim.clump_bodies_mut().ok_or(SetupError::NoClumps)?;
         let inits = self.clumps_in(placed, &existing, &walls, &domain, t, bodies);
         sim.insert_clumps(&inits)
@@ -149,11 +150,7 @@ impl Grains {
         bodies: &mut Bodies,
     ) -> Vec<ClumpInit> {
         let unit = self.clump.as_ref().expect("called with a clump shape");
-        let reach = unit
-            .members
-            .iter()
-            .map(|m| m.radius_m)
-            .fold(0.0, f64::max);
+        let reach = unit.members.iter().map(|m| m.radius_m).fold(0.0, f64::max);
         let largest = placed
             .iter()
             .map(|p| p.radius_m * reach)
@@ -164,9 +161,8 @@ impl Grains {
             grid.insert(*x, r);
         }
         let placed_walls: Vec<_> = walls.iter().map(|w| w.placed_at(t_s)).collect();
-        let mut body = bodies.next_id();
         let mut inits = Vec::with_capacity(placed.len());
-        for p in placed {
+        for (body, p) in (bodies.next_id()..).zip(placed) {
             let shape = shape_index(bodies, unit, p.radius_m);
             let members = &bodies.shapes[shape].members;
             let mut rng = ChaCha8Rng::seed_from_u64(self.packing_seed);
@@ -214,7 +210,6 @@ impl Grains {
                 velocity: p.velocity,
                 angular_velocity: p.angular_velocity,
             });
-            body += 1;
         }
         inits
     }

@@ -232,12 +232,12 @@ fn run_hopper(
         exp,
         &sim,
         &lab.plan,
-        &lab.grains,
         traces,
         log_file,
         inserted,
         settled.settled,
     )?;
+    result.warnings.extend(lab.grains.warnings());
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

@@ -10,15 +10,15 @@
 use super::SceneError;
 use crate::dem::clump::template::{ClumpShape, ClumpTemplate, Member};
 use crate::dem::contact::PairParameters;
-use crate::dem::vec3::Vec3;
 use crate::dem::material::{effective_youngs_modulus, ElasticMaterial};
 use crate::dem::simulation::{ContactSetup, NormalChoice, RollingChoice};
 use crate::dem::timestep::{
     choose_time_step, StiffestContact, TimeStepError, TimeStepPlan, TimeStepRequest,
 };
+use crate::dem::vec3::Vec3;
 use crate::manifest::{
-    CoarseGrainingRule, Experiment, NormalModel, PairParams, ParticleShape, RollingModel, SizeDistribution,
-    WallMaterial, WallStiffness,
+    CoarseGrainingRule, Experiment, NormalModel, PairParams, ParticleShape, RollingModel,
+    SizeDistribution, WallMaterial, WallStiffness,
 };
 use crate::packing::coarse::{
     coarse_grain, effective_modulus, surface_energy_factor, CohesionState, ScalingRule,

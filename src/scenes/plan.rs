@@ -111,7 +111,8 @@ const CLEARANCE_DIAMETERS: f64 = 0.05;
 pub struct RunPlan {
     /// The scene kind (`drum`, `pair`, ...).
     pub scene: &'static str,
-    /// Estimated number of simulated particles (the most at any time).
+    /// Estimated number of simulated spheres (the most at any time; with
+    /// clumps, their member spheres).
     pub particles: f64,
     /// The time step the engine will use, s.
     pub dt_s: f64,
@@ -545,8 +546,24 @@ fn estimate(exp: &Experiment, errors: &mut Vec<FieldError>) -> Option<RunPlan> {
             }
         }
     };
-    let dt = time_step(exp, shape.as_ref()?.d_min, errors)?;
-    let shape = shape?;
+    // Clumps: each grain is its member spheres, the smallest of which sets
+    // the step (as in the lab set-up).
+    let (members, smallest) = match physics::clump_shape(exp) {
+        Ok(None) => (1.0, 1.0),
+        Ok(Some(c)) => (c.members.len() as f64, c.min_member_radius_m()),
+        Err(e) => {
+            fail(
+                errors,
+                "material.particle.shape",
+                String::from("the clump given"),
+                e.to_string(),
+            );
+            return None;
+        }
+    };
+    let dt = time_step(exp, shape.as_ref()?.d_min * smallest, errors)?;
+    let mut shape = shape?;
+    shape.particles *= members;
     if let Some(every) = shape.sample_interval_s {
         if every < dt {
             fail(

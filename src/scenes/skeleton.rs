@@ -21,18 +21,18 @@
 
 use std::path::Path;
 
+pub use super::grains::Grains;
 use super::physics::{self, STANDARD_GRAVITY_M_S2};
 use super::protocol::Traces;
 use super::SceneError;
-pub use super::grains::Grains;
 use crate::dem::clump::template::ClumpShape;
 use crate::dem::domain::{Domain, DomainError};
-use crate::dem::particles::ParticleInit;
-use crate::dem::walls::Wall;
 use crate::dem::health::{HealthError, HealthLimits};
+use crate::dem::particles::ParticleInit;
 use crate::dem::simulation::{ContactSetup, SetupError, Simulation, SimulationSetup, World};
 use crate::dem::timestep::TimeStepPlan;
 use crate::dem::vec3::Vec3;
+use crate::dem::walls::Wall;
 use crate::dem::walls::WallError;
 use crate::log::{LogError, LogOptions, RunLog};
 use crate::manifest::Experiment;
@@ -258,8 +258,7 @@ pub fn open_log(
 /// Ends a lab run: closes its MCAP log, if it has one (the file appears only
 /// now, complete), and starts the result with the experiment, the kernel that
 /// ran, the sampled traces, the warnings about the time step `plan` (contacts
-/// faster than it resolves, see [`physics::time_step_warnings`]) and about the
-/// clump placement of `grains`, and the
+/// faster than it resolves, see [`physics::time_step_warnings`]) and the
 /// shared measurements (see the module docs) from `sim`'s final state,
 /// `particles` and whether the `settle` phase `settled`. The scene then adds
 /// its own measurements and its headline angle. A scene that finishes its log
@@ -268,7 +267,6 @@ pub fn finish(
     exp: &Experiment,
     sim: &Simulation,
     plan: &TimeStepPlan,
-    grains: &Grains,
     traces: Traces,
     log: Option<RunLog>,
     particles: usize,
@@ -280,7 +278,6 @@ pub fn finish(
     let mut result = RunResult::new(exp, sim.kernel_name());
     result.traces = traces.into_map();
     result.warnings = physics::time_step_warnings(plan, sim.stats().max_approach_speed_m_s);
-    result.warnings.extend(grains.warnings());
     let w = sim.world();
     for (key, value) in [
         ("particles", particles as f64),

@@ -402,13 +402,12 @@ pub fn rig(exp: &Experiment, scene: &StaticPileScene) -> Result<Rig, SceneError>
     };
     let geometry = Geometry::new(scene);
     let removal = Removal::new(&geometry, max_m);
-    let world = empty_world(&lab, &geometry, &removal, max_m, scene.insertion_interval_s)
-        .map_err(fail)?;
+    let world =
+        empty_world(&lab, &geometry, &removal, max_m, scene.insertion_interval_s).map_err(fail)?;
     let sim = lab
         .simulation(world, HealthLimits::default())
         .map_err(|e| fail(e.into()))?;
-    let feeder =
-        Feeder::new(exp, scene, &geometry, &lab).map_err(|e| fail(e.into()))?;
+    let feeder = Feeder::new(exp, scene, &geometry, &lab).map_err(|e| fail(e.into()))?;
     Ok(Rig {
         sim,
         feeder,
@@ -719,12 +718,12 @@ pub fn run(
         exp,
         &sim,
         &plan,
-        &grains,
         traces,
         log_file,
         generated as usize,
         settled.settled,
     )?;
+    result.warnings.extend(grains.warnings());
     let mut put = |k: &str, v: f64| {
         result.measurements.insert(k.to_string(), v);
     };

@@ -101,7 +101,10 @@ impl World {
     /// and bounding radii (so a body is counted once, where it is).
     pub fn grain_centres(&self) -> (Vec<Vec3>, Vec<f64>) {
         match &self.bodies {
-            None => (self.particles.position.clone(), self.particles.radius.clone()),
+            None => (
+                self.particles.position.clone(),
+                self.particles.radius.clone(),
+            ),
             Some(b) => (
                 b.position.clone(),
                 b.shape

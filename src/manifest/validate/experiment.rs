@@ -6,8 +6,8 @@ use std::collections::BTreeMap;
 use super::checker::{join, number, string, Checker, Interval};
 use super::scene::check_scene;
 use crate::manifest::experiment::{
-    AtRest, CoarseGraining, ContactModel, Experiment, Material, ParticleShape, NormalModel, PairParams,
-    RollingModel, SizeDistribution, TimeStep, WallStiffness,
+    AtRest, CoarseGraining, ContactModel, Experiment, Material, NormalModel, PairParams,
+    ParticleShape, RollingModel, SizeDistribution, TimeStep, WallStiffness,
 };
 use crate::manifest::{Scene, PHYSICS_VERSION, SCHEMA_VERSION};
 
