@@ -34,47 +34,30 @@ impl Grid {
         self.spheres.push((p, r));
     }
 
+    /// The stored spheres in the cells around `p` (every sphere that can
+    /// overlap a sphere at `p`).
+    fn near(&self, p: &Vec3) -> impl Iterator<Item = &(Vec3, f64)> {
+        let [i, j, k] = self.key(p);
+        (-1..=1)
+            .flat_map(move |di| (-1..=1).flat_map(move |dj| (-1..=1).map(move |dk| [di, dj, dk])))
+            .filter_map(move |[di, dj, dk]| self.cells.get(&[i + di, j + dj, k + dk]))
+            .flatten()
+            .map(|&s| &self.spheres[s])
+    }
+
     /// The deepest overlap, m, of a sphere at `p` with radius `r` with the
     /// stored spheres (sum of the radii less the centre distance; 0 when it
     /// touches none).
     pub(crate) fn deepest_overlap(&self, p: &Vec3, r: f64) -> f64 {
-        let [i, j, k] = self.key(p);
-        let mut deepest: f64 = 0.0;
-        for di in -1..=1 {
-            for dj in -1..=1 {
-                for dk in -1..=1 {
-                    let Some(list) = self.cells.get(&[i + di, j + dj, k + dk]) else {
-                        continue;
-                    };
-                    for &s in list {
-                        let (q, rq) = self.spheres[s];
-                        deepest = deepest.max(r + rq - (q - p).norm());
-                    }
-                }
-            }
-        }
-        deepest
+        self.near(p)
+            .map(|(q, rq)| r + rq - (q - p).norm())
+            .fold(0.0, f64::max)
     }
 
     /// True when a sphere at `p` with radius `r` would overlap a stored sphere
     /// (centre distance below the sum of the radii).
     pub(crate) fn overlaps(&self, p: &Vec3, r: f64) -> bool {
-        let [i, j, k] = self.key(p);
-        for di in -1..=1 {
-            for dj in -1..=1 {
-                for dk in -1..=1 {
-                    let Some(list) = self.cells.get(&[i + di, j + dj, k + dk]) else {
-                        continue;
-                    };
-                    for &s in list {
-                        let (q, rq) = self.spheres[s];
-                        if (q - p).norm_squared() < (r + rq) * (r + rq) {
-                            return true;
-                        }
-                    }
-                }
-            }
-        }
-        false
+        self.near(p)
+            .any(|(q, rq)| (q - p).norm_squared() < (r + rq) * (r + rq))
     }
 }

@@ -564,7 +564,7 @@ fn build_world(
         Vec3::new(geo.floor_x_m.1 + pad, y_hi, geo.wall_height_m + pad),
         [false, periodic, false],
     )?;
-    let world = lab.world(&placed.particles, geo.walls()?, domain)?;
+    let world = lab.grains.world(&placed.particles, geo.walls()?, domain)?;
     let mut tally = Tally::default();
     for m in &world.particles.mass {
         tally.add(*m);

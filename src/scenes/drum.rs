@@ -284,5 +284,5 @@ fn build_world(exp: &Experiment, scene: &DrumScene, lab: &Lab) -> Result<World, 
         Err(PackingError::RegionFull { .. }) => place_lattice(&spec, LATTICE_SPACING)?,
         Err(e) => return Err(e.into()),
     };
-    Ok(lab.world(&placed.particles, walls, domain)?)
+    Ok(lab.grains.world(&placed.particles, walls, domain)?)
 }

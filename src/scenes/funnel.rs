@@ -366,7 +366,10 @@ pub fn simulate(
     let domain = geom
         .domain(spring_out_speed(&lab.contact, rho, &health))
         .map_err(FunnelError::from)?;
-    let world = lab.world(first, walls, domain).map_err(FunnelError::from)?;
+    let world = lab
+        .grains
+        .world(first, walls, domain)
+        .map_err(FunnelError::from)?;
     let mut sim = lab.simulation(world, health).map_err(FunnelError::from)?;
 
     // Fill: layer k is released at k / n of the generation time.
@@ -381,7 +384,9 @@ pub fn simulate(
         let free = fill::free_sites(layer, &w.particles.position, &w.particles.radius);
         skipped += layer.len() - free.len();
         charged += free.len();
-        lab.insert(&mut sim, &free).map_err(FunnelError::from)?;
+        lab.grains
+            .insert(&mut sim, &free)
+            .map_err(FunnelError::from)?;
     }
     sim.advance(step_at(n) - step_at(n - 1))
         .map_err(FunnelError::from)?;

@@ -191,7 +191,9 @@ fn run_hopper(
 
     let (placed, top_z) = pour(exp, scene, &geo, &lab.sizes, fill_height)?;
     let inserted = placed.particles.len();
-    let world = lab.world(&placed.particles, geo.walls()?, geo.domain(top_z, every)?)?;
+    let world = lab
+        .grains
+        .world(&placed.particles, geo.walls()?, geo.domain(top_z, every)?)?;
     let mut sim = lab.simulation(world, HealthLimits::default())?;
 
     let speed_scale_m_s = (2.0 * G_M_S2 * scene.drop_height_m).sqrt();

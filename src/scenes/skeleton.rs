@@ -26,13 +26,11 @@ use super::physics::{self, STANDARD_GRAVITY_M_S2};
 use super::protocol::Traces;
 use super::SceneError;
 use crate::dem::clump::template::ClumpShape;
-use crate::dem::domain::{Domain, DomainError};
+use crate::dem::domain::DomainError;
 use crate::dem::health::{HealthError, HealthLimits};
-use crate::dem::particles::ParticleInit;
 use crate::dem::simulation::{ContactSetup, SetupError, Simulation, SimulationSetup, World};
 use crate::dem::timestep::TimeStepPlan;
 use crate::dem::vec3::Vec3;
-use crate::dem::walls::Wall;
 use crate::dem::walls::WallError;
 use crate::log::{LogError, LogOptions, RunLog};
 use crate::manifest::Experiment;
@@ -192,25 +190,6 @@ impl Lab {
                 exp.seeds.packing_seed,
             ),
         })
-    }
-
-    /// The world of `placed` (see [`Grains::world`]).
-    pub fn world(
-        &self,
-        placed: &[ParticleInit],
-        walls: Vec<Wall>,
-        domain: Domain,
-    ) -> Result<World, SetupError> {
-        self.grains.world(placed, walls, domain)
-    }
-
-    /// Inserts `placed` (see [`Grains::insert`]).
-    pub fn insert(
-        &self,
-        sim: &mut Simulation,
-        placed: &[ParticleInit],
-    ) -> Result<Vec<u32>, SetupError> {
-        self.grains.insert(sim, placed)
     }
 
     /// Mass of a sphere of the representative diameter, kg (the unit of the

@@ -433,7 +433,7 @@ fn empty_world(
         Vec3::new(reach, reach, geometry.top_z_m + d_max_m + travel),
         [false; 3],
     )?;
-    Ok(lab.world(&[], geometry.walls()?, domain)?)
+    Ok(lab.grains.world(&[], geometry.walls()?, domain)?)
 }
 
 /// The pile's measurements (see the module docs).

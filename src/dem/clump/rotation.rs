@@ -114,7 +114,9 @@ mod tests {
 
     /// A symmetric top (I₁ = I₂ = 2, I₃ = 1) precesses: its symmetry axis
     /// turns about the fixed L at the rate |L|/I₁ (Landau & Lifshitz §33),
-    /// keeping its angle to L.
+    /// keeping its angle to L. The splitting keeps that angle to O(dt²):
+    /// 9.6e-9 in cos at dt = 1e-3 s and 2.4e-9 at 5e-4 s (the same scheme in
+    /// numpy), so the bound below is twice the measured value.
     #[test]
     fn symmetric_top_precesses_at_l_over_i1() {
         let inertia = Vec3::new(2.0, 2.0, 1.0);
@@ -126,14 +128,14 @@ mod tests {
         let cone = axis0.dot(&l_hat);
         let (dt, steps) = (1e-3, 5_000);
         let mut q = q0;
+        let mut cone_error: f64 = 0.0;
         for _ in 0..steps {
             q = free_rotation(q, l, inertia, dt);
+            let axis = q.transform_vector(&Vec3::z());
+            cone_error = cone_error.max((axis.dot(&l_hat) - cone).abs());
         }
+        assert!(cone_error < 2e-8, "cone angle changed by {cone_error}");
         let axis = q.transform_vector(&Vec3::z());
-        assert!(
-            (axis.dot(&l_hat) - cone).abs() < 1e-12,
-            "cone angle changed"
-        );
         // Angle turned about L: between the components perpendicular to L.
         let perp = |a: Vec3| (a - l_hat * a.dot(&l_hat)).normalize();
         let (p0, p1) = (perp(axis0), perp(axis));
@@ -141,8 +143,9 @@ mod tests {
         let expected = (rate * dt * steps as f64 + std::f64::consts::PI)
             .rem_euclid(2.0 * std::f64::consts::PI)
             - std::f64::consts::PI;
+        // Measured 7.1e-9 rad after 5 s (numpy, same scheme).
         assert!(
-            (turned - expected).abs() < 1e-6,
+            (turned - expected).abs() < 1e-7,
             "{turned} vs {expected} rad"
         );
     }
