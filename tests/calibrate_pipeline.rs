@@ -512,6 +512,7 @@ fn a_verification_scene_that_cannot_measure_an_angle_is_a_failed_candidate() {
         if e.seeds.sample_index == 2 {
             return Err(DrumError::from(HealthError {
                 particle_id: 7,
+                body_id: None,
                 step: 100,
                 time_s: 0.01,
                 cause: HealthCause::NonFinite,

@@ -287,3 +287,40 @@ fn members_of_one_clump_never_touch_and_spheres_cannot_enter_a_clump_world() {
         .unwrap_err();
     assert!(err.to_string().contains("shape = 3"), "{err}");
 }
+
+#[test]
+fn a_health_failure_names_the_member_sphere_and_its_clump() {
+    let mut world = clump_world(
+        vec![paired()],
+        Vec::new(),
+        Vec3::from_element(-0.005),
+        Vec3::from_element(0.005),
+    );
+    for x in [-0.002, 0.002] {
+        world
+            .push_clump(
+                &init(
+                    Vec3::new(x, 0.0, 0.0),
+                    UnitQuaternion::identity(),
+                    Vec3::new(0.0, 0.0, 1.0),
+                    Vec3::zeros(),
+                ),
+                RHO,
+            )
+            .unwrap();
+    }
+    let c = contact_setup(RollingChoice::None, 0.0);
+    let dt = auto_dt(&c, R, RHO, 1.0);
+    let mut sim = Simulation::new(world, &setup(c, RHO, false, dt, 1e-4)).unwrap();
+    // Both clumps fly up out of the box; the lower-indexed member leaves first.
+    let err = sim.advance((0.01 / dt) as u64).unwrap_err();
+    let body = err.body_id.expect("a clump world names the body");
+    let b = sim.world().bodies.clone().unwrap();
+    assert!(b.member_ids(body as usize).contains(&err.particle_id));
+    let text = err.to_string();
+    assert!(
+        text.contains(&format!("member sphere of clump {body}"))
+            && text.contains("left the domain"),
+        "{text}"
+    );
+}

@@ -102,16 +102,25 @@ pub enum HealthCause {
 
 /// A run stopped by a health check.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("unhealthy simulation at step {step} (t = {time_s:.6e} s), particle {particle_id}: {}", describe(.cause))]
+#[error("unhealthy simulation at step {step} (t = {time_s:.6e} s), particle {particle_id}{}: {}", member_of(.body_id), describe(.cause))]
 pub struct HealthError {
     /// Stable id of the (first) offending particle (lowest index for ties).
     pub particle_id: u32,
+    /// In a world of clumps, the stable id of the body that particle is a
+    /// member of (the checks run on every member sphere; the message names
+    /// both).
+    pub body_id: Option<u32>,
     /// Step number at which the check failed.
     pub step: u64,
     /// Simulated time, s.
     pub time_s: f64,
     /// The cause.
     pub cause: HealthCause,
+}
+
+fn member_of(body: &Option<u32>) -> String {
+    body.map(|b| format!(" (a member sphere of clump {b})"))
+        .unwrap_or_default()
 }
 
 fn describe(c: &HealthCause) -> String {

@@ -250,6 +250,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         };
         Err(HealthError {
             particle_id: p.id[i],
+            body_id: body_id(world, p.id[i]),
             step: world.step + 1,
             time_s: world.time_s + self.dt,
             cause: HealthCause::Tunnelling {
@@ -277,6 +278,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
     fn health(&self, world: &World, index: usize, cause: HealthCause) -> HealthError {
         HealthError {
             particle_id: world.particles.id[index],
+            body_id: body_id(world, world.particles.id[index]),
             step: world.step,
             time_s: world.time_s,
             cause,
@@ -309,8 +311,10 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             | NeighborError::NonFinitePosition { index } => index,
             _ => 0,
         };
+        let particle_id = world.particles.id.get(index).copied().unwrap_or(0);
         HealthError {
-            particle_id: world.particles.id.get(index).copied().unwrap_or(0),
+            particle_id,
+            body_id: body_id(world, particle_id),
             step: world.step,
             time_s: world.time_s,
             cause: HealthCause::NeighborSearch(e.to_string()),
@@ -648,6 +652,13 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         }
         Ok(())
     }
+}
+
+/// The id of the clump whose member has particle id `particle` (`None` in
+/// a world of spheres).
+fn body_id(world: &World, particle: u32) -> Option<u32> {
+    let bodies = world.bodies.as_ref()?;
+    bodies.body_of_member(particle).map(|b| bodies.id[b])
 }
 
 /// Hertz elastic energy (8/15) E* √R* δ^{5/2}, J (0 without overlap).
