@@ -52,6 +52,11 @@ fn init(position: Vec3, orientation: UnitQuaternion<f64>, v: Vec3, w: Vec3) -> C
     }
 }
 
+/// Adds a clump of shape 0 at `position` (see [`init`]) of density [`RHO`].
+fn push(world: &mut World, position: Vec3, q: UnitQuaternion<f64>, v: Vec3, w: Vec3) {
+    world.push_clump(&init(position, q, v, w), RHO).unwrap();
+}
+
 fn contact_setup(rolling: RollingChoice, mu_r: f64) -> repose::dem::simulation::ContactSetup {
     contact(
         NormalChoice::Hertz,
@@ -75,9 +80,7 @@ fn free_asymmetric_clump_keeps_its_angular_momentum_and_energy() {
     // Spin mostly about the intermediate (unstable) axis: it tumbles.
     let q0 = UnitQuaternion::from_euler_angles(0.3, -0.2, 0.1);
     let w0 = q0.transform_vector(&Vec3::new(20.0, 300.0, 20.0));
-    world
-        .push_clump(&init(Vec3::zeros(), q0, Vec3::new(0.1, 0.0, 0.0), w0), RHO)
-        .unwrap();
+    push(&mut world, Vec3::zeros(), q0, Vec3::new(0.1, 0.0, 0.0), w0);
     let c = contact_setup(RollingChoice::None, 0.0);
     let dt = 1e-5;
     let mut sim = Simulation::new(world, &setup(c, RHO, false, dt, 1e-4)).unwrap();
@@ -130,17 +133,13 @@ fn a_paired_sphere_dropped_on_a_plane_comes_to_rest_lying_flat() {
     // Tilted 50° about y, sliding sideways, dropped from 5 mm. (With a
     // spin about its long axis it can land upright and spin like a top.)
     let q = UnitQuaternion::from_euler_angles(0.0, 50f64.to_radians(), 0.2);
-    world
-        .push_clump(
-            &init(
-                Vec3::new(0.0, 0.0, 0.005),
-                q,
-                Vec3::new(0.01, 0.0, 0.0),
-                Vec3::zeros(),
-            ),
-            RHO,
-        )
-        .unwrap();
+    push(
+        &mut world,
+        Vec3::new(0.0, 0.0, 0.005),
+        q,
+        Vec3::new(0.01, 0.0, 0.0),
+        Vec3::zeros(),
+    );
     let c = contact_setup(RollingChoice::Cdt, 0.1);
     let dt = auto_dt(&c, r_member, RHO, 1.0);
     let mut sim = Simulation::new(world, &setup(c, RHO, true, dt, 1e-4)).unwrap();
@@ -171,28 +170,20 @@ fn impact(threads: usize) -> (World, Vec3, Vec3) {
     );
     let qa = UnitQuaternion::from_euler_angles(0.1, 0.4, -0.3);
     let qb = UnitQuaternion::from_euler_angles(-0.7, 0.2, 1.1);
-    world
-        .push_clump(
-            &init(
-                Vec3::new(-0.003, 0.0004, 0.0),
-                qa,
-                Vec3::new(0.5, 0.0, 0.02),
-                Vec3::new(0.0, 30.0, -10.0),
-            ),
-            RHO,
-        )
-        .unwrap();
-    world
-        .push_clump(
-            &init(
-                Vec3::new(0.003, -0.0003, 0.0002),
-                qb,
-                Vec3::new(-0.4, 0.05, 0.0),
-                Vec3::new(15.0, 0.0, 5.0),
-            ),
-            RHO,
-        )
-        .unwrap();
+    push(
+        &mut world,
+        Vec3::new(-0.003, 0.0004, 0.0),
+        qa,
+        Vec3::new(0.5, 0.0, 0.02),
+        Vec3::new(0.0, 30.0, -10.0),
+    );
+    push(
+        &mut world,
+        Vec3::new(0.003, -0.0003, 0.0002),
+        qb,
+        Vec3::new(-0.4, 0.05, 0.0),
+        Vec3::new(15.0, 0.0, 5.0),
+    );
     let b0 = world.bodies.clone().unwrap();
     let (p0, l0) = (b0.momentum(), b0.angular_momentum_about_origin());
     let c = contact_setup(RollingChoice::Cdt, 0.05);
@@ -246,17 +237,13 @@ fn members_of_one_clump_never_touch_and_spheres_cannot_enter_a_clump_world() {
         Vec3::from_element(-0.01),
         Vec3::from_element(0.01),
     );
-    world
-        .push_clump(
-            &init(
-                Vec3::zeros(),
-                UnitQuaternion::identity(),
-                Vec3::zeros(),
-                Vec3::zeros(),
-            ),
-            RHO,
-        )
-        .unwrap();
+    push(
+        &mut world,
+        Vec3::zeros(),
+        UnitQuaternion::identity(),
+        Vec3::zeros(),
+        Vec3::zeros(),
+    );
     let c = contact_setup(RollingChoice::None, 0.0);
     let dt = auto_dt(&c, R, RHO, 1.0);
     let mut sim = Simulation::new(world, &setup(c, RHO, false, dt, 1e-4)).unwrap();
@@ -297,17 +284,13 @@ fn a_health_failure_names_the_member_sphere_and_its_clump() {
         Vec3::from_element(0.005),
     );
     for x in [-0.002, 0.002] {
-        world
-            .push_clump(
-                &init(
-                    Vec3::new(x, 0.0, 0.0),
-                    UnitQuaternion::identity(),
-                    Vec3::new(0.0, 0.0, 1.0),
-                    Vec3::zeros(),
-                ),
-                RHO,
-            )
-            .unwrap();
+        push(
+            &mut world,
+            Vec3::new(x, 0.0, 0.0),
+            UnitQuaternion::identity(),
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::zeros(),
+        );
     }
     let c = contact_setup(RollingChoice::None, 0.0);
     let dt = auto_dt(&c, R, RHO, 1.0);

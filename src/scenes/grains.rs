@@ -29,6 +29,7 @@ use crate::dem::clump::template::ClumpShape;
 use crate::dem::domain::Domain;
 use crate::dem::particles::{ParticleInit, Particles};
 use crate::dem::simulation::{SetupError, Simulation, World};
+use crate::dem::vec3::Vec3;
 use crate::dem::walls::Wall;
 use crate::packing::grid::Grid;
 use nalgebra::{Quaternion, UnitQuaternion};
@@ -94,7 +95,7 @@ impl Grains {
         let inits = {
             let (walls, domain) = (world.walls.clone(), world.domain);
             let bodies = world.bodies.as_mut().expect("a world of clumps");
-            self.clumps_in(placed, &Particles::default(), &walls, &domain, 0.0, bodies)
+            self.clumps_in(placed, (&[], &[]), &walls, &domain, 0.0, bodies)
         };
         for init in &inits {
             world.push_clump(init, self.density_kg_m3)?;
@@ -114,10 +115,19 @@ impl Grains {
             return sim.insert(placed);
         }
         let w = sim.world();
-        let (existing, walls, domain, t) =
-            (w.particles.clone(), w.walls.clone(), w.domain, w.time_s);
+        // Only the members' centres and radii are needed (copied: `sim` is
+        // borrowed mutably next).
+        let existing = (w.particles.position.clone(), w.particles.radius.clone());
+        let (walls, domain, t) = (w.walls.clone(), w.domain, w.time_s);
         let bodies = sim.clump_bodies_mut().ok_or(SetupError::NoClumps)?;
-        let inits = self.clumps_in(placed, &existing, &walls, &domain, t, bodies);
+        let inits = self.clumps_in(
+            placed,
+            (&existing.0, &existing.1),
+            &walls,
+            &domain,
+            t,
+            bodies,
+        );
         sim.insert_clumps(&inits)
     }
 
@@ -138,12 +148,12 @@ impl Grains {
     }
 
     /// A clump for each of the spheres `placed`, among the member spheres
-    /// `existing` and `walls` at time `t_s` inside `domain`; shapes of new
-    /// sizes are added to `bodies`.
+    /// `existing` (centres, m, and radii, m) and `walls` at time `t_s` inside
+    /// `domain`; shapes of new sizes are added to `bodies`.
     fn clumps_in(
         &self,
         placed: &[ParticleInit],
-        existing: &Particles,
+        existing: (&[Vec3], &[f64]),
         walls: &[Wall],
         domain: &Domain,
         t_s: f64,
@@ -154,10 +164,10 @@ impl Grains {
         let largest = placed
             .iter()
             .map(|p| p.radius_m * reach)
-            .chain(existing.radius.iter().copied())
+            .chain(existing.1.iter().copied())
             .fold(0.0, f64::max);
         let mut grid = Grid::new(2.0 * largest.max(f64::MIN_POSITIVE));
-        for (x, &r) in existing.position.iter().zip(&existing.radius) {
+        for (x, &r) in existing.0.iter().zip(existing.1) {
             grid.insert(*x, r);
         }
         let placed_walls: Vec<_> = walls.iter().map(|w| w.placed_at(t_s)).collect();

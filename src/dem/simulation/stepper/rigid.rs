@@ -179,13 +179,17 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
         let g = self.body.acceleration();
         let dt = self.dt;
         let p = &mut world.particles;
+        // The members' offsets, world frame, rotated once per body and used
+        // for the torque and the members' velocities.
+        let mut offsets: Vec<Vec3> = Vec::new();
         for b in 0..bodies.len() {
             let q = bodies.orientation[b];
             let shape = &bodies.shapes[bodies.shape[b] as usize];
             let mut force = g * bodies.mass[b];
             let mut torque = Vec3::zeros();
-            let offsets = shape.members.iter().map(|m| q.transform_vector(&m.offset));
-            for (offset, &i) in offsets.clone().zip(index.members(b)) {
+            offsets.clear();
+            offsets.extend(shape.members.iter().map(|m| q.transform_vector(&m.offset)));
+            for (offset, &i) in offsets.iter().zip(index.members(b)) {
                 let i = i as usize;
                 // The pair sums start at g × the mass the laws see (the body's).
                 let contact = p.force[i] - g * self.records.motion[i].m;
@@ -200,7 +204,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             bodies.force[b] = force;
             bodies.torque[b] = torque;
             let (v, w) = (bodies.velocity[b], bodies.angular_velocity(b));
-            for (offset, &i) in offsets.zip(index.members(b)) {
+            for (offset, &i) in offsets.iter().zip(index.members(b)) {
                 p.velocity[i as usize] = v + w.cross(&offset);
                 p.angular_velocity[i as usize] = w;
             }
