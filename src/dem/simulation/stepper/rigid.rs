@@ -205,7 +205,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
             bodies.torque[b] = torque;
             let (v, w) = (bodies.velocity[b], bodies.angular_velocity(b));
             for (offset, &i) in offsets.iter().zip(index.members(b)) {
-                p.velocity[i as usize] = v + w.cross(&offset);
+                p.velocity[i as usize] = v + w.cross(offset);
                 p.angular_velocity[i as usize] = w;
             }
         }
