@@ -73,6 +73,9 @@ pub enum HealthCause {
         limit: f64,
         /// The other body.
         partner: String,
+        /// Where the particle was, m (to find the jam: a wall, a brush, a
+        /// funnel throat).
+        position: Vec3,
     },
     /// The particle left the domain through a non-periodic face.
     LeftDomain {
@@ -126,8 +129,14 @@ fn member_of(body: &Option<u32>) -> String {
 fn describe(c: &HealthCause) -> String {
     match c {
         HealthCause::NonFinite => "position or velocity is not finite".into(),
-        HealthCause::Overlap { ratio, limit, partner } => format!(
-            "overlap {ratio:.3} of the radius with {partner} exceeds the bound {limit} (time step too large for the impact speed, or stiffness too low)"
+        HealthCause::Overlap {
+            ratio,
+            limit,
+            partner,
+            position,
+        } => format!(
+            "overlap {ratio:.3} of the radius with {partner} at ({:.6}, {:.6}, {:.6}) m exceeds the bound {limit} (time step too large for the impact speed, or stiffness too low)",
+            position.x, position.y, position.z
         ),
         HealthCause::LeftDomain { position } => format!(
             "left the domain at ({:.6}, {:.6}, {:.6}) m",

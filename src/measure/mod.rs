@@ -15,6 +15,8 @@
 //! - [`fit`]: least-squares lines, R², angle of a slope.
 //! - [`pile`]: he2019 pile profile angle (left, right, mean) and cai2024's
 //!   tan(angle) = 2H/D.
+//! - [`cone`]: the whole pile surface, seen from above, fitted as one cone
+//!   with a free axis (every surface particle at every azimuth).
 //! - [`ortho`]: yan2015 ortho-slice angles (xz and yz slabs, four angles).
 //! - [`drum`]: rotating-drum free-surface angle.
 //! - [`baffle`]: he2019 §3.6.1 baffle-lift slope.
@@ -22,6 +24,7 @@
 //! - [`series`]: mean and standard deviation of an angle trace.
 
 pub mod baffle;
+pub mod cone;
 pub mod drum;
 pub mod fit;
 pub mod flow;

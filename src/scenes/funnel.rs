@@ -92,6 +92,15 @@
 //! the flanks of the other views (`angle_views` says how many); a pile with
 //! fewer than [`MIN_VIEWS`] fitted views, too low or too narrow, fails the run
 //! with a "not measurable" error; [`simulate`] still gives such a run's counts.
+//!
+//! The same pile is also fitted as one cone over its whole surface
+//! ([`crate::measure::cone`]: the top particle of every column one mean
+//! diameter wide, 10 %–90 % of the height, a free axis): `angle_cone_deg`
+//! with its point count, R², residual and the axis's distance from the
+//! platform's centre. It uses every surface particle instead of the 5–7 of a
+//! flank, so it scatters less between packings (measured in
+//! `experiments/funnel_pile/README.md`); a study chooses it as its response
+//! (`response` of a target scene). The headline stays he2019's side view.
 
 pub mod fill;
 pub mod geometry;
@@ -108,6 +117,7 @@ use crate::dem::vec3::Vec3;
 use crate::log::{AngleSample, RunLog, Trace};
 use crate::manifest::scene::FunnelPileScene;
 use crate::manifest::Experiment;
+use crate::measure::cone::{cone_angle, ConeAngle, ConeSpec};
 pub use crate::measure::pile::VIEW_AZIMUTHS_DEG;
 use crate::measure::pile::{side_views, PileSpec, SideViews};
 use crate::measure::MeasureError;
@@ -179,6 +189,12 @@ pub fn pile_angles(p: &Particles, geom: &FunnelGeometry) -> Result<SideViews, Me
         &PileSpec::new(0.0, geom.d_mean_m),
         MIN_VIEWS,
     )
+}
+
+/// The pile's whole surface fitted as one cone (see the module docs).
+pub fn pile_cone(p: &Particles, geom: &FunnelGeometry) -> Result<ConeAngle, MeasureError> {
+    let (positions, radii) = pile_particles(p, geom);
+    cone_angle(&positions, &radii, &ConeSpec::new(0.0, geom.d_mean_m))
 }
 
 /// Removes fallen particles and records traces, angles and log frames.
@@ -266,6 +282,9 @@ pub fn run(
     } = simulate(exp, scene, log_file.as_mut())?;
     let angles = pile_angles(&world.particles, &geometry).map_err(FunnelError::from)?;
     put_angles(&mut result, &angles);
+    if let Ok(cone) = pile_cone(&world.particles, &geometry) {
+        put_cone(&mut result, &cone);
+    }
     if let Some(log) = log_file {
         log.finish()?;
     }
@@ -321,6 +340,20 @@ fn put_angles(result: &mut RunResult, a: &SideViews) {
         f64::from(u8::from(a.min_r2() < R2_FLOOR)),
     );
     result.headline_angle_deg = Some(a.mean_deg());
+}
+
+/// The cone fit's angle and diagnostics (absent when the surface could not
+/// be fitted).
+fn put_cone(result: &mut RunResult, c: &ConeAngle) {
+    let m = &mut result.measurements;
+    m.insert("angle_cone_deg".into(), c.angle_deg);
+    m.insert("angle_cone_points".into(), c.points as f64);
+    m.insert("angle_cone_r2".into(), c.r2);
+    m.insert("angle_cone_rms_m".into(), c.rms_m);
+    m.insert(
+        "angle_cone_axis_offset_m".into(),
+        c.axis_xy_m[0].hypot(c.axis_xy_m[1]),
+    );
 }
 
 /// Runs the protocol (fill, stand, discharge, settle) and returns the final

@@ -129,12 +129,20 @@ const PAIR: &[ResponseSpec] = &[
     ),
 ];
 
-const FUNNEL_PILE: &[ResponseSpec] = &[spec(
-    "angle_deg",
-    "deg",
-    "pile angle of repose on the platform: mean of the flank fits of the fitted side views \
-     (he2019 §2.2), the headline angle",
-)];
+const FUNNEL_PILE: &[ResponseSpec] = &[
+    spec(
+        "angle_deg",
+        "deg",
+        "pile angle of repose on the platform: mean of the flank fits of the fitted side views \
+         (he2019 §2.2), the headline angle",
+    ),
+    spec(
+        "angle_cone_deg",
+        "deg",
+        "pile angle of repose on the platform from its whole surface: one cone with a free \
+         axis fitted to the top particle of every column (10-90 % of the height)",
+    ),
+];
 
 const BAFFLE_LIFT: &[ResponseSpec] = &[spec(
     "angle_deg",
@@ -231,6 +239,7 @@ fn read(kind: &str, name: &str) -> Option<Read> {
         }
         ("pair", "pull_off_ratio") => Ratio("pull_off_force_n", "theory_pull_off_force_n"),
         ("funnel_pile", "angle_deg") => Key("angle_deg"),
+        ("funnel_pile", "angle_cone_deg") => Key("angle_cone_deg"),
         ("baffle_lift", "angle_deg") => Key("static_angle_deg"),
         ("drum", "dynamic_angle_deg" | "static_angle_deg") => Key(known(DRUM, name)?),
         ("hopper", "alpha_deg") => Key("upper_angle_deg"),

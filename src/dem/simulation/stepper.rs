@@ -384,6 +384,7 @@ impl<N: NormalModel, R: RollingModel, G: BodyForce, B: Boundary> Stepper<N, R, G
                     ratio,
                     limit: self.limits.max_overlap_ratio,
                     partner,
+                    position: world.particles.position[index],
                 },
             ));
         }
