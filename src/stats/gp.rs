@@ -166,7 +166,9 @@ pub enum GpError {
     #[error("x[0] has no coordinates; the input dimension must be at least 1")]
     NoCoordinates,
     /// A point's dimension differs from the first point's.
-    #[error("x[{point}] has {got} coordinates where {expected} (the dimension of x[0]) are needed")]
+    #[error(
+        "x[{point}] has {got} coordinates where {expected} (the dimension of x[0]) are needed"
+    )]
     DimensionMismatch {
         /// Index of the point.
         point: usize,
@@ -498,7 +500,10 @@ fn maximise(
                 if held[i] {
                     0.0
                 } else {
-                    (0..p).filter(|&j| !held[j]).map(|j| h[(i, j)] * grad[j]).sum()
+                    (0..p)
+                        .filter(|&j| !held[j])
+                        .map(|j| h[(i, j)] * grad[j])
+                        .sum()
                 }
             })
             .collect();
@@ -559,8 +564,7 @@ fn maximise(
             h -= (&s * hy.transpose() + &hy * s.transpose()) * rho;
             h += &s * s.transpose() * (rho * rho * yhy + rho);
         }
-        let converged = (trial_lml - lml).abs() <= 1e-13 * lml.abs().max(1.0)
-            && s.amax() <= 1e-10;
+        let converged = (trial_lml - lml).abs() <= 1e-13 * lml.abs().max(1.0) && s.amax() <= 1e-10;
         theta = trial;
         lml = trial_lml;
         grad = trial_grad;
@@ -811,4 +815,404 @@ pub fn expected_improvement_on_distance(mean: f64, sd: f64, target: f64, best: f
         - mu * (cp - 2.0 * c0 + cm)
         - sd * (2.0 * normal_pdf(z0) - normal_pdf(zp) - normal_pdf(zm));
     ei.max(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Asserts |actual − expected| ≤ tol · |expected| for each pair.
+    fn assert_close(what: &str, actual: &[f64], expected: &[f64], tol: f64) {
+        assert_eq!(actual.len(), expected.len(), "{what}: lengths");
+        for (i, (a, e)) in actual.iter().zip(expected).enumerate() {
+            assert!(
+                (a - e).abs() <= tol * e.abs(),
+                "{what}[{i}]: {a} vs reference {e}"
+            );
+        }
+    }
+
+    /// The 2-D data of tests 1 and 2 (y with an offset of about 30 deg).
+    fn data_2d() -> (Vec<Vec<f64>>, Vec<f64>) {
+        let x = [
+            [0.1, 0.2],
+            [0.4, 0.9],
+            [0.8, 0.3],
+            [0.55, 0.5],
+            [0.95, 0.85],
+            [0.25, 0.7],
+            [0.7, 0.05],
+            [0.05, 0.95],
+        ];
+        let y = vec![31.2, 34.5, 29.8, 32.1, 35.9, 33.0, 29.1, 34.2];
+        (x.iter().map(|p| p.to_vec()).collect(), y)
+    }
+
+    const TEST_POINTS_2D: [[f64; 2]; 3] = [[0.3, 0.4], [0.6, 0.75], [0.9, 0.1]];
+
+    /// σ_f² = 4, ℓ = (0.3, 0.7), σ_n² = 0.05, m = mean(y).
+    fn hyper_2d(y: &[f64]) -> GpHyper {
+        GpHyper {
+            signal_var: 4.0,
+            length_scales: vec![0.3, 0.7],
+            nugget_var: 0.05,
+            mean: y.iter().sum::<f64>() / y.len() as f64,
+        }
+    }
+
+    /// Predictions at [`TEST_POINTS_2D`] and L of `with_hyper`.
+    fn fixed_fit(noise_var: &[f64]) -> (Vec<f64>, Vec<f64>, f64) {
+        let (x, y) = data_2d();
+        let gp = GaussianProcess::with_hyper(&x, &y, noise_var, &hyper_2d(&y)).unwrap();
+        assert_eq!(gp.dimension(), 2);
+        assert_eq!(gp.hyper(), &hyper_2d(&y));
+        let predictions: Vec<GpPrediction> = TEST_POINTS_2D.iter().map(|p| gp.predict(p)).collect();
+        (
+            predictions.iter().map(|p| p.mean).collect(),
+            predictions.iter().map(|p| p.sd).collect(),
+            gp.log_marginal_likelihood(),
+        )
+    }
+
+    // References for tests 1 and 2 (scikit-learn 1.x, numpy; m = y.mean()):
+    //   k = C(4.0,'fixed')*Matern(length_scale=[0.3,0.7], nu=2.5,
+    //         length_scale_bounds='fixed') + WhiteKernel(0.05,'fixed')
+    //   g = GaussianProcessRegressor(kernel=k, alpha=nv, optimizer=None,
+    //         normalize_y=False).fit(X, y - m)
+    //   mean = g.predict(Xs) + m;  lml = g.log_marginal_likelihood_value_
+    // The latent sd comes from a second regressor without the WhiteKernel
+    // and with alpha = nv + 0.05 (its std has no white-noise term):
+    //   g2 = GaussianProcessRegressor(kernel=C(4.0,'fixed')*Matern(...),
+    //         alpha=nv + 0.05, optimizer=None, normalize_y=False).fit(X, y - m)
+    //   sd = g2.predict(Xs, return_std=True)[1]
+    // (it agrees with sqrt(std_white² − 0.05) to 1e-15, and g2's LML with
+    // g's).
+
+    #[test]
+    fn fixed_hyperparameters_match_sklearn() {
+        // nv = np.full(8, 0.02)
+        let (mean, sd, lml) = fixed_fit(&[0.02; 8]);
+        let mean_ref = [31.823876113640686, 33.484972048478646, 29.893000532717465];
+        let sd_ref = [0.7683011361393531, 0.7502971319078454, 0.9586537533413126];
+        let lml_ref = -17.54238554019156;
+        assert_close("mean", &mean, &mean_ref, 1e-9);
+        assert_close("sd", &sd, &sd_ref, 1e-9);
+        assert_close("lml", &[lml], &[lml_ref], 1e-9);
+    }
+
+    #[test]
+    fn per_point_noise_matches_sklearn() {
+        // nv = np.array([0.01,0.05,0.0,0.2,0.03,0.1,0.0,0.07])
+        let (mean, sd, lml) = fixed_fit(&[0.01, 0.05, 0.0, 0.2, 0.03, 0.1, 0.0, 0.07]);
+        let mean_ref = [31.86679409988607, 33.42415537720227, 29.87671239883978];
+        let sd_ref = [0.8051763724213261, 0.808046597396176, 0.9584181246431398];
+        let lml_ref = -17.61671225389749;
+        assert_close("mean", &mean, &mean_ref, 1e-9);
+        assert_close("sd", &sd, &sd_ref, 1e-9);
+        assert_close("lml", &[lml], &[lml_ref], 1e-9);
+    }
+
+    /// 20 points in the unit cube: np.random.default_rng(7), X3 =
+    /// round(uniform(size=(20,3)), 4), y3 = round(30 + 5 sin(3 x0) + 3 x1² −
+    /// 2 x0 x2 + normal(0, 0.3), 4); noise_var 0.03 each.
+    fn data_3d() -> (Vec<Vec<f64>>, Vec<f64>, Vec<f64>) {
+        let x = [
+            [0.6251, 0.8972, 0.7757],
+            [0.2252, 0.3002, 0.8736],
+            [0.0053, 0.8212, 0.7971],
+            [0.4679, 0.303, 0.2784],
+            [0.2549, 0.4451, 0.5045],
+            [0.5535, 0.9955, 0.7927],
+            [0.6222, 0.989, 0.2153],
+            [0.1602, 0.6125, 0.0439],
+            [0.0357, 0.5149, 0.4662],
+            [0.9172, 0.6292, 0.5141],
+            [0.4969, 0.2475, 0.0118],
+            [0.1924, 0.692, 0.2006],
+            [0.3695, 0.0037, 0.83],
+            [0.1545, 0.2676, 0.8803],
+            [0.5098, 0.8472, 0.6397],
+            [0.7418, 0.0915, 0.5411],
+            [0.5078, 0.8713, 0.3613],
+            [0.5982, 0.0593, 0.3876],
+            [0.323, 0.1502, 0.8163],
+            [0.3794, 0.9787, 0.59],
+        ];
+        let y = vec![
+            36.0124, 33.0647, 31.9552, 34.9834, 33.4426, 36.9016, 37.3904, 33.6926, 31.6401,
+            31.7485, 34.9176, 34.2819, 33.2641, 32.0393, 36.4675, 33.5659, 37.1118, 34.324,
+            33.5514, 36.8902,
+        ];
+        (x.iter().map(|p| p.to_vec()).collect(), y, vec![0.03; 20])
+    }
+
+    #[test]
+    fn optimised_fit_matches_sklearn() {
+        // v = np.var(y3); m = y3.mean()
+        // k = C(v, (1e-3*v, 1e2*v)) * Matern(length_scale=[0.5]*3,
+        //       length_scale_bounds=(0.05, 20), nu=2.5)
+        //     + WhiteKernel(0.1*v, (1e-6*v, v))
+        // g = GaussianProcessRegressor(kernel=k, alpha=np.full(20, 0.03),
+        //       n_restarts_optimizer=10, random_state=0,
+        //       normalize_y=False).fit(X3, y3 - m)
+        // g.kernel_ = 6.49**2 * Matern(length_scale=[0.924, 2.6, 6.65])
+        //             + WhiteKernel(noise_level=3.42e-06) (the nugget's lower bound)
+        // g.log_marginal_likelihood_value_ = -18.605574757205808
+        // g.predict(X3s) + m, X3s = [[0.2,0.5,0.5],[0.7,0.3,0.8],[0.5,0.9,0.1]]:
+        //   [33.36218774935527, 33.87237679864326, 37.51957726966613]
+        // range of y3 = 5.750299999999999
+        let (x, y, noise) = data_3d();
+        let settings = GpSettings {
+            restarts: 10,
+            ..GpSettings::default()
+        };
+        let gp = GaussianProcess::fit(&x, &y, &noise, &settings).unwrap();
+        let lml_ref = -18.605574757205808;
+        let lml = gp.log_marginal_likelihood();
+        println!("lml {lml} (sklearn {lml_ref}), hyper {:?}", gp.hyper());
+        assert!(lml >= lml_ref - 1e-3, "lml {lml} vs sklearn {lml_ref}");
+        let points = [[0.2, 0.5, 0.5], [0.7, 0.3, 0.8], [0.5, 0.9, 0.1]];
+        let means_ref = [33.36218774935527, 33.87237679864326, 37.51957726966613];
+        for (p, m_ref) in points.iter().zip(means_ref) {
+            let m = gp.predict(p).mean;
+            println!("mean at {p:?}: {m} (sklearn {m_ref})");
+            assert!(
+                (m - m_ref).abs() <= 0.01 * 5.750299999999999,
+                "{m} vs {m_ref}"
+            );
+        }
+    }
+
+    #[test]
+    fn analytic_gradient_matches_finite_differences() {
+        let (x, y, _) = data_3d();
+        let noise: Vec<f64> = (0..20).map(|i| 0.01 * (i % 4) as f64).collect();
+        let data = Data::new(&x, &y, &noise).unwrap();
+        for fit_nugget in [true, false] {
+            let bounds = theta_bounds(3, fit_nugget, data.variance());
+            let mut rng = ChaCha8Rng::seed_from_u64(11);
+            let theta: Vec<f64> = bounds
+                .iter()
+                .map(|(lo, hi)| lo + (hi - lo) * rng.random::<f64>())
+                .collect();
+            let (_, grad) = evaluate(&data, &theta, fit_nugget).unwrap();
+            let h = 1e-5;
+            for j in 0..theta.len() {
+                let shifted = |delta: f64| {
+                    let mut t = theta.clone();
+                    t[j] += delta;
+                    evaluate(&data, &t, fit_nugget).unwrap().0
+                };
+                let fd = (shifted(h) - shifted(-h)) / (2.0 * h);
+                assert!(
+                    (grad[j] - fd).abs() <= 1e-5 * fd.abs().max(1e-3),
+                    "fit_nugget {fit_nugget}, θ{j} = {}: analytic {} vs finite difference {fd}",
+                    theta[j],
+                    grad[j]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn band_probability_and_expected_improvement_match_scipy() {
+        // scipy.stats.norm.cdf(hi, mu, s) - norm.cdf(lo, mu, s)
+        let bands = [
+            ((30.0, 2.0, 28.0, 33.0), 0.7745375447996848),
+            ((35.0, 1.5, 30.0, 34.0), 0.2520634772137261),
+            ((0.0, 1.0, -0.5, 0.25), 0.2901687869569368),
+            // far tail, where cdf differences cancel: norm.sf(8) - norm.sf(9)
+            ((0.0, 1.0, 8.0, 9.0), 6.219831985865787e-16),
+        ];
+        for ((mu, s, lo, hi), p_ref) in bands {
+            let p = probability_in_band(mu, s, lo, hi);
+            assert_close("band", &[p], &[p_ref], 1e-9);
+        }
+        assert_eq!(probability_in_band(30.0, 0.0, 29.0, 31.0), 1.0);
+        assert_eq!(probability_in_band(32.0, 0.0, 29.0, 31.0), 0.0);
+        // scipy.integrate.quad(lambda y: max(0, b - abs(y - t)) * norm.pdf(y, mu, s),
+        //     t - b, t + b, points=[t], epsabs=1e-14, epsrel=1e-12)[0]
+        let cases = [
+            ((31.0, 1.0, 32.0, 1.5), 0.5331697534050615),
+            ((35.0, 2.0, 32.0, 0.5), 0.016294150190150365),
+            ((32.2, 0.3, 32.0, 0.4), 0.1572113166377256),
+        ];
+        for ((mu, s, t, b), ei_ref) in cases {
+            let ei = expected_improvement_on_distance(mu, s, t, b);
+            assert_close("ei", &[ei], &[ei_ref], 1e-9);
+        }
+        assert_eq!(expected_improvement_on_distance(32.5, 0.0, 32.0, 1.5), 1.0);
+        assert_eq!(expected_improvement_on_distance(32.5, 1.0, 32.0, 0.0), 0.0);
+    }
+
+    #[test]
+    fn observation_sd_adds_the_nugget_and_new_noise() {
+        let (x, y) = data_2d();
+        let gp = GaussianProcess::with_hyper(&x, &y, &[0.0; 8], &hyper_2d(&y)).unwrap();
+        let p = GpPrediction {
+            mean: 30.0,
+            sd: 0.3,
+        };
+        let expected = (0.09_f64 + 0.05 + 0.1).sqrt();
+        assert!((gp.observation_sd(&p, 0.1) - expected).abs() <= 1e-15);
+    }
+
+    #[test]
+    fn fits_are_bit_identical() {
+        let (x, y, noise) = data_3d();
+        let fits: Vec<GaussianProcess> = (0..2)
+            .map(|_| GaussianProcess::fit(&x, &y, &noise, &GpSettings::default()).unwrap())
+            .collect();
+        let bits = |gp: &GaussianProcess| {
+            let h = gp.hyper();
+            let p = gp.predict(&[0.3, 0.6, 0.2]);
+            let mut v = vec![
+                h.signal_var,
+                h.nugget_var,
+                h.mean,
+                gp.log_marginal_likelihood(),
+            ];
+            v.extend(&h.length_scales);
+            v.extend([p.mean, p.sd]);
+            v.iter().map(|f| f.to_bits()).collect::<Vec<u64>>()
+        };
+        assert_eq!(bits(&fits[0]), bits(&fits[1]));
+        let fixed = GpSettings {
+            fit_nugget: false,
+            ..GpSettings::default()
+        };
+        let gp = GaussianProcess::fit(&x, &y, &noise, &fixed).unwrap();
+        assert_eq!(gp.hyper().nugget_var, 0.0);
+    }
+
+    #[test]
+    fn bad_inputs_are_refused_naming_them() {
+        let (x, y) = data_2d();
+        let nv = [0.0; 8];
+        let s = GpSettings::default();
+        let message = |r: Result<GaussianProcess, GpError>| r.unwrap_err().to_string();
+        assert_eq!(
+            message(GaussianProcess::fit(&x[..1], &y[..1], &nv[..1], &s)),
+            "1 points given; a Gaussian process needs at least 2"
+        );
+        assert_eq!(
+            message(GaussianProcess::fit(&x, &y[..7], &nv, &s)),
+            "lengths differ: y has 7 values where 8 are needed"
+        );
+        assert_eq!(
+            message(GaussianProcess::fit(&x, &y, &nv[..3], &s)),
+            "lengths differ: noise_var has 3 values where 8 are needed"
+        );
+        let mut bad_x = x.clone();
+        bad_x[3] = vec![0.5];
+        assert_eq!(
+            message(GaussianProcess::fit(&bad_x, &y, &nv, &s)),
+            "x[3] has 1 coordinates where 2 (the dimension of x[0]) are needed"
+        );
+        let empty = vec![vec![]; 8];
+        assert_eq!(
+            message(GaussianProcess::fit(&empty, &y, &nv, &s)),
+            "x[0] has no coordinates; the input dimension must be at least 1"
+        );
+        let mut bad_x = x.clone();
+        bad_x[2][1] = 1.01;
+        assert_eq!(
+            message(GaussianProcess::fit(&bad_x, &y, &nv, &s)),
+            "x[2][1] = 1.01 lies outside the unit interval [0, 1]"
+        );
+        let mut edge_x = x.clone();
+        edge_x[2][1] = 1.0 + 1e-10;
+        assert!(GaussianProcess::with_hyper(&edge_x, &y, &nv, &hyper_2d(&y)).is_ok());
+        let mut bad_x = x.clone();
+        bad_x[1][0] = f64::NAN;
+        assert_eq!(
+            message(GaussianProcess::fit(&bad_x, &y, &nv, &s)),
+            "non-finite value NaN in x[1][0]"
+        );
+        let mut bad_y = y.clone();
+        bad_y[5] = f64::INFINITY;
+        assert_eq!(
+            message(GaussianProcess::fit(&x, &bad_y, &nv, &s)),
+            "non-finite value inf in y[5]"
+        );
+        let mut bad_nv = nv;
+        bad_nv[4] = -0.1;
+        assert_eq!(
+            message(GaussianProcess::fit(&x, &y, &bad_nv, &s)),
+            "noise_var[4] = -0.1 is invalid: it must be >= 0"
+        );
+        let with = |h: GpHyper| message(GaussianProcess::with_hyper(&x, &y, &nv, &h));
+        let h = hyper_2d(&y);
+        assert_eq!(
+            with(GpHyper {
+                length_scales: vec![0.3],
+                ..h.clone()
+            }),
+            "lengths differ: length_scales has 1 values where 2 are needed"
+        );
+        assert_eq!(
+            with(GpHyper {
+                length_scales: vec![0.3, 0.0],
+                ..h.clone()
+            }),
+            "length_scales[1] = 0 is invalid: it must be > 0"
+        );
+        assert_eq!(
+            with(GpHyper {
+                signal_var: -1.0,
+                ..h.clone()
+            }),
+            "signal_var = -1 is invalid: it must be > 0"
+        );
+        assert_eq!(
+            with(GpHyper {
+                nugget_var: -0.5,
+                ..h.clone()
+            }),
+            "nugget_var = -0.5 is invalid: it must be >= 0"
+        );
+        assert_eq!(
+            with(GpHyper {
+                mean: f64::NAN,
+                ..h.clone()
+            }),
+            "non-finite value NaN in mean"
+        );
+        // Two identical points without noise or nugget: the jitter keeps K
+        // positive definite.
+        let twins = vec![vec![0.5, 0.5], vec![0.5, 0.5]];
+        let twin_hyper = GpHyper {
+            signal_var: 1.0,
+            length_scales: vec![0.5, 0.5],
+            nugget_var: 0.0,
+            mean: 0.0,
+        };
+        assert!(GaussianProcess::with_hyper(&twins, &[1.0, 2.0], &[0.0, 0.0], &twin_hyper).is_ok());
+        // A signal variance whose products overflow: the factorisation fails.
+        let huge = GpHyper {
+            signal_var: f64::MAX,
+            ..twin_hyper
+        };
+        assert_eq!(
+            message(GaussianProcess::with_hyper(
+                &twins,
+                &[1.0, 2.0],
+                &[0.0, 0.0],
+                &huge
+            )),
+            format!(
+                "the covariance matrix is not positive definite even with the jitter \
+                 (signal variance {}, length scales [0.5, 0.5], diagonal addition {})",
+                f64::MAX,
+                1e-10 * f64::MAX
+            )
+        );
+    }
+    #[test]
+    #[should_panic(expected = "predict: point has 3 coordinates, the process 2")]
+    fn predict_refuses_a_point_of_the_wrong_dimension() {
+        let (x, y) = data_2d();
+        let gp = GaussianProcess::with_hyper(&x, &y, &[0.0; 8], &hyper_2d(&y)).unwrap();
+        gp.predict(&[0.1, 0.2, 0.3]);
+    }
 }
