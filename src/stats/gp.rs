@@ -9,11 +9,11 @@
 //! variances `noise_var[i]` ≥ 0 (deg²; the replicate variance of the mean,
 //! s²/R, or all zero). The output is modelled as
 //!
-//! y(x) = m + f(x) + εᵢ,  f ~ GP(0, k),  εᵢ ~ N(0, noise_var[i] + σ_n²),
+//! y(x) = m + f(x) + εᵢ,  f ~ GP(0, k),  εᵢ ~ N(0, `noise_var[i]` + σ_n²),
 //!
 //! - **Mean.** m is the arithmetic mean of y (a constant, not fitted by
 //!   likelihood and not weighted by the noise); the process is fitted to
-//!   y − m.
+//!   y − m. [`GaussianProcess::with_hyper`] uses the m it is given.
 //! - **Kernel.** σ_f² times the Matérn 5/2 correlation with one length scale
 //!   per input (automatic relevance determination):
 //!   k(x, x') = σ_f² (1 + √5 r + 5r²/3) exp(−√5 r),
@@ -21,10 +21,10 @@
 //!   Matérn 5/2 is the standard kernel for computer experiments that are
 //!   deterministic up to noise (a DEM angle of repose varies smoothly with
 //!   the parameters, plus packing noise): its sample paths are twice
-//!   mean-square differentiable (once continuously differentiable paths),
-//!   smooth enough for a physical response without the squared
-//!   exponential's infinite smoothness, which over-smooths kinks and makes
-//!   K badly conditioned; Matérn 3/2 is rougher than such responses.
+//!   differentiable (Matérn ν: ⌈ν⌉ − 1 times), smooth enough for a physical
+//!   response without the squared exponential's infinite smoothness, which
+//!   over-smooths kinks and makes K badly conditioned; Matérn 3/2
+//!   (once-differentiable paths) is rougher than such responses.
 //! - **Noise.** The covariance of the observations is
 //!   K = k(X, X) + diag(noise_var) + σ_n² I.
 //!   `noise_var` is the *known* part: the variance of each point's mean over
@@ -44,8 +44,11 @@
 //! analytic gradient ∂L/∂θⱼ = ½ tr((ααᵀ − K⁻¹) ∂K/∂θⱼ), α = K⁻¹y, by a
 //! projected BFGS on θ within the box (variables on a bound with the gradient
 //! pushing outwards are held; trial points are clamped into the box; Armijo
-//! backtracking). The bounds, with v = var(y) (population variance, floored
-//! at 10⁻¹²):
+//! backtracking; inverse-Hessian scaled after the first step, reset to the
+//! identity when its direction is not ascent). A run stops when the largest
+//! free component of ∇L is ≤ 10⁻⁷, when the line search fails, when a step
+//! changes neither θ (≤ 10⁻¹⁰) nor L, or after 200 iterations. The bounds,
+//! with v = var(y) (population variance, floored at 10⁻¹²):
 //!
 //! - ℓₖ ∈ [0.05, 20] (in unit-cube units);
 //! - σ_f² ∈ [10⁻³ v, 10² v];
@@ -172,7 +175,7 @@ pub enum GpError {
     DimensionMismatch {
         /// Index of the point.
         point: usize,
-        /// The dimension of x[0].
+        /// The dimension of `x[0]`.
         expected: usize,
         /// The dimension of this point.
         got: usize,
@@ -774,8 +777,9 @@ fn normal_pdf(z: f64) -> f64 {
 }
 
 /// P(lo ≤ Y ≤ hi) for Y ~ N(mean, sd²) (all in the same unit, e.g. deg);
-/// sd = 0 gives 1 when lo ≤ mean ≤ hi and 0 otherwise. Both tails are
-/// computed from the nearer side, so far-tail bands keep their precision.
+/// sd = 0 gives 1 when lo ≤ mean ≤ hi and 0 otherwise; hi < lo gives 0.
+/// Bands above the mean are computed from the upper tail, so far-tail bands
+/// keep their precision.
 pub fn probability_in_band(mean: f64, sd: f64, lo: f64, hi: f64) -> f64 {
     if hi < lo {
         return 0.0;
