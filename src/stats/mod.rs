@@ -24,12 +24,18 @@
 //!   from its log-linear least-squares fit) and flow-rate decay (Eq. 20).
 //! - [`pca`]: principal component analysis of the auto-scaled data matrix
 //!   (yan2015 Eq. 13–16): eigenvalues, explained fractions and loadings.
+//! - [`gp`]: Gaussian-process regression with a Matérn 5/2 ARD kernel, known
+//!   per-point noise variances and a fitted nugget (he2019's noise-aware
+//!   surrogate), hyperparameters by multi-start maximum likelihood; the
+//!   probability of a band and the expected improvement on the distance to
+//!   a target.
 //!
 //! The fits and analyses of variance check their inputs before any
 //! arithmetic: a non-finite value, slices of different lengths, too few
 //! observations for the parameters and an aliased design are each a
 //! [`StatsError`] rather than a NaN in the output.
 
+pub mod gp;
 pub mod metrics;
 pub mod nlls;
 pub mod oneway;
