@@ -24,7 +24,9 @@ pub use experiment::{
     Seeds, SizeDistribution, TimeStep, WallMaterial, WallStiffness, PAIR_PARAM_FIELDS,
 };
 pub use scene::{PairMode, PairScene, Partner, Scene};
-pub use study::{Design, DesignKind, ParameterRange, Slot, Study, TargetScene};
+pub use study::{
+    Adaptive, Design, DesignKind, NoiseAware, ParameterRange, Slot, Study, TargetScene,
+};
 pub use validate::{validate_experiment, validate_study, FieldError, ValidationErrors};
 
 /// Version of the manifest format this build reads and writes.

@@ -46,10 +46,16 @@ impl Scene {
                 Partner::Wall { material } => vec![("partner.material", material.as_str())],
                 Partner::Particle { .. } => Vec::new(),
             },
-            Scene::FunnelPile(s) => vec![
-                ("funnel_material", s.funnel_material.as_str()),
-                ("platform_material", s.platform_material.as_str()),
-            ],
+            Scene::FunnelPile(s) => {
+                let mut walls = vec![
+                    ("funnel_material", s.funnel_material.as_str()),
+                    ("platform_material", s.platform_material.as_str()),
+                ];
+                if let Some(brush) = &s.brush_material {
+                    walls.push(("brush_material", brush.as_str()));
+                }
+                walls
+            }
             Scene::BaffleLift(s) => vec![
                 ("box_material", s.box_material.as_str()),
                 ("floor_material", s.floor_material.as_str()),
@@ -166,6 +172,15 @@ pub struct FunnelPileScene {
     /// Only with `brush_rpm`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub brush_width_m: Option<f64>,
+    /// Wall material of the brush blades (absent: `funnel_material`). A blade
+    /// is kinematic: with the funnel's friction it can wedge a non-spherical
+    /// grain against the wall and crush it (measured with paired spheres and
+    /// he2019's wall friction 1.5: overlap bound reached within 0.07 s of
+    /// brushing at 2 of 4 packing seeds, none with a frictionless blade), so
+    /// a study can give the blades their own material — a stand-in for
+    /// bristles that bend instead of gripping. Only with `brush_rpm`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub brush_material: Option<String>,
     /// Solid volume fraction the factory fills the funnel to, below the random close
     /// packing limit 0.64 (he2019's "filling rate 0.56").
     pub fill_fraction: f64,
@@ -188,7 +203,7 @@ pub struct FunnelPileScene {
     /// that fell off the platform, s, > 0 (absent: 0.02).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sample_interval_s: Option<f64>,
-    /// Funnel (and brush) wall material name.
+    /// Funnel (and, without `brush_material`, brush) wall material name.
     pub funnel_material: String,
     /// Platform wall material name.
     pub platform_material: String,

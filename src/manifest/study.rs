@@ -23,7 +23,10 @@ use super::{PHYSICS_VERSION, SCHEMA_VERSION};
 /// Contact parameters are addressed as `particle_particle.<field>` or
 /// `particle_wall.<wall>.<field>`, where `<field>` is one of
 /// [`super::PAIR_PARAM_FIELDS`] and `<wall>` a wall material name or `*` (every wall
-/// material: one parameter drives all walls, as he2019's single e_pw / mu_pw do).
+/// material: one parameter drives all walls, as he2019's single e_pw / mu_pw do —
+/// except a wall material whose same field is named explicitly elsewhere in
+/// `parameters` or `fixed`, which that address sets instead: e.g. a funnel's
+/// brush with its own friction beside one calibrated μ_pw for every other wall).
 /// Every parameter slot is either calibrated or fixed, exactly once.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -59,6 +62,48 @@ pub struct Study {
     /// Coarse graining of the generated experiments (absent: real particles).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coarse_graining: Option<CoarseGraining>,
+    /// Noise-aware calibration (absent: he2019's one-shot method, one packing
+    /// seed per sample): replicates, the noise floor, the Gaussian-process
+    /// search and the multi-seed verification (see [`NoiseAware`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_aware: Option<NoiseAware>,
+}
+
+/// How a noise-aware calibration treats the packing noise of its runs.
+///
+/// Replicate `r` (0-based) of any point — a design sample, the noise floor's
+/// centre, an adaptive point, a verified candidate — runs with packing seed
+/// `packing_seed + r`: replicates differ in packing only, and every point
+/// shares the same packings (common random numbers, so differences between
+/// points are not blurred by packing noise more than they must be).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseAware {
+    /// Packing seeds per design point (≥ 1); the response is their mean.
+    pub replicates: u32,
+    /// Packing seeds of the noise floor at the centre of the ranges (≥ 3;
+    /// 8 or more recommended).
+    pub noise_seeds: u32,
+    /// Smallest probability, under the Gaussian-process surrogate, that a
+    /// resampled point's angle lies inside the target band for the search to
+    /// keep it, in (0, 1).
+    pub min_probability: f64,
+    /// Packing seeds of every verification run of a candidate (≥ 5).
+    pub verification_seeds: u32,
+    /// Active learning after the initial design (`repose calibrate
+    /// --adaptive`).
+    pub adaptive: Adaptive,
+}
+
+/// Batches of points chosen by the surrogate until a point's replicate mean
+/// is inside the target band or the budget is spent.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Adaptive {
+    /// Points per batch (≥ 1); each runs `replicates` seeds.
+    pub batch: u32,
+    /// Most DEM runs the adaptive stage may add (≥ 1).
+    pub max_runs: u32,
 }
 
 /// A closed range `[min, max]` of a calibrated parameter (min < max).
@@ -84,6 +129,20 @@ pub struct TargetScene {
     /// Accepted relative deviation |sim − target| / target, in (0, 1)
     /// (he2019 Eq. 8–10 uses 0.05).
     pub tolerance_fraction: f64,
+    /// The scene's named response compared with the target (`repose
+    /// responses KIND`; absent: the scene's headline angle).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub response: Option<String>,
+}
+
+impl TargetScene {
+    /// The target band [target (1 − tol), target (1 + tol)], degrees.
+    pub fn band_deg(&self) -> (f64, f64) {
+        (
+            self.target_angle_deg * (1.0 - self.tolerance_fraction),
+            self.target_angle_deg * (1.0 + self.tolerance_fraction),
+        )
+    }
 }
 
 /// The sampling plan over the calibrated parameters.
@@ -145,6 +204,10 @@ impl Study {
                 self.material
                     .walls
                     .keys()
+                    .filter(|w| {
+                        let named = format!("particle_wall.{w}.{field}");
+                        !self.parameters.contains_key(&named) && !self.fixed.contains_key(&named)
+                    })
                     .map(|w| Some(w.clone()))
                     .collect(),
                 field,
@@ -164,6 +227,11 @@ impl Study {
         Ok(walls.into_iter().map(|wall| Slot { wall, field }).collect())
     }
 
+    /// Packing seeds per design point (1 without `noise_aware`).
+    pub fn replicates(&self) -> u32 {
+        self.noise_aware.map_or(1, |n| n.replicates)
+    }
+
     /// The experiment that runs `scene` with the calibrated parameters at `point`
     /// (address → value, one entry per entry of `parameters`) and the fixed ones;
     /// material, contact model, profile, time step and seeds come from the study
@@ -175,6 +243,18 @@ impl Study {
         scene: &Scene,
         point: &BTreeMap<String, f64>,
         sample_index: u64,
+    ) -> Result<Experiment, ValidationErrors> {
+        self.replicate_experiment(scene, point, sample_index, 0)
+    }
+
+    /// [`Study::experiment`] with packing seed `packing_seed + replicate`
+    /// (see [`NoiseAware`]).
+    pub fn replicate_experiment(
+        &self,
+        scene: &Scene,
+        point: &BTreeMap<String, f64>,
+        sample_index: u64,
+        replicate: u32,
     ) -> Result<Experiment, ValidationErrors> {
         let mut errors = Vec::new();
         for address in self.parameters.keys().filter(|a| !point.contains_key(*a)) {
@@ -229,7 +309,7 @@ impl Study {
             seeds: Seeds {
                 design_seed: self.design.seed,
                 sample_index,
-                packing_seed: self.packing_seed,
+                packing_seed: self.packing_seed + u64::from(replicate),
             },
             time_step: self.time_step,
             coarse_graining: self.coarse_graining,

@@ -88,7 +88,7 @@ pub fn cone_angle(
     check_positive("cell_m", spec.cell_m)?;
     check_positive("min_height_diameters", spec.min_height_diameters)?;
     let (b0, b1) = spec.band;
-    if !(0.0..1.0).contains(&b0) || !(b0 < b1 && b1 <= 1.0) {
+    if !((0.0..1.0).contains(&b0) && b0 < b1 && b1 <= 1.0) {
         return Err(MeasureError::BadParameter {
             name: "band",
             value: b1,
@@ -270,7 +270,7 @@ fn fit_cone(points: &[[f64; 3]], start: [f64; 2]) -> Result<ConeFit, MeasureErro
         |b, q| (b.0.min(q[0]), b.1.max(q[0]), b.2.min(q[1]), b.3.max(q[1])),
     );
     let inside = p[2] >= xmin && p[2] <= xmax && p[3] >= ymin && p[3] <= ymax;
-    if !(p[1] > 0.0) || !inside {
+    if p[1].is_nan() || p[1] <= 0.0 || !inside {
         return Err(MeasureError::Series(format!(
             "the pile surface is not a cone (fitted slope {:.3}, axis ({:.4}, {:.4}) m)",
             p[1], p[2], p[3]

@@ -368,6 +368,10 @@ pub fn simulate(
     let walls = [
         scene.funnel_material.as_str(),
         scene.platform_material.as_str(),
+        scene
+            .brush_material
+            .as_deref()
+            .unwrap_or(&scene.funnel_material),
     ];
     let lab = Lab::new(exp, &walls, |e| FunnelError::from(e).into())?;
     let (rho, d_mean, sizes) = (lab.density_kg_m3, lab.d_mean_m, &lab.sizes);

@@ -137,6 +137,9 @@ fn check_funnel(c: &mut Checker, path: &str, s: &FunnelPileScene) {
         brush_only(c, path, "brush_gap_m", number(g), s);
         c.non_negative(&join(path, "brush_gap_m"), g);
     }
+    if let Some(m) = &s.brush_material {
+        brush_only(c, path, "brush_material", m.clone(), s);
+    }
     if let Some(w) = s.brush_width_m {
         brush_only(c, path, "brush_width_m", number(w), s);
         c.positive(&join(path, "brush_width_m"), w);

@@ -9,7 +9,7 @@ use super::experiment::{
 };
 use super::scene::check_scene;
 use crate::manifest::experiment::PAIR_PARAM_FIELDS;
-use crate::manifest::study::{DesignKind, Slot, Study, TargetScene};
+use crate::manifest::study::{DesignKind, NoiseAware, Slot, Study, TargetScene};
 use crate::manifest::Scene;
 
 /// Checks every field of a study.
@@ -29,6 +29,51 @@ pub(crate) fn check_study(c: &mut Checker, s: &Study) {
     if let Some(cg) = &s.coarse_graining {
         check_coarse_graining(c, "coarse_graining", cg);
     }
+    if let Some(n) = &s.noise_aware {
+        check_noise_aware(c, n);
+    }
+}
+
+fn check_noise_aware(c: &mut Checker, n: &NoiseAware) {
+    let mut at_least = |field: &str, v: u32, min: u32, why: &str| {
+        if v < min {
+            c.fail(
+                &join("noise_aware", field),
+                v.to_string(),
+                format!("must be at least {min} ({why})"),
+            );
+        }
+    };
+    at_least(
+        "replicates",
+        n.replicates,
+        1,
+        "packing seeds per design point",
+    );
+    at_least(
+        "noise_seeds",
+        n.noise_seeds,
+        3,
+        "a standard deviation from fewer seeds is no noise floor; 8 or more are recommended",
+    );
+    at_least(
+        "verification_seeds",
+        n.verification_seeds,
+        5,
+        "a verified mean needs its confidence interval",
+    );
+    at_least("adaptive.batch", n.adaptive.batch, 1, "points per batch");
+    at_least(
+        "adaptive.max_runs",
+        n.adaptive.max_runs,
+        1,
+        "the run budget",
+    );
+    c.within(
+        "noise_aware.min_probability",
+        n.min_probability,
+        Interval::open(0.0, 1.0),
+    );
 }
 
 fn check_parameters(c: &mut Checker, s: &Study) {

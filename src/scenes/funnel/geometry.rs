@@ -19,10 +19,13 @@ pub const REMOVAL_DEPTH_DIAMETERS: f64 = 2.0;
 /// mean diameters.
 const MARGIN_DIAMETERS: f64 = 2.0;
 
-/// Wall-material index of the funnel, its tube and the brush.
+/// Wall-material index of the funnel and its tube.
 pub const FUNNEL_MATERIAL: usize = 0;
 /// Wall-material index of the platform.
 pub const PLATFORM_MATERIAL: usize = 1;
+/// Wall-material index of the brush blades (`brush_material`, by default the
+/// funnel's material again).
+pub const BRUSH_MATERIAL: usize = 2;
 
 /// Everything the scene derives from the manifest's dimensions, m.
 #[derive(Clone, Debug, PartialEq)]
@@ -258,7 +261,7 @@ fn blade(
         up_slope,
         0.5 * (s1 - s0),
         0.5 * width,
-        FUNNEL_MATERIAL,
+        BRUSH_MATERIAL,
     )
 }
 
