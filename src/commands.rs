@@ -11,13 +11,21 @@ use crate::audit::{self, AuditError};
 use crate::bench::{self, BenchError, BenchOptions};
 use crate::calibrate::batch::batch as run_batch;
 use crate::calibrate::curve;
+use crate::calibrate::gp_search::gp_search;
+use crate::calibrate::gp_train::train_gp;
+use crate::calibrate::noise::noise as run_noise;
+use crate::calibrate::pipeline::{
+    calibrate_noise_aware as calibrate_noise_aware_stages, NoiseAwareOptions,
+};
 use crate::calibrate::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
+use crate::calibrate::search::load_model;
 use crate::calibrate::search::{search as run_search, SearchSettings};
 use crate::calibrate::surrogate::TrainSettings;
 use crate::calibrate::train::DEFAULT_TRAIN_FRACTION;
 use crate::calibrate::train::{train_study, train_table, TableSpec, TrainOptions, TrainOutcome};
 use crate::calibrate::verify::verify as run_verify;
-use crate::calibrate::{CalibrateError, StudyDir};
+use crate::calibrate::verify_seeds::verify_seeds;
+use crate::calibrate::{CalibrateError, Stage, StudyDir};
 use crate::doe::diagnostics::Diagnostics;
 use crate::exec::LocalPool;
 use crate::log::{inspect, InspectError};
@@ -797,6 +805,101 @@ pub fn sample_diagnose(
     Ok(())
 }
 
+/// Switches of `repose calibrate`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct CalibrateFlags {
+    /// Adaptive batches after the initial design (noise-aware studies).
+    pub adaptive: bool,
+    /// Print the outcome as JSON on stdout (stage reports go to stderr).
+    pub json: bool,
+}
+
+/// `repose calibrate` on a noise-aware study
+/// ([`crate::calibrate::pipeline`]): stage reports on `out` (stderr with
+/// `--json`, which then prints the outcome as JSON on `out`).
+fn calibrate_noise_aware(
+    store_root: &Path,
+    path: &Path,
+    jobs: usize,
+    candidates: usize,
+    flags: CalibrateFlags,
+    limits: &Limits,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_study(store_root, path)?;
+    let store = open_store(store_root)?;
+    let pool = study_pool(jobs, limits);
+    set_quiet(true);
+    let options = NoiseAwareOptions {
+        candidates,
+        adaptive: flags.adaptive,
+        sample: SampleSettings::default(),
+        train: TrainOptions {
+            settings: TrainSettings::with_seed(study.design.seed),
+            train_fraction: DEFAULT_TRAIN_FRACTION,
+        },
+        search: SearchSettings::with_seed(study.design.seed),
+    };
+    let mut lines: Vec<String> = Vec::new();
+    let mut err = io::stderr();
+    let outcome = {
+        let mut log = |line: &str| {
+            if flags.json {
+                let _ = writeln!(err, "{line}");
+            } else {
+                lines.push(line.to_string());
+            }
+        };
+        let result = calibrate_noise_aware_stages(
+            &dir, &study, &store, &pool, &options, run_logged, &mut log,
+        );
+        result?
+    };
+    for l in &lines {
+        writeln!(out, "{l}")?;
+    }
+    if flags.json {
+        writeln!(
+            out,
+            "{}",
+            serde_json::to_string_pretty(&outcome).expect("outcome serialises")
+        )?;
+    } else {
+        writeln!(
+            out,
+            "\n{}: {} noise + {} design + {} adaptive + {} verification runs; calibrated: {}, verified in every scene: {}\n  outcome: {}",
+            outcome.study,
+            outcome.runs.noise,
+            outcome.runs.design,
+            outcome.runs.adaptive,
+            outcome.runs.verification,
+            if outcome.calibrated { "yes" } else { "no" },
+            if outcome.verified { "yes" } else { "no" },
+            dir.path().join("outcome.json").display()
+        )?;
+    }
+    Ok(())
+}
+
+/// `repose noise STUDY`: the noise floor of a noise-aware study's
+/// calibration response ([`crate::calibrate::noise`]).
+pub fn noise(
+    store_root: &Path,
+    study_path: &Path,
+    jobs: usize,
+    limits: &Limits,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_study(store_root, study_path)?;
+    let store = open_store(store_root)?;
+    let pool = study_pool(jobs, limits);
+    set_quiet(true);
+    let outcome = run_noise(&dir, &study, &store, &pool, run_logged)?;
+    write!(out, "{}", outcome.markdown)?;
+    writeln!(out, "  outputs: {}", dir.stage(Stage::Noise).display())?;
+    Ok(())
+}
+
 /// `repose batch STUDY`: runs every sampled experiment not yet complete
 /// (`jobs` at a time, each single-threaded) and writes the angle table. The
 /// progress bar replaces the runs' own progress lines, which are silenced.
@@ -946,7 +1049,20 @@ pub fn train(
     let mut options = *options;
     options.settings.seed = seed.unwrap_or(study.design.seed);
     let outcome = train_study(&dir, &study, &options)?;
-    write_sweep(&outcome, out)
+    write_sweep(&outcome, out)?;
+    if study.noise_aware.is_some() {
+        let model = load_model(&dir.stage(Stage::Train).join("model.json"))?;
+        let net = |x: &[f64]| model.predict(x);
+        let gp = train_gp(
+            &dir,
+            &study,
+            options.train_fraction,
+            options.settings.seed,
+            Some(&net),
+        )?;
+        write!(out, "\n{}", gp.markdown)?;
+    }
+    Ok(())
 }
 
 /// `repose train --table FILE`: the same sweep on a CSV table.
@@ -973,6 +1089,11 @@ pub fn search(
     let (study, dir) = open_study(store_root, study_path)?;
     let mut settings = *settings;
     settings.seed = seed.unwrap_or(study.design.seed);
+    if study.noise_aware.is_some() {
+        let found = gp_search(&dir, &study, &settings)?;
+        write!(out, "{}", found.markdown)?;
+        return Ok(());
+    }
     let outcome = run_search(&dir, &study, &settings)?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(
@@ -1010,6 +1131,11 @@ pub fn verify(
         limits: *limits,
     };
     set_quiet(true);
+    if study.noise_aware.is_some() {
+        let v = verify_seeds(&dir, &study, &store, &settings, candidates, run_logged)?;
+        write!(out, "{}", v.markdown)?;
+        return Ok(());
+    }
     let outcome = run_verify(&dir, &study, &store, &settings, candidates, run_logged)?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(out, "  table: {}", outcome.table.display())?;
@@ -1207,7 +1333,8 @@ pub fn calibrate(
     store_root: &Path,
     study_path: Option<&Path>,
     jobs: usize,
-    candidates: usize,
+    candidates: Option<usize>,
+    flags: CalibrateFlags,
     limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
@@ -1226,6 +1353,17 @@ pub fn calibrate(
         }
     };
     let study = read_study(&path)?;
+    if study.noise_aware.is_some() {
+        let candidates = candidates.unwrap_or(1);
+        return calibrate_noise_aware(store_root, &path, jobs, candidates, flags, limits, out);
+    }
+    let candidates = candidates.unwrap_or(3);
+    if flags.adaptive || flags.json {
+        return Err(CommandError::Usage(format!(
+            "--adaptive and --json need a noise-aware study (a `noise_aware` block); {} has none",
+            path.display()
+        )));
+    }
     let mut err = io::stderr();
     writeln!(out, "\n== 1/5 sample")?;
     sample(store_root, &path, &SampleSettings::default(), out, &mut err)?;

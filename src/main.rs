@@ -136,18 +136,40 @@ enum Command {
         #[arg(long, default_value_t = 3)]
         candidates: usize,
     },
-    /// The whole he2019 method: sample, batch, train, search, verify. Without a
-    /// study, runs the embedded default (he2019 at the quick profile,
-    /// experiments/he2019-quick/study.json).
+    /// The whole he2019 method: sample, batch, train, search, verify; for a
+    /// noise-aware study, the noise floor first, replicates, a Gaussian-process
+    /// search and multi-seed verification. Without a study, runs the embedded
+    /// default (he2019 at the quick profile, experiments/he2019-quick/study.json).
     Calibrate {
         /// Study manifest [default: the embedded he2019-quick study].
         study: Option<PathBuf>,
         /// Runs at once, each single-threaded [default: the number of CPUs].
         #[arg(long)]
         jobs: Option<usize>,
-        /// How many clusters (largest first) to verify.
-        #[arg(long, default_value_t = 3)]
-        candidates: usize,
+        /// How many clusters (largest first) to verify [default: 3; 1 for a
+        /// noise-aware study, whose candidate runs every scene with several seeds].
+        #[arg(long)]
+        candidates: Option<usize>,
+        /// Noise-aware studies: after the initial design, add batches of
+        /// points chosen by the Gaussian process until a point's replicate
+        /// mean is inside the target band or the study's run budget is spent.
+        #[arg(long)]
+        adaptive: bool,
+        /// Noise-aware studies: print the outcome (noise floor, surrogate
+        /// metrics, candidates, verification) as JSON on stdout; stage reports
+        /// go to stderr.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The noise floor of a noise-aware study: its calibration scene at the
+    /// centre of the ranges with the study's noise seeds; σ, the 95 % CI of
+    /// the mean, the cost per run and σ² × CPU seconds.
+    Noise {
+        /// Study manifest (with a `noise_aware` block).
+        study: PathBuf,
+        /// Runs at once, each single-threaded [default: the number of CPUs].
+        #[arg(long)]
+        jobs: Option<usize>,
     },
     /// Measure what accuracy costs in time: sweep fidelity knobs around a scene
     /// manifest (one at a time, R replicates each) and tabulate angle error vs the
@@ -685,14 +707,20 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             study,
             jobs,
             candidates,
+            adaptive,
+            json,
         } => commands::calibrate(
             &cli.store,
             study.as_deref(),
             default_jobs(jobs),
             candidates,
+            commands::CalibrateFlags { adaptive, json },
             &limits,
             &mut out,
         ),
+        Command::Noise { study, jobs } => {
+            commands::noise(&cli.store, &study, default_jobs(jobs), &limits, &mut out)
+        }
         Command::Tradeoff(args) => {
             let options = args.options().map_err(CommandError::Usage)?;
             commands::tradeoff(&cli.store, &args.manifest, &options, &limits, &mut out)

@@ -1,25 +1,27 @@
 //! The documented outcome of `repose calibrate` (the default study,
-//! experiments/he2019-quick) stays the current code's.
+//! experiments/he2019-quick, noise-aware) stays the current code's.
 //!
 //! `experiments/he2019-quick/measured/outcome.json` records one measured run:
-//! the study id, the physics version, every experiment id it ran (the 45
-//! design samples and the verification runs) and its headline numbers. The
-//! READMEs quote those numbers, and this test checks (a) that they quote
-//! exactly the file's, and (b) that today's code would run exactly the
-//! recorded experiments: the study id, the physics version, the design's
-//! experiment ids (re-sampled here, < 1 s) and the verification experiments
-//! built from the recorded candidate centres. A change to a manifest, the
-//! study, the design or the physics version therefore fails here until
-//! someone re-runs `repose calibrate` and updates the file and the READMEs.
-//! (Ids cover what a run is asked to do; a change of what the code does for
-//! the same manifest must bump the physics version to be caught.)
+//! the study id, the physics version, every experiment id it ran (noise
+//! floor, design replicates, verification) and the outcome `repose calibrate
+//! --json` printed. The READMEs quote its headline numbers, and this test
+//! checks (a) that they quote exactly the file's, and (b) that today's code
+//! would run exactly the recorded experiments: the study id, the physics
+//! version, the noise floor's and the design's experiment ids (re-sampled
+//! here, < 1 s) and the verification experiments built from the recorded
+//! candidate centres. A change to a manifest, the study, the design or the
+//! physics version therefore fails here until someone re-runs `repose
+//! calibrate` and updates the file and the READMEs. (Ids cover what a run is
+//! asked to do; a change of what the code does for the same manifest must
+//! bump the physics version to be caught.)
 
 mod common;
 
 use std::collections::BTreeMap;
 
+use repose::calibrate::noise::NOISE_INDEX;
 use repose::calibrate::sample::{sample, SampleSettings};
-use repose::calibrate::StudyDir;
+use repose::calibrate::{parameter_names, to_physical, StudyDir};
 use repose::manifest::{parse_study, PHYSICS_VERSION};
 use serde_json::Value;
 
@@ -38,25 +40,34 @@ fn number(x: f64, digits: usize) -> String {
 
 /// The phrases every README must contain, built from the file's numbers.
 fn quoted(o: &Value) -> Vec<String> {
-    let runs = o["batch"]["runs"].as_u64().unwrap();
-    let failed = o["batch"]["failed"].as_array().unwrap().len();
-    let mut phrases = vec![
-        format!(
-            "validation R² {}",
-            number(o["train"]["validation_r2"].as_f64().unwrap(), 2)
-        ),
-        format!("{failed} of {runs} funnel runs"),
-        format!("{} cluster(s)", o["search"]["clusters"].as_u64().unwrap()),
-    ];
-    for row in o["verification"].as_array().unwrap() {
+    let out = &o["outcome"];
+    let mut phrases = vec![format!(
+        "noise floor σ {}°",
+        number(out["noise_floor"]["sd_deg"].as_f64().unwrap(), 2)
+    )];
+    for s in out["surrogates"].as_array().unwrap() {
+        let name = match s["surrogate"].as_str().unwrap() {
+            "gp" => "GP",
+            _ => "GA-BP",
+        };
+        if let Some(r2) = s["validation_r2"].as_f64() {
+            phrases.push(format!("{name} validation R² {}", number(r2, 2)));
+        }
+    }
+    for row in out["verification"].as_array().unwrap() {
         if row["group"] != 1 {
             continue;
         }
         let scene = row["scene"].as_str().unwrap();
-        phrases.push(match row["simulated_deg"].as_f64() {
-            Some(a) => format!("{scene} {}°", number(a, 1)),
-            None => format!("{scene} not measurable"),
-        });
+        phrases.push(
+            match (
+                row["mean_deg"].as_f64(),
+                row["ci95_half_width_deg"].as_f64(),
+            ) {
+                (Some(m), Some(h)) => format!("{scene} {} ± {}°", number(m, 2), number(h, 2)),
+                _ => format!("{scene} not measurable"),
+            },
+        );
     }
     phrases
 }
@@ -79,10 +90,20 @@ fn the_readmes_quote_the_recorded_outcome() {
     }
 }
 
+fn recorded(o: &Value, key: &str) -> Vec<String> {
+    o[key]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().to_string())
+        .collect()
+}
+
 #[test]
 fn the_recorded_outcome_is_of_the_experiments_todays_code_runs() {
     let o = outcome();
     let study = parse_study(&common::text(STUDY)).unwrap();
+    let spec = study.noise_aware.expect("the default study is noise-aware");
     assert_eq!(
         o["study_id"].as_str().unwrap(),
         study.id().to_string(),
@@ -93,66 +114,95 @@ fn the_recorded_outcome_is_of_the_experiments_todays_code_runs() {
         u64::from(PHYSICS_VERSION),
         "the physics version changed: re-measure {OUTCOME}"
     );
+    let names = parameter_names(&study);
+    let point = |values: &[f64]| -> BTreeMap<String, f64> {
+        names.iter().cloned().zip(values.iter().copied()).collect()
+    };
 
-    // The design: sampled again with calibrate's defaults.
+    // The noise floor: the centre of the ranges, one run per seed.
+    let centre = to_physical(&study, &vec![0.5; names.len()]);
+    let noise: Vec<String> = (0..spec.noise_seeds)
+        .map(|r| {
+            let e = study.replicate_experiment(
+                &study.calibration.scene,
+                &point(&centre),
+                NOISE_INDEX,
+                r,
+            );
+            e.unwrap().id().to_string()
+        })
+        .collect();
+    assert_eq!(
+        noise,
+        recorded(&o, "noise_experiment_ids"),
+        "re-measure {OUTCOME}"
+    );
+
+    // The design: sampled again with calibrate's defaults, every replicate.
     let tmp = tempfile::tempdir().unwrap();
     let study_path = common::root().join(STUDY);
     let dir = StudyDir::new(tmp.path(), &study, &study_path);
     let design = sample(&dir, &study, &SampleSettings::default()).unwrap();
-    let csv = std::fs::read_to_string(&design.design_file).unwrap();
-    let ids: Vec<&str> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.rsplit(',').next().unwrap())
-        .collect();
-    let recorded: Vec<&str> = o["design_experiment_ids"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_str().unwrap())
-        .collect();
+    let mut ids = Vec::new();
+    for (index, p) in design.points.iter().enumerate() {
+        for r in 0..spec.replicates {
+            let e =
+                study.replicate_experiment(&study.calibration.scene, &point(p), index as u64, r);
+            ids.push(e.unwrap().id().to_string());
+        }
+    }
     assert_eq!(
-        ids, recorded,
+        ids,
+        recorded(&o, "design_experiment_ids"),
         "the design's experiments changed: re-measure {OUTCOME}"
     );
-    assert_eq!(o["batch"]["runs"].as_u64().unwrap(), ids.len() as u64);
 
-    // The verification runs: each candidate centre in each scene.
-    let scenes: BTreeMap<&str, _> = std::iter::once(&study.calibration)
-        .chain(&study.verification)
-        .map(|t| (t.name.as_str(), t))
-        .collect();
-    let candidates: BTreeMap<u64, BTreeMap<String, f64>> = o["candidates"]
+    // The verification: each verified candidate's centre in each scene, one
+    // run per seed (scene by scene, candidate by candidate).
+    let rows = o["outcome"]["verification"].as_array().unwrap();
+    let groups: Vec<u64> =
+        rows.iter()
+            .map(|r| r["group"].as_u64().unwrap())
+            .fold(Vec::new(), |mut g, x| {
+                if !g.contains(&x) {
+                    g.push(x);
+                }
+                g
+            });
+    let centres: BTreeMap<u64, Vec<f64>> = o["outcome"]["candidates"]
         .as_array()
         .unwrap()
         .iter()
         .map(|c| {
             let centre = c["centre"]
-                .as_object()
+                .as_array()
                 .unwrap()
                 .iter()
-                .map(|(k, v)| (k.clone(), v.as_f64().unwrap()))
+                .map(|v| v.as_f64().unwrap())
                 .collect();
             (c["group"].as_u64().unwrap(), centre)
         })
         .collect();
-    let rows = o["verification"].as_array().unwrap();
-    assert_eq!(rows.len(), candidates.len() * scenes.len());
+    let mut ids = Vec::new();
+    for target in std::iter::once(&study.calibration).chain(&study.verification) {
+        for g in &groups {
+            for r in 0..spec.verification_seeds {
+                let e = study.replicate_experiment(&target.scene, &point(&centres[g]), *g, r);
+                ids.push(e.unwrap().id().to_string());
+            }
+        }
+    }
+    assert_eq!(
+        ids,
+        recorded(&o, "verification_experiment_ids"),
+        "the verification experiments changed: re-measure {OUTCOME}"
+    );
     for row in rows {
-        let group = row["group"].as_u64().unwrap();
-        let target = scenes[row["scene"].as_str().unwrap()];
-        let experiment = study
-            .experiment(&target.scene, &candidates[&group], group)
+        let scene = row["scene"].as_str().unwrap();
+        let target = std::iter::once(&study.calibration)
+            .chain(&study.verification)
+            .find(|t| t.name == scene)
             .unwrap();
-        assert_eq!(
-            row["experiment_id"].as_str().unwrap(),
-            experiment.id().to_string(),
-            "verification of candidate {group} in {}: re-measure {OUTCOME}",
-            target.name
-        );
-        assert_eq!(
-            row["measured_deg"].as_f64().unwrap(),
-            target.target_angle_deg
-        );
+        assert_eq!(row["target_deg"].as_f64().unwrap(), target.target_angle_deg);
     }
 }

@@ -278,6 +278,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 brush_blades: None,
                 brush_gap_m: None,
                 brush_width_m: None,
+                brush_material: None,
                 fill_fraction: f[6],
                 fill_height_m: None,
                 fill_time_s: f[7],

@@ -11,6 +11,7 @@ use std::path::PathBuf;
 
 use serde_json::json;
 
+use super::replicates::{replicates_csv, run_replicated};
 use super::sample::{design_path, experiment_path};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::exec::{run_incomplete, LocalPool, Ran};
@@ -137,6 +138,17 @@ where
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
     let design = read_design(dir, study)?;
+    if let Some(spec) = study.noise_aware {
+        return batch_replicated(
+            dir,
+            study,
+            store,
+            settings,
+            &runner,
+            &design,
+            spec.replicates,
+        );
+    }
     let experiments = design
         .iter()
         .map(|row| load_experiment(dir, row))
@@ -239,4 +251,128 @@ pub fn read_angles(
         })
         .collect();
     Ok((path, rows))
+}
+
+/// `batch/replicates.csv`: every replicate run of a noise-aware study.
+pub fn replicates_path(dir: &StudyDir) -> PathBuf {
+    dir.stage(Stage::Batch).join("replicates.csv")
+}
+
+/// The batch of a noise-aware study: `replicates` packing seeds per design
+/// row ([`super::replicates`]); angles.csv gives each row's replicate mean
+/// (with the count and spread), so he2019's network trains on means.
+fn batch_replicated<E, F>(
+    dir: &StudyDir,
+    study: &Study,
+    store: &Store,
+    settings: &LocalPool,
+    runner: &F,
+    design: &[DesignRow],
+    replicates: u32,
+) -> Result<BatchOutcome, CalibrateError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let points: Vec<(u64, Vec<f64>)> = design
+        .iter()
+        .map(|r| (r.index as u64, r.point.clone()))
+        .collect();
+    let total = design.len() * replicates as usize;
+    let (runs, cached) = run_replicated(
+        study,
+        &study.calibration,
+        &points,
+        replicates,
+        store,
+        settings,
+        runner,
+        false,
+    )?;
+    for (row, p) in design.iter().zip(&runs) {
+        if p.runs[0].id != row.id {
+            return Err(CalibrateError::Inconsistent {
+                path: super::sample::design_path(dir),
+                message: format!(
+                    "sample {}: replicate 0 hashes to {}, the design lists {}: rerun `repose sample`",
+                    row.index, p.runs[0].id, row.id
+                ),
+            });
+        }
+    }
+    let failures: Vec<Failure> = runs
+        .iter()
+        .flat_map(|p| {
+            p.runs.iter().filter_map(move |r| {
+                r.value.as_ref().err().map(|m| Failure {
+                    index: p.index as usize,
+                    id: r.id.clone(),
+                    message: m.clone(),
+                })
+            })
+        })
+        .collect();
+    let names = parameter_names(study);
+    let mut header = vec!["index".to_string()];
+    header.extend(names.iter().cloned());
+    header.extend(
+        [
+            "experiment_id",
+            "angle_deg",
+            "status",
+            "replicates",
+            "measured",
+            "angle_sd_deg",
+        ]
+        .map(String::from),
+    );
+    let mut csv = CsvWriter::new(&header);
+    let mut lineage = dir
+        .lineage(
+            Stage::Batch,
+            json!({ "angle": study.calibration.response.clone()
+                        .unwrap_or_else(|| "headline_angle_deg".into()),
+                    "replicates": replicates, "value": "mean of the measured replicates" }),
+        )
+        .with_input(dir.input("design", &design_path(dir))?);
+    for p in &runs {
+        for r in &p.runs {
+            let file = store.run_dir(&r.id).result_path();
+            if file.is_file() {
+                lineage = lineage.with_input(dir.input("result", &file)?);
+            }
+        }
+    }
+    for (row, p) in design.iter().zip(&runs) {
+        let values = p.values();
+        let mut cells = vec![Cell::Integer(row.index as u64)];
+        cells.extend(row.point.iter().map(|v| Cell::Number(*v)));
+        cells.push(Cell::Text(row.id.to_string()));
+        cells.push(p.mean().map_or(Cell::Empty, Cell::Number));
+        let status = if values.is_empty() {
+            RunStatus::Failed
+        } else {
+            RunStatus::Complete
+        };
+        cells.push(Cell::Text(status.to_string()));
+        cells.push(Cell::Integer(u64::from(replicates)));
+        cells.push(Cell::Integer(values.len() as u64));
+        cells.push(p.summary().map_or(Cell::Empty, |s| Cell::Number(s.std)));
+        csv.row(&cells);
+    }
+    super::create_dir(&dir.stage(Stage::Batch))?;
+    write_output(
+        &replicates_path(dir),
+        replicates_csv(study, &runs).as_bytes(),
+        &lineage,
+    )?;
+    let table = angles_path(dir);
+    write_output(&table, csv.finish().as_bytes(), &lineage)?;
+    Ok(BatchOutcome {
+        total,
+        cached,
+        computed: total - cached - failures.len().min(total - cached),
+        failures,
+        table,
+    })
 }

@@ -61,18 +61,25 @@
 //! Randomness comes from ChaCha8 streams of the study's design seed (or a seed
 //! given on the command line), one stream per purpose ([`Stream`]).
 
+pub mod adaptive;
 pub mod batch;
 pub mod curve;
 pub mod genetic;
+pub mod gp_search;
+pub mod gp_train;
 pub mod levenberg;
 pub mod meanshift;
 pub mod network;
+pub mod noise;
 pub mod objective;
+pub mod pipeline;
+pub mod replicates;
 pub mod sample;
 pub mod search;
 pub mod surrogate;
 pub mod train;
 pub mod verify;
+pub mod verify_seeds;
 
 use std::path::{Path, PathBuf};
 
@@ -95,6 +102,8 @@ pub enum Stream {
     Search = 3,
     /// The genetic algorithm (one sub-stream per hidden size).
     Genetic = 4,
+    /// The adaptive stage's candidate pools (one sub-stream per batch).
+    Adaptive = 5,
 }
 
 /// The ChaCha8 stream for `purpose` (and sub-stream `index`) of `seed`.
@@ -119,6 +128,10 @@ pub enum Stage {
     Verify,
     /// `repose learning-curve` (reads the batch; not part of `calibrate`).
     LearningCurve,
+    /// `repose noise`: the noise floor of a noise-aware study.
+    Noise,
+    /// The adaptive batches of `repose calibrate --adaptive`.
+    Adaptive,
 }
 
 impl Stage {
@@ -131,6 +144,8 @@ impl Stage {
             Stage::Search => "search",
             Stage::Verify => "verify",
             Stage::LearningCurve => "learning-curve",
+            Stage::Noise => "noise",
+            Stage::Adaptive => "adaptive",
         }
     }
 }

@@ -292,7 +292,8 @@ pub fn find(
     })
 }
 
-fn load_model(path: &std::path::Path) -> Result<Model, CalibrateError> {
+/// Reads and checks a trained network (`train/model.json`).
+pub(crate) fn load_model(path: &std::path::Path) -> Result<Model, CalibrateError> {
     let inconsistent = |message: String| CalibrateError::Inconsistent {
         path: path.to_path_buf(),
         message,

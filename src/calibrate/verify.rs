@@ -255,7 +255,7 @@ where
 /// apostrophes and line breaks spaces (an error message such as "has 1 surface
 /// points, at least 3 are needed" would otherwise split its row). The Markdown
 /// table quotes the message as it is.
-fn csv_word(text: &str) -> String {
+pub(crate) fn csv_word(text: &str) -> String {
     text.chars()
         .map(|c| match c {
             ',' => ';',

@@ -1,0 +1,407 @@
+//! The search of a noise-aware study: resampled points kept by the
+//! probability, under the GP surrogate, that their angle lies in the target
+//! band; mean-shift clusters of the kept points as candidates; and the
+//! family of parameter sets consistent with the target.
+//!
+//! Each resampled point x gets the GP's predictive mean μ(x) and latent
+//! standard deviation s(x) of the angle (the mean over packings, not one
+//! run), and P(x) = Φ((hi − μ)/s) − Φ((lo − μ)/s) for the band [lo, hi] =
+//! target (1 ∓ tolerance). Points with P ≥ `min_probability` are kept: a
+//! point the surrogate knows little about is not kept on a lucky mean, and
+//! one it knows well is kept only when its mean is inside. The kept points
+//! are clustered by mean shift as in he2019 (§3.5, [`super::meanshift`]),
+//! and the clusters (largest first) are the candidates `verify` re-simulates.
+//!
+//! # The family
+//!
+//! One angle rarely pins every parameter: the kept points spread along the
+//! directions the target does not constrain. `family.md` gives each
+//! parameter's mean, standard deviation and range over the kept points, and
+//! the principal directions of the kept points in the unit cube of the
+//! ranges (eigenvectors of their covariance, largest variance first): a
+//! direction with a large share is a combination of parameters the target
+//! leaves free; one with a small share is what the target determines.
+//!
+//! The resampling is `10 × samples` points of a Latin hypercube from the
+//! search stream (the GP is cheap to evaluate; a narrow band in five
+//! parameters needs thousands of points to be populated).
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use nalgebra::{DMatrix, SymmetricEigen};
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use super::gp_train::{gp_path, read_gp};
+use super::meanshift::{estimate_bandwidth, mean_shift};
+use super::noise::noise_aware;
+use super::search::SearchSettings;
+use super::{
+    json_bytes, parameter_names, rng, to_physical, write_output, CalibrateError, Stage, Stream,
+    StudyDir,
+};
+use crate::doe::lhs::latin_hypercube;
+use crate::manifest::Study;
+use crate::report::markdown::MarkdownTable;
+use crate::report::svg::scatter_matrix;
+use crate::report::table::{Cell, CsvWriter};
+use crate::stats::gp::probability_in_band;
+
+/// Resampled points per point of the network's search.
+pub const RESAMPLE_FACTOR: usize = 10;
+
+/// A candidate: one cluster of kept points.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Candidate {
+    /// Group number (1 = largest).
+    pub group: usize,
+    /// Kept points in the cluster.
+    pub size: usize,
+    /// The cluster centre, physical units, in parameter order.
+    pub centre: Vec<f64>,
+    /// GP mean at the centre, degrees.
+    pub predicted_deg: f64,
+    /// GP latent standard deviation at the centre, degrees.
+    pub predicted_sd_deg: f64,
+    /// Probability of the band at the centre.
+    pub probability: f64,
+}
+
+/// One parameter's spread over the kept points.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Spread {
+    /// The parameter.
+    pub parameter: String,
+    /// Mean, physical units.
+    pub mean: f64,
+    /// Standard deviation, physical units.
+    pub sd: f64,
+    /// Smallest kept value.
+    pub min: f64,
+    /// Largest kept value.
+    pub max: f64,
+    /// sd over the width of the range.
+    pub relative_sd: f64,
+}
+
+/// A principal direction of the kept points (unit cube).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Direction {
+    /// Share of the kept points' total variance along it.
+    pub variance_share: f64,
+    /// Unit vector, one loading per parameter.
+    pub loadings: Vec<f64>,
+}
+
+/// The parameter sets consistent with the target.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Family {
+    /// Resampled points.
+    pub resampled: usize,
+    /// Kept points.
+    pub kept: usize,
+    /// Per-parameter spread.
+    pub spread: Vec<Spread>,
+    /// Principal directions, largest share first.
+    pub directions: Vec<Direction>,
+}
+
+/// What the search did.
+#[derive(Debug, Clone)]
+pub struct GpSearchOutcome {
+    /// The candidates, largest cluster first.
+    pub candidates: Vec<Candidate>,
+    /// The family report.
+    pub family: Family,
+    /// The Markdown report (clusters and family).
+    pub markdown: String,
+}
+
+/// `search/clusters.csv`.
+pub fn clusters_path(dir: &StudyDir) -> PathBuf {
+    dir.stage(Stage::Search).join("clusters.csv")
+}
+
+/// Runs the noise-aware search (see the module docs).
+pub fn gp_search(
+    dir: &StudyDir,
+    study: &Study,
+    settings: &SearchSettings,
+) -> Result<GpSearchOutcome, CalibrateError> {
+    let spec = noise_aware(study)?;
+    let model = read_gp(dir)?;
+    let gp = model.process()?;
+    let names = parameter_names(study);
+    let samples = settings.samples * RESAMPLE_FACTOR;
+    let unit = latin_hypercube(
+        samples,
+        names.len(),
+        settings.placement,
+        &mut rng(settings.seed, Stream::Search, 1),
+    );
+    let (lo, hi) = study.calibration.band_deg();
+    let predictions: Vec<_> = unit.iter().map(|u| gp.predict(u)).collect();
+    let probability: Vec<f64> = predictions
+        .iter()
+        .map(|p| probability_in_band(p.mean, p.sd, lo, hi))
+        .collect();
+    let kept: Vec<usize> = (0..unit.len())
+        .filter(|&i| probability[i] >= spec.min_probability)
+        .collect();
+    if kept.is_empty() {
+        let best = (0..unit.len())
+            .max_by(|&a, &b| probability[a].total_cmp(&probability[b]))
+            .unwrap_or(0);
+        return Err(CalibrateError::NothingKept(format!(
+            "none of the {samples} resampled points has probability >= {} of an angle in \
+             {lo:.2}–{hi:.2} deg under the GP; the best has {:.3} (mean {:.2} ± {:.2} deg): \
+             more runs near the target (`--adaptive`) or a lower min_probability",
+            spec.min_probability, probability[best], predictions[best].mean, predictions[best].sd
+        )));
+    }
+    let kept_unit: Vec<Vec<f64>> = kept.iter().map(|&i| unit[i].clone()).collect();
+    let bandwidth = match settings.bandwidth {
+        Some(h) => h,
+        None => estimate_bandwidth(&kept_unit, settings.quantile),
+    };
+    let clustering = if bandwidth > 0.0 {
+        mean_shift(&kept_unit, settings.kernel, bandwidth)
+    } else {
+        // One kept point (or identical ones): one cluster.
+        mean_shift(&kept_unit, settings.kernel, 1.0)
+    };
+    let candidates: Vec<Candidate> = clustering
+        .centres
+        .iter()
+        .zip(&clustering.sizes)
+        .enumerate()
+        .map(|(k, (c, &size))| {
+            let p = gp.predict(c);
+            Candidate {
+                group: k + 1,
+                size,
+                centre: to_physical(study, c),
+                predicted_deg: p.mean,
+                predicted_sd_deg: p.sd,
+                probability: probability_in_band(p.mean, p.sd, lo, hi),
+            }
+        })
+        .collect();
+    let family = family(study, &names, &kept_unit, samples);
+
+    let mut label = vec![None; unit.len()];
+    for (&i, &l) in kept.iter().zip(&clustering.labels) {
+        label[i] = Some(l + 1);
+    }
+    let out = dir.stage(Stage::Search);
+    dir.prepare(study, Stage::Search)?;
+    let lineage = dir
+        .lineage(
+            Stage::Search,
+            json!({ "settings": settings, "surrogate": "gp", "resampled": samples,
+                    "min_probability": spec.min_probability, "band_deg": [lo, hi],
+                    "bandwidth_used": bandwidth }),
+        )
+        .with_input(dir.input("gp", &gp_path(dir))?);
+    let mut header = vec!["point".to_string()];
+    header.extend(names.iter().cloned());
+    header.extend(
+        [
+            "predicted_deg",
+            "predicted_sd_deg",
+            "probability",
+            "cluster",
+        ]
+        .map(String::from),
+    );
+    let mut points = CsvWriter::new(&header);
+    for (i, u) in unit.iter().enumerate() {
+        let mut cells = vec![Cell::Integer(i as u64)];
+        cells.extend(to_physical(study, u).into_iter().map(Cell::Number));
+        cells.push(Cell::Number(predictions[i].mean));
+        cells.push(Cell::Number(predictions[i].sd));
+        cells.push(Cell::Number(probability[i]));
+        cells.push(label[i].map_or(Cell::Empty, |l| Cell::Integer(l as u64)));
+        points.row(&cells);
+    }
+    let mut header = vec!["group".to_string(), "size".to_string()];
+    header.extend(names.iter().cloned());
+    header.extend(["predicted_angle_deg", "predicted_sd_deg", "probability"].map(String::from));
+    let mut clusters = CsvWriter::new(&header);
+    for c in &candidates {
+        let mut cells = vec![Cell::Integer(c.group as u64), Cell::Integer(c.size as u64)];
+        cells.extend(c.centre.iter().map(|v| Cell::Number(*v)));
+        cells.push(Cell::Number(c.predicted_deg));
+        cells.push(Cell::Number(c.predicted_sd_deg));
+        cells.push(Cell::Number(c.probability));
+        clusters.row(&cells);
+    }
+    let ranges: Vec<(f64, f64)> = study.parameters.values().map(|r| (r.min, r.max)).collect();
+    let svg = scatter_matrix(
+        &names,
+        &ranges,
+        &kept_unit,
+        &clustering.labels,
+        &clustering.centres,
+        &format!(
+            "{} of {samples} points with P(angle in {lo:.1}–{hi:.1} deg) >= {}",
+            kept.len(),
+            spec.min_probability
+        ),
+    );
+    let markdown = markdown(&names, &candidates, &family, spec.min_probability, (lo, hi));
+    write_output(
+        &out.join("points.csv"),
+        points.finish().as_bytes(),
+        &lineage,
+    )?;
+    write_output(&out.join("scatter.svg"), svg.as_bytes(), &lineage)?;
+    write_output(&out.join("family.json"), &json_bytes(&family), &lineage)?;
+    write_output(&out.join("clusters.md"), markdown.as_bytes(), &lineage)?;
+    write_output(&clusters_path(dir), clusters.finish().as_bytes(), &lineage)?;
+    Ok(GpSearchOutcome {
+        candidates,
+        family,
+        markdown,
+    })
+}
+
+/// The family report of the kept points (see the module docs).
+fn family(study: &Study, names: &[String], kept_unit: &[Vec<f64>], resampled: usize) -> Family {
+    let n = kept_unit.len();
+    let d = names.len();
+    let mean_u: Vec<f64> = (0..d)
+        .map(|j| kept_unit.iter().map(|u| u[j]).sum::<f64>() / n as f64)
+        .collect();
+    let denom = (n.max(2) - 1) as f64;
+    let cov = DMatrix::from_fn(d, d, |a, b| {
+        kept_unit
+            .iter()
+            .map(|u| (u[a] - mean_u[a]) * (u[b] - mean_u[b]))
+            .sum::<f64>()
+            / denom
+    });
+    let spread = study
+        .parameters
+        .iter()
+        .enumerate()
+        .map(|(j, (name, r))| {
+            let width = r.max - r.min;
+            let values: Vec<f64> = kept_unit.iter().map(|u| r.min + u[j] * width).collect();
+            let sd = cov[(j, j)].sqrt() * width;
+            Spread {
+                parameter: name.clone(),
+                mean: r.min + mean_u[j] * width,
+                sd,
+                min: values.iter().copied().fold(f64::INFINITY, f64::min),
+                max: values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                relative_sd: sd / width,
+            }
+        })
+        .collect();
+    let eigen = SymmetricEigen::new(cov);
+    let total: f64 = eigen.eigenvalues.iter().map(|v| v.max(0.0)).sum();
+    let mut order: Vec<usize> = (0..d).collect();
+    order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
+    let directions = order
+        .into_iter()
+        .map(|k| {
+            let mut v: Vec<f64> = eigen.eigenvectors.column(k).iter().copied().collect();
+            // Sign convention: the largest loading positive (deterministic).
+            let big = v
+                .iter()
+                .copied()
+                .fold(0.0f64, |m, x| if x.abs() > m.abs() { x } else { m });
+            if big < 0.0 {
+                v.iter_mut().for_each(|x| *x = -*x);
+            }
+            Direction {
+                variance_share: if total > 0.0 {
+                    eigen.eigenvalues[k].max(0.0) / total
+                } else {
+                    0.0
+                },
+                loadings: v,
+            }
+        })
+        .collect();
+    Family {
+        resampled,
+        kept: n,
+        spread,
+        directions,
+    }
+}
+
+fn markdown(
+    names: &[String],
+    candidates: &[Candidate],
+    family: &Family,
+    min_probability: f64,
+    band: (f64, f64),
+) -> String {
+    let mut t = MarkdownTable::new(
+        &[
+            vec!["group".to_string(), "size".to_string()],
+            names.to_vec(),
+            vec!["GP mean ± sd (°)".to_string(), "P(in band)".to_string()],
+        ]
+        .concat()
+        .iter()
+        .map(String::as_str)
+        .collect::<Vec<_>>(),
+    );
+    for c in candidates {
+        let mut row = vec![c.group.to_string(), c.size.to_string()];
+        row.extend(c.centre.iter().map(|v| format!("{v:.4}")));
+        row.push(format!(
+            "{:.2} ± {:.2}",
+            c.predicted_deg, c.predicted_sd_deg
+        ));
+        row.push(format!("{:.2}", c.probability));
+        t.row(&row);
+    }
+    let mut out = format!(
+        "{} of {} resampled points have P(angle in {:.2}–{:.2}°) ≥ {min_probability} under the GP; \
+         mean shift gives {} cluster(s):\n\n",
+        family.kept,
+        family.resampled,
+        band.0,
+        band.1,
+        candidates.len()
+    );
+    out.push_str(&t.render());
+    out.push_str("\n## The family of parameter sets consistent with the target\n\n");
+    let mut s = MarkdownTable::new(&["parameter", "mean", "sd", "min", "max", "sd / range"]);
+    for p in &family.spread {
+        s.row(&[
+            p.parameter.clone(),
+            format!("{:.4}", p.mean),
+            format!("{:.4}", p.sd),
+            format!("{:.4}", p.min),
+            format!("{:.4}", p.max),
+            format!("{:.2}", p.relative_sd),
+        ]);
+    }
+    out.push_str(&s.render());
+    out.push_str(
+        "\nPrincipal directions of the kept points (unit cube of the ranges, largest share \
+         first; a large share is a combination the target leaves free):\n\n",
+    );
+    let mut d = MarkdownTable::new(
+        &[vec!["share".to_string()], names.to_vec()]
+            .concat()
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    for dir in &family.directions {
+        let mut row = vec![format!("{:.0} %", 100.0 * dir.variance_share)];
+        row.extend(dir.loadings.iter().map(|v| format!("{v:+.2}")));
+        d.row(&row);
+    }
+    out.push_str(&d.render());
+    let _ = writeln!(out);
+    out
+}

@@ -1,0 +1,209 @@
+//! `repose calibrate` on a noise-aware study: every stage in order, with the
+//! outcome as one record.
+//!
+//! ```text
+//! noise  ──▶ noise/noise.{csv,md,json}      σ at the centre, precision per cost
+//! sample ──▶ sample/design.csv              the study's Latin hypercube
+//! batch  ──▶ batch/replicates.csv, angles.csv  R seeds per sample, their means
+//! train  ──▶ train/model.json (GA-BP, he2019), train/gp.json, surrogates.md
+//! adaptive (--adaptive) ──▶ adaptive/replicates.csv, then train again
+//! search ──▶ search/points.csv, clusters.csv/.md, family.json
+//! verify ──▶ verify/acceptance.json (first), verification.csv/.md, runs.csv
+//! ```
+//!
+//! The outcome ([`CalibrationOutcome`], also `outcome.json` in the study's
+//! directory and what `repose calibrate --json` prints) gathers the noise
+//! floor, the run counts per stage, the surrogates' validation metrics, the
+//! candidates with the family report, the acceptance rule and every
+//! candidate's verification. Its wall-time cells (the noise floor's cost)
+//! are its only non-deterministic ones.
+
+use serde::Serialize;
+use serde_json::json;
+
+use super::adaptive::{adaptive, AdaptiveOutcome};
+use super::batch::batch;
+use super::gp_search::{gp_search, Candidate, Family};
+use super::gp_train::{train_gp, SurrogateMetrics};
+use super::noise::{noise, NoiseFloor};
+use super::sample::{sample, SampleSettings};
+use super::search::{load_model, SearchSettings};
+use super::train::{train_study, TrainOptions};
+use super::verify_seeds::{verify_seeds, Acceptance, SeedVerifyRow};
+use super::{json_bytes, write_output, CalibrateError, Stage, StudyDir};
+use crate::exec::LocalPool;
+use crate::manifest::{Experiment, Study};
+use crate::store::{RunDir, RunResult, Store};
+
+/// Options of a noise-aware calibration.
+#[derive(Debug, Clone, Copy)]
+pub struct NoiseAwareOptions {
+    /// Candidates (clusters, largest first) to verify.
+    pub candidates: usize,
+    /// Run the adaptive batches after the initial design.
+    pub adaptive: bool,
+    /// The sample stage's settings.
+    pub sample: SampleSettings,
+    /// The network's training (he2019) and the validation split of both
+    /// surrogates.
+    pub train: TrainOptions,
+    /// The search's resampling and clustering.
+    pub search: SearchSettings,
+}
+
+/// DEM runs per stage.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct RunCounts {
+    /// Noise floor.
+    pub noise: usize,
+    /// Initial design (samples × replicates).
+    pub design: usize,
+    /// Adaptive points × replicates.
+    pub adaptive: usize,
+    /// Verification (candidates × scenes × seeds).
+    pub verification: usize,
+}
+
+/// The outcome of a noise-aware calibration (see the module docs).
+#[derive(Debug, Clone, Serialize)]
+pub struct CalibrationOutcome {
+    /// Study name.
+    pub study: String,
+    /// Study id.
+    pub study_id: String,
+    /// The calibration response's noise floor.
+    pub noise_floor: NoiseFloor,
+    /// DEM runs per stage.
+    pub runs: RunCounts,
+    /// The adaptive stage, when run.
+    pub adaptive: Option<AdaptiveOutcome>,
+    /// Validation metrics of the GP and of the network.
+    pub surrogates: Vec<SurrogateMetrics>,
+    /// The candidates, largest cluster first.
+    pub candidates: Vec<Candidate>,
+    /// The parameter sets consistent with the target.
+    pub family: Family,
+    /// The acceptance rule, recorded before verification.
+    pub acceptance: Acceptance,
+    /// Every candidate in every scene.
+    pub verification: Vec<SeedVerifyRow>,
+    /// Some candidate passes the calibration scene.
+    pub calibrated: bool,
+    /// Some candidate passes every scene.
+    pub verified: bool,
+}
+
+/// Runs every stage (see the module docs); `log` gets one line per stage.
+pub fn calibrate_noise_aware<E, F>(
+    dir: &StudyDir,
+    study: &Study,
+    store: &Store,
+    pool: &LocalPool,
+    options: &NoiseAwareOptions,
+    runner: F,
+    log: &mut dyn FnMut(&str),
+) -> Result<CalibrationOutcome, CalibrateError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let spec = super::noise::noise_aware(study)?;
+    super::replicates::check_response(&study.calibration)?;
+    for v in &study.verification {
+        super::replicates::check_response(v)?;
+    }
+    log(&format!(
+        "== noise floor: centre of the ranges x {} seeds",
+        spec.noise_seeds
+    ));
+    let floor = noise(dir, study, store, pool, &runner)?;
+    log(&floor.markdown);
+    log("== sample");
+    let sampled = sample(dir, study, &options.sample)?;
+    let design_points = sampled.points.len();
+    log(&format!(
+        "== batch: {design_points} samples x {} seeds",
+        spec.replicates
+    ));
+    let b = batch(dir, study, store, pool, &runner)?;
+    log(&format!(
+        "{} runs, {} without an angle",
+        b.total,
+        b.failures.len()
+    ));
+    log("== train: GA-BP network (he2019) and Gaussian process");
+    train_study(dir, study, &options.train)?;
+    let seed = options.train.settings.seed;
+    let fraction = options.train.train_fraction;
+    let model = load_model(&dir.stage(Stage::Train).join("model.json"))?;
+    let net = |x: &[f64]| model.predict(x);
+    let mut gp = train_gp(dir, study, fraction, seed, Some(&net))?;
+    log(&gp.markdown);
+    let mut adaptive_outcome = None;
+    if options.adaptive {
+        log("== adaptive");
+        let a = adaptive(dir, study, store, pool, seed, &runner, &mut |m| log(m))?;
+        log(&format!(
+            "stopped ({:?}) after {} batch(es), {} run(s){}",
+            a.stop,
+            a.batches,
+            a.runs,
+            a.hit.as_ref().map_or(String::new(), |h| format!(
+                "; {} point {} at {:.2}°",
+                h.0, h.1, h.2
+            ))
+        ));
+        gp = train_gp(dir, study, fraction, seed, Some(&net))?;
+        adaptive_outcome = Some(a);
+    }
+    log("== search");
+    let found = gp_search(dir, study, &options.search)?;
+    log(&found.markdown);
+    log(&format!(
+        "== verify: {} candidate(s) x {} scene(s) x {} seeds",
+        options.candidates.min(found.candidates.len()),
+        1 + study.verification.len(),
+        spec.verification_seeds
+    ));
+    let v = verify_seeds(dir, study, store, pool, options.candidates, &runner)?;
+    log(&v.markdown);
+    let verified_candidates = options.candidates.min(found.candidates.len());
+    let calibrated = v
+        .rows
+        .iter()
+        .any(|r| r.scene == study.calibration.name && r.pass);
+    let verified = (0..verified_candidates).any(|k| {
+        let group = found.candidates[k].group;
+        v.rows.iter().filter(|r| r.group == group).all(|r| r.pass)
+    });
+    let outcome = CalibrationOutcome {
+        study: study.name.clone(),
+        study_id: dir.id().to_string(),
+        runs: RunCounts {
+            noise: floor.floor.seeds,
+            design: b.total,
+            adaptive: adaptive_outcome.as_ref().map_or(0, |a| a.runs),
+            verification: v.rows.iter().map(|r| r.seeds).sum(),
+        },
+        noise_floor: floor.floor,
+        adaptive: adaptive_outcome,
+        surrogates: gp.metrics,
+        candidates: found.candidates,
+        family: found.family,
+        acceptance: v.acceptance,
+        verification: v.rows,
+        calibrated,
+        verified,
+    };
+    let lineage = dir.lineage(
+        Stage::Verify,
+        json!({ "record": "calibration outcome", "adaptive": options.adaptive,
+                "candidates": options.candidates }),
+    );
+    write_output(
+        &dir.path().join("outcome.json"),
+        &json_bytes(&outcome),
+        &lineage,
+    )?;
+    Ok(outcome)
+}

@@ -1,0 +1,289 @@
+//! Points × packing seeds in one target scene, through the one executor: the
+//! runs of every noise-aware stage (noise floor, design batch, adaptive
+//! batches, verification).
+//!
+//! Replicate `r` of a point is [`Study::replicate_experiment`] with packing
+//! seed `packing_seed + r`. Every experiment is handed to
+//! [`crate::exec::run_incomplete`] at once, so a killed stage resumes and a
+//! run shared with another stage is simulated once. A run that failed before
+//! is not run again unless asked (`retry_failed`): its error.json already
+//! says why (a pile that is not measurable stays so), and the noise-aware
+//! stages re-read many points on every batch.
+//!
+//! The value of a run is the target's response ([`response_of`]): the named
+//! response of the scene when the target names one, else the headline
+//! angle.
+
+use super::CalibrateError;
+use crate::exec::{run_incomplete, LocalPool, Ran};
+use crate::manifest::{ContentId, Experiment, Study, TargetScene};
+use crate::report::table::{parse_number, Cell, CsvWriter, Table};
+use crate::scenes::responses::response;
+use crate::stats::summary::{mean_ci, MeanCi};
+use crate::store::{ErrorRecord, RunDir, RunResult, RunStatus, Store, TimingRecord};
+
+/// One packing seed of a point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeedRun {
+    /// Replicate number; the packing seed is the study's + this.
+    pub replicate: u32,
+    /// The experiment.
+    pub id: ContentId,
+    /// The response, or why there is none (the run's error).
+    pub value: Result<f64, String>,
+}
+
+/// A point and its replicate runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Replicated {
+    /// The experiments' `sample_index`.
+    pub index: u64,
+    /// Parameter values, physical units, in the study's parameter order.
+    pub point: Vec<f64>,
+    /// One run per replicate, in replicate order.
+    pub runs: Vec<SeedRun>,
+}
+
+impl Replicated {
+    /// The measured values, in replicate order.
+    pub fn values(&self) -> Vec<f64> {
+        self.runs
+            .iter()
+            .filter_map(|r| r.value.as_ref().ok().copied())
+            .collect()
+    }
+
+    /// Mean of the measured values (`None` when none was measured).
+    pub fn mean(&self) -> Option<f64> {
+        let v = self.values();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    }
+
+    /// Mean, standard deviation and 95 % interval (two or more values).
+    pub fn summary(&self) -> Option<MeanCi> {
+        mean_ci(&self.values())
+    }
+}
+
+/// The value a run gives `target`: its named response, or the headline angle.
+pub fn response_of(result: &RunResult, target: &TargetScene) -> Result<f64, String> {
+    match &target.response {
+        Some(name) => response(result, target.scene.kind(), name).map_err(|e| e.to_string()),
+        None => result
+            .headline_angle_deg
+            .ok_or_else(|| "the run has no headline angle".to_string()),
+    }
+}
+
+/// Checks that `target`'s response exists for its scene kind, before any run.
+pub fn check_response(target: &TargetScene) -> Result<(), CalibrateError> {
+    let Some(name) = &target.response else {
+        return Ok(());
+    };
+    let table = crate::scenes::responses::catalogue(target.scene.kind()).unwrap_or(&[]);
+    if table.iter().any(|s| s.name == name) {
+        Ok(())
+    } else {
+        Err(CalibrateError::Settings(format!(
+            "target `{}`: response `{name}` is not a response of {} (allowed: {})",
+            target.name,
+            target.scene.kind(),
+            table.iter().map(|s| s.name).collect::<Vec<_>>().join(", ")
+        )))
+    }
+}
+
+/// Runs `replicates` packing seeds of every point in `target`'s scene (see the
+/// module docs) and reads their values back, with the number of runs this
+/// call did not simulate (complete before, or failed before and not retried).
+#[allow(clippy::too_many_arguments)]
+pub fn run_replicated<E, F>(
+    study: &Study,
+    target: &TargetScene,
+    points: &[(u64, Vec<f64>)],
+    replicates: u32,
+    store: &Store,
+    pool: &LocalPool,
+    runner: &F,
+    retry_failed: bool,
+) -> Result<(Vec<Replicated>, usize), CalibrateError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    check_response(target)?;
+    let names = super::parameter_names(study);
+    let mut experiments = Vec::new();
+    for (index, point) in points {
+        let values = names.iter().cloned().zip(point.iter().copied()).collect();
+        for r in 0..replicates {
+            let e = study
+                .replicate_experiment(&target.scene, &values, *index, r)
+                .map_err(|errors| CalibrateError::InvalidPoint {
+                    index: *index as usize,
+                    errors,
+                })?;
+            experiments.push(e);
+        }
+    }
+    let ids: Vec<ContentId> = experiments.iter().map(Experiment::id).collect();
+    let pending: Vec<Experiment> = experiments
+        .iter()
+        .zip(&ids)
+        .filter(|(_, id)| retry_failed || store.status(id) != RunStatus::Failed)
+        .map(|(e, _)| e.clone())
+        .collect();
+    let Ran { failures, cached } = run_incomplete(&pending, store, pool, runner)?;
+    let not_simulated = cached + (experiments.len() - pending.len());
+    let failed_now: Vec<(ContentId, String)> = failures
+        .into_iter()
+        .map(|(i, m)| (pending[i].id(), m))
+        .collect();
+    let mut out = Vec::with_capacity(points.len());
+    let mut k = 0;
+    for (index, point) in points {
+        let mut runs = Vec::with_capacity(replicates as usize);
+        for r in 0..replicates {
+            let id = ids[k].clone();
+            k += 1;
+            let value = match failed_now.iter().find(|(f, _)| *f == id) {
+                Some((_, message)) => Err(message.clone()),
+                None => value_in_store(store, &id, target)?,
+            };
+            runs.push(SeedRun {
+                replicate: r,
+                id,
+                value,
+            });
+        }
+        out.push(Replicated {
+            index: *index,
+            point: point.clone(),
+            runs,
+        });
+    }
+    Ok((out, not_simulated))
+}
+
+/// The value of a run the store holds: its response when complete, its
+/// recorded error when failed.
+fn value_in_store(
+    store: &Store,
+    id: &ContentId,
+    target: &TargetScene,
+) -> Result<Result<f64, String>, CalibrateError> {
+    if let Some(result) = store.load_result(id)? {
+        return Ok(response_of(&result, target));
+    }
+    let error = Store::read_json::<ErrorRecord>(&store.run_dir(id).error_path())
+        .map(|e| e.error)
+        .unwrap_or_else(|_| format!("run {} has no result", id.short(12)));
+    Ok(Err(error))
+}
+
+/// Wall time of a run as its timing record gives it, s (none for failed or
+/// missing runs).
+pub fn wall_time_s(store: &Store, id: &ContentId) -> Option<f64> {
+    Store::read_json::<TimingRecord>(&store.run_dir(id).timing_path())
+        .ok()
+        .map(|t| t.wall_time_s)
+}
+
+/// Columns of a replicates table: `index`, the parameters, `replicate`,
+/// `packing_seed`, `experiment_id`, `value_deg`, `failure`.
+pub fn replicates_csv(study: &Study, points: &[Replicated]) -> String {
+    let names = super::parameter_names(study);
+    let mut header = vec!["index".to_string()];
+    header.extend(names.iter().cloned());
+    header.extend(
+        [
+            "replicate",
+            "packing_seed",
+            "experiment_id",
+            "value_deg",
+            "failure",
+        ]
+        .map(String::from),
+    );
+    let mut csv = CsvWriter::new(&header);
+    for p in points {
+        for r in &p.runs {
+            let mut cells = vec![Cell::Integer(p.index)];
+            cells.extend(p.point.iter().map(|v| Cell::Number(*v)));
+            cells.push(Cell::Integer(u64::from(r.replicate)));
+            cells.push(Cell::Integer(study.packing_seed + u64::from(r.replicate)));
+            cells.push(Cell::Text(r.id.to_string()));
+            cells.push(r.value.as_ref().map_or(Cell::Empty, |v| Cell::Number(*v)));
+            cells.push(Cell::Text(
+                r.value
+                    .as_ref()
+                    .err()
+                    .map_or(String::new(), |m| super::verify::csv_word(m)),
+            ));
+            csv.row(&cells);
+        }
+    }
+    csv.finish()
+}
+
+/// Reads a table written by [`replicates_csv`] back into points (rows of one
+/// index are one point, in file order).
+pub fn read_replicates_csv(
+    path: &std::path::Path,
+    study: &Study,
+) -> Result<Vec<Replicated>, CalibrateError> {
+    let table = Table::read(path)?;
+    let names = super::parameter_names(study);
+    let index = table.numbers(path, "index")?;
+    let columns = names
+        .iter()
+        .map(|n| table.numbers(path, n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let replicate = table.numbers(path, "replicate")?;
+    let id_col = table.require(path, "experiment_id")?;
+    let value_col = table.require(path, "value_deg")?;
+    let failure_col = table.require(path, "failure")?;
+    let mut out: Vec<Replicated> = Vec::new();
+    for (i, cells) in table.rows.iter().enumerate() {
+        let id = ContentId::parse(&cells[id_col]).ok_or_else(|| CalibrateError::Inconsistent {
+            path: path.to_path_buf(),
+            message: format!(
+                "line {}: `{}` is not an experiment id",
+                i + 2,
+                cells[id_col]
+            ),
+        })?;
+        let value = parse_number(&cells[value_col]).ok_or_else(|| cells[failure_col].clone());
+        let run = SeedRun {
+            replicate: replicate[i] as u32,
+            id,
+            value,
+        };
+        let idx = index[i] as u64;
+        match out.last_mut() {
+            Some(last) if last.index == idx => last.runs.push(run),
+            _ => out.push(Replicated {
+                index: idx,
+                point: columns.iter().map(|c| c[i]).collect(),
+                runs: vec![run],
+            }),
+        }
+    }
+    Ok(out)
+}
+
+/// The seed-to-seed variance pooled over every point with two or more
+/// measured values, Σ(nᵢ − 1)sᵢ² / Σ(nᵢ − 1), deg², with its degrees of
+/// freedom (`None` without any replicated point).
+pub fn pooled_variance(points: &[&Replicated]) -> Option<(f64, usize)> {
+    let (mut ss, mut df) = (0.0, 0usize);
+    for p in points {
+        let v = p.values();
+        if v.len() >= 2 {
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            ss += v.iter().map(|x| (x - m) * (x - m)).sum::<f64>();
+            df += v.len() - 1;
+        }
+    }
+    (df > 0).then(|| (ss / df as f64, df))
+}

@@ -1,0 +1,334 @@
+//! `repose verify` for a noise-aware study: every candidate re-simulated
+//! with `verification_seeds` packing seeds in the calibration scene and in
+//! each verification scene, judged by a rule fixed before any run.
+//!
+//! # The acceptance rule
+//!
+//! A candidate passes a scene when at least [`MIN_MEASURED`] of its seeds
+//! measured an angle and the mean of the measured ones lies inside the
+//! scene's band, target × (1 ∓ tolerance). The mean carries its Student-t
+//! 95 % interval, reported beside it, but the rule judges the mean (he2019
+//! judges one run the same way, Eq. 8–10), so a candidate is not failed for
+//! the noise of the test, nor passed for it. The rule, the seeds and every
+//! scene's target and band are written to `verify/acceptance.json` — with
+//! its lineage record, before the first verification run — from the study
+//! (whose id fixes them), so they cannot be chosen after the result is
+//! seen; the verification table's lineage names that file.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use super::gp_search::clusters_path;
+use super::noise::noise_aware;
+use super::replicates::{replicates_csv, run_replicated, Replicated};
+use super::{json_bytes, parameter_names, write_output, CalibrateError, Stage, StudyDir};
+use crate::exec::LocalPool;
+use crate::manifest::{Experiment, Study};
+use crate::report::markdown::MarkdownTable;
+use crate::report::table::{Cell, CsvWriter, Table};
+use crate::store::{RunDir, RunResult, Store};
+
+/// Fewest measured seeds a candidate needs to pass a scene (a mean with an
+/// interval).
+pub const MIN_MEASURED: usize = 3;
+
+/// One scene of the acceptance rule.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AcceptedScene {
+    /// Scene name.
+    pub name: String,
+    /// Scene kind.
+    pub kind: String,
+    /// The response judged.
+    pub response: String,
+    /// Measured angle, degrees.
+    pub target_deg: f64,
+    /// Accepted relative deviation of the mean.
+    pub tolerance_fraction: f64,
+    /// [lo, hi], degrees.
+    pub band_deg: (f64, f64),
+}
+
+/// The acceptance rule, as written before the verification runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Acceptance {
+    /// The rule in words.
+    pub rule: String,
+    /// Packing seeds per candidate and scene.
+    pub seeds: u32,
+    /// Fewest measured seeds to pass.
+    pub min_measured: usize,
+    /// Every scene judged.
+    pub scenes: Vec<AcceptedScene>,
+}
+
+/// One candidate in one scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SeedVerifyRow {
+    /// Candidate (cluster group).
+    pub group: usize,
+    /// Scene name.
+    pub scene: String,
+    /// Seeds run.
+    pub seeds: usize,
+    /// Seeds measured.
+    pub measured: usize,
+    /// Mean of the measured seeds, degrees.
+    pub mean_deg: Option<f64>,
+    /// Their standard deviation, degrees.
+    pub sd_deg: Option<f64>,
+    /// Half-width of the 95 % interval of the mean, degrees.
+    pub ci95_half_width_deg: Option<f64>,
+    /// Measured (target) angle, degrees.
+    pub target_deg: f64,
+    /// |mean − target| / target.
+    pub relative_error: Option<f64>,
+    /// Whether the rule passes it.
+    pub pass: bool,
+    /// Why seeds have no angle (one line per failed seed).
+    pub failures: Vec<String>,
+}
+
+/// What verify did.
+#[derive(Debug, Clone)]
+pub struct SeedVerifyOutcome {
+    /// The rule.
+    pub acceptance: Acceptance,
+    /// One row per candidate and scene.
+    pub rows: Vec<SeedVerifyRow>,
+    /// The Markdown table (also verification.md).
+    pub markdown: String,
+}
+
+/// The study's acceptance rule (see the module docs).
+pub fn acceptance(study: &Study) -> Result<Acceptance, CalibrateError> {
+    let spec = noise_aware(study)?;
+    let scenes = std::iter::once(&study.calibration)
+        .chain(&study.verification)
+        .map(|t| AcceptedScene {
+            name: t.name.clone(),
+            kind: t.scene.kind().to_string(),
+            response: t
+                .response
+                .clone()
+                .unwrap_or_else(|| "headline_angle_deg".into()),
+            target_deg: t.target_angle_deg,
+            tolerance_fraction: t.tolerance_fraction,
+            band_deg: t.band_deg(),
+        })
+        .collect();
+    Ok(Acceptance {
+        rule: format!(
+            "a candidate passes a scene when at least {MIN_MEASURED} of its {} packing seeds \
+             measure an angle and their mean lies inside the band target x (1 -/+ tolerance)",
+            spec.verification_seeds
+        ),
+        seeds: spec.verification_seeds,
+        min_measured: MIN_MEASURED,
+        scenes,
+    })
+}
+
+/// `verify/acceptance.json`.
+pub fn acceptance_path(dir: &StudyDir) -> PathBuf {
+    dir.stage(Stage::Verify).join("acceptance.json")
+}
+
+/// Runs the verification (see the module docs) on at most `candidates`
+/// clusters, largest first.
+pub fn verify_seeds<E, F>(
+    dir: &StudyDir,
+    study: &Study,
+    store: &Store,
+    pool: &LocalPool,
+    candidates: usize,
+    runner: F,
+) -> Result<SeedVerifyOutcome, CalibrateError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    if candidates == 0 {
+        return Err(CalibrateError::Settings(
+            "--candidates = 0: must be >= 1".into(),
+        ));
+    }
+    let rule = acceptance(study)?;
+    let clusters_file = dir.require(clusters_path(dir), Stage::Search)?;
+    let table = Table::read(&clusters_file)?;
+    let names = parameter_names(study);
+    let groups = table.numbers(&clusters_file, "group")?;
+    let columns = names
+        .iter()
+        .map(|n| table.numbers(&clusters_file, n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let points: Vec<(u64, Vec<f64>)> = groups
+        .iter()
+        .enumerate()
+        .take(candidates)
+        .map(|(row, g)| (*g as u64, columns.iter().map(|c| c[row]).collect()))
+        .collect();
+
+    // The rule goes on record before any verification run.
+    dir.prepare(study, Stage::Verify)?;
+    let rule_lineage = dir
+        .lineage(Stage::Verify, json!({ "record": "acceptance rule" }))
+        .with_input(dir.input("clusters", &clusters_file)?);
+    write_output(&acceptance_path(dir), &json_bytes(&rule), &rule_lineage)?;
+
+    let targets: Vec<_> = std::iter::once(&study.calibration)
+        .chain(&study.verification)
+        .collect();
+    let mut per_scene: Vec<Vec<Replicated>> = Vec::new();
+    for target in &targets {
+        per_scene.push(
+            run_replicated(
+                study, target, &points, rule.seeds, store, pool, &runner, false,
+            )?
+            .0,
+        );
+    }
+    let mut rows = Vec::new();
+    for (k, (group, _)) in points.iter().enumerate() {
+        for (target, runs) in targets.iter().zip(&per_scene) {
+            let r = &runs[k];
+            let values = r.values();
+            let summary = r.summary();
+            let mean = r.mean();
+            let (lo, hi) = target.band_deg();
+            rows.push(SeedVerifyRow {
+                group: *group as usize,
+                scene: target.name.clone(),
+                seeds: r.runs.len(),
+                measured: values.len(),
+                mean_deg: mean,
+                sd_deg: summary.map(|s| s.std),
+                ci95_half_width_deg: summary.map(|s| s.half_width),
+                target_deg: target.target_angle_deg,
+                relative_error: mean
+                    .map(|m| (m - target.target_angle_deg).abs() / target.target_angle_deg),
+                pass: values.len() >= MIN_MEASURED && mean.is_some_and(|m| m >= lo && m <= hi),
+                failures: r
+                    .runs
+                    .iter()
+                    .filter_map(|s| {
+                        s.value
+                            .as_ref()
+                            .err()
+                            .map(|m| format!("seed {}: {m}", s.replicate))
+                    })
+                    .collect(),
+            });
+        }
+    }
+    let mut lineage = dir
+        .lineage(Stage::Verify, json!({ "candidates": candidates }))
+        .with_input(dir.input("clusters", &clusters_file)?)
+        .with_input(dir.input("acceptance", &acceptance_path(dir))?);
+    for runs in &per_scene {
+        for r in runs.iter().flat_map(|p| &p.runs) {
+            let file = store.run_dir(&r.id).result_path();
+            if file.is_file() {
+                lineage = lineage.with_input(dir.input("result", &file)?);
+            }
+        }
+    }
+    let out = dir.stage(Stage::Verify);
+    let all: Vec<Replicated> = per_scene.concat();
+    write_output(
+        &out.join("runs.csv"),
+        replicates_csv(study, &all).as_bytes(),
+        &lineage,
+    )?;
+    let markdown = markdown(&rule, &rows);
+    write_output(&out.join("verification.md"), markdown.as_bytes(), &lineage)?;
+    write_output(
+        &out.join("verification.csv"),
+        csv(&rows).as_bytes(),
+        &lineage,
+    )?;
+    Ok(SeedVerifyOutcome {
+        acceptance: rule,
+        rows,
+        markdown,
+    })
+}
+
+fn csv(rows: &[SeedVerifyRow]) -> String {
+    let mut csv = CsvWriter::new(&[
+        "group",
+        "scene",
+        "seeds",
+        "measured",
+        "mean_deg",
+        "sd_deg",
+        "ci95_half_width_deg",
+        "target_deg",
+        "relative_error",
+        "pass",
+    ]);
+    for r in rows {
+        csv.row(&[
+            Cell::Integer(r.group as u64),
+            Cell::Text(r.scene.clone()),
+            Cell::Integer(r.seeds as u64),
+            Cell::Integer(r.measured as u64),
+            r.mean_deg.map_or(Cell::Empty, Cell::Number),
+            r.sd_deg.map_or(Cell::Empty, Cell::Number),
+            r.ci95_half_width_deg.map_or(Cell::Empty, Cell::Number),
+            Cell::Number(r.target_deg),
+            r.relative_error.map_or(Cell::Empty, Cell::Number),
+            Cell::Text(if r.pass { "yes" } else { "no" }.into()),
+        ]);
+    }
+    csv.finish()
+}
+
+fn markdown(rule: &Acceptance, rows: &[SeedVerifyRow]) -> String {
+    let mut t = MarkdownTable::new(&[
+        "candidate",
+        "scene",
+        "seeds (measured)",
+        "simulated mean ± 95 % CI (°)",
+        "σ (°)",
+        "measured (°)",
+        "relative error",
+        "pass",
+    ]);
+    for r in rows {
+        t.row(&[
+            r.group.to_string(),
+            r.scene.clone(),
+            format!("{} ({})", r.seeds, r.measured),
+            match (r.mean_deg, r.ci95_half_width_deg) {
+                (Some(m), Some(h)) => format!("{m:.2} ± {h:.2}"),
+                (Some(m), None) => format!("{m:.2}"),
+                _ => "not measurable".into(),
+            },
+            r.sd_deg.map_or("—".into(), |s| format!("{s:.2}")),
+            format!("{:.2}", r.target_deg),
+            r.relative_error
+                .map_or("—".into(), |e| format!("{:.1} %", 100.0 * e)),
+            if r.pass { "yes" } else { "no" }.into(),
+        ]);
+    }
+    let mut out = format!(
+        "Acceptance rule (recorded before the runs): {}.\n\n",
+        rule.rule
+    );
+    out.push_str(&t.render());
+    let failures: Vec<_> = rows
+        .iter()
+        .flat_map(|r| r.failures.iter().map(move |f| (r, f)))
+        .collect();
+    if !failures.is_empty() {
+        out.push_str("\nSeeds without an angle:\n\n");
+        for (r, f) in failures {
+            let _ = writeln!(out, "- candidate {} {}: {f}", r.group, r.scene);
+        }
+    }
+    out
+}

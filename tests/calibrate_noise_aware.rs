@@ -1,0 +1,280 @@
+//! The noise-aware calibration (issue 28) end to end on the smoke study with a
+//! fast fake runner whose angle is a known smooth function plus packing
+//! noise: noise floor, replicated batch, GP beside the network, the
+//! probability search with its family report, the acceptance rule recorded
+//! before verification, multi-seed verification, adaptive batches, and the
+//! errors a user meets.
+
+mod common;
+
+use std::path::Path;
+
+use repose::calibrate::adaptive::{Stop, ADAPTIVE_INDEX};
+use repose::calibrate::noise::{noise, NOISE_INDEX};
+use repose::calibrate::pipeline::{calibrate_noise_aware, NoiseAwareOptions};
+use repose::calibrate::sample::SampleSettings;
+use repose::calibrate::search::SearchSettings;
+use repose::calibrate::surrogate::TrainSettings;
+use repose::calibrate::train::{TrainOptions, DEFAULT_TRAIN_FRACTION};
+use repose::calibrate::{Stage, StudyDir};
+use repose::exec::LocalPool;
+use repose::manifest::{parse_study, validate_study, Experiment, Study};
+use repose::store::{Lineage, RunDir, RunResult, Store};
+use serde_json::{json, Value};
+
+/// Seed-to-seed standard deviation of the fake angle, degrees.
+const SIGMA: f64 = 1.5;
+
+/// The packing noise of one run: a fixed pseudo-random value of its packing
+/// seed and its point (uniform on ±√3 σ, so its standard deviation is σ):
+/// independent between points, as a pile's chaotic history makes it even
+/// from the same packing.
+fn packing_noise(seed: u64, point: u64) -> f64 {
+    let mut x =
+        (seed ^ point.rotate_left(17)).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x5851_f42d_4c95_7f2d;
+    x ^= x >> 29;
+    x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x ^= x >> 32;
+    let u = (x >> 11) as f64 / (1u64 << 53) as f64;
+    (2.0 * u - 1.0) * 3f64.sqrt() * SIGMA
+}
+
+/// 20 + 30 μ + 40 μ_r degrees plus the packing noise.
+fn fake_angle(e: &Experiment) -> f64 {
+    let pp = e.contact.particle_particle;
+    20.0 + 30.0 * pp.static_friction
+        + 40.0 * pp.rolling_friction
+        + packing_noise(e.seeds.packing_seed, e.seeds.sample_index)
+}
+
+fn fake(e: &Experiment, _: &RunDir) -> Result<RunResult, std::io::Error> {
+    let mut r = RunResult::new(e, "fake");
+    r.headline_angle_deg = Some(fake_angle(e));
+    Ok(r)
+}
+
+fn noise_aware_block(max_runs: u32) -> Value {
+    json!({ "replicates": 2, "noise_seeds": 8, "min_probability": 0.5,
+            "verification_seeds": 5, "adaptive": { "batch": 2, "max_runs": max_runs } })
+}
+
+/// The smoke study made noise-aware, with edits (JSON pointer → value).
+fn study(dir: &Path, edits: &[(&str, Value)]) -> (Study, std::path::PathBuf) {
+    let mut v = common::example("calibrate-smoke/study.json");
+    v = common::edit(v, "/noise_aware", Some(noise_aware_block(8)));
+    for (pointer, value) in edits {
+        v = common::edit(v, pointer, Some(value.clone()));
+    }
+    let path = dir.join("study.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    (parse_study(&v.to_string()).unwrap(), path)
+}
+
+fn pool() -> LocalPool {
+    LocalPool {
+        jobs: 2,
+        progress: false,
+        limits: Default::default(),
+    }
+}
+
+fn options(study: &Study, adaptive: bool) -> NoiseAwareOptions {
+    NoiseAwareOptions {
+        candidates: 1,
+        adaptive,
+        sample: SampleSettings::default(),
+        train: TrainOptions {
+            settings: TrainSettings::with_seed(study.design.seed),
+            train_fraction: DEFAULT_TRAIN_FRACTION,
+        },
+        search: SearchSettings::with_seed(study.design.seed),
+    }
+}
+
+fn sd(v: &[f64]) -> f64 {
+    let m = v.iter().sum::<f64>() / v.len() as f64;
+    (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+}
+
+#[test]
+fn a_noise_aware_calibration_lands_a_verified_candidate_and_reproduces() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (study, path) = study(tmp.path(), &[]);
+    let run = |root: &Path| {
+        let store = Store::open(root).unwrap();
+        let dir = StudyDir::new(root, &study, &path);
+        let outcome = calibrate_noise_aware(
+            &dir,
+            &study,
+            &store,
+            &pool(),
+            &options(&study, false),
+            fake,
+            &mut |_| {},
+        )
+        .unwrap();
+        (dir, outcome)
+    };
+    let (dir, outcome) = run(&tmp.path().join("a"));
+
+    // Noise floor: the 8 seeds' spread is exactly that of the injected noise.
+    let injected: Vec<f64> = (0..8)
+        .map(|r| packing_noise(study.packing_seed + r, NOISE_INDEX))
+        .collect();
+    let floor = &outcome.noise_floor;
+    assert_eq!((floor.seeds, floor.measured), (8, 8));
+    assert!(
+        (floor.sd_deg.unwrap() - sd(&injected)).abs() < 1e-9,
+        "{floor:?}"
+    );
+    // Centre: μ 0.45, μ_r 0.15 → 39.5° plus the mean noise.
+    let mean_noise = injected.iter().sum::<f64>() / 8.0;
+    assert!((floor.mean_deg.unwrap() - (39.5 + mean_noise)).abs() < 1e-9);
+
+    // Run counts: 8 noise, 12 samples × 2 seeds, 1 candidate × 2 scenes × 5.
+    assert_eq!(outcome.runs.noise, 8);
+    assert_eq!(outcome.runs.design, 24);
+    assert_eq!(outcome.runs.verification, 10);
+
+    // The GP predicts the held-out means of a linear response well and its
+    // intervals cover them; the network's metrics are reported beside it.
+    let gp = outcome
+        .surrogates
+        .iter()
+        .find(|s| s.surrogate == "gp")
+        .unwrap();
+    assert!(gp.validation_r2.unwrap() > 0.9, "{gp:?}");
+    assert!(gp.interval_coverage.unwrap() >= 0.75, "{gp:?}");
+    assert!(outcome.surrogates.iter().any(|s| s.surrogate == "ga_bp"));
+
+    // The candidate's 5-seed mean in the calibration scene is in the band,
+    // judged by the rule recorded before the runs.
+    assert!(outcome.calibrated, "{:#?}", outcome.verification);
+    let row = outcome
+        .verification
+        .iter()
+        .find(|r| r.scene == study.calibration.name)
+        .unwrap();
+    assert_eq!((row.seeds, row.measured), (5, 5));
+    assert!(row.ci95_half_width_deg.unwrap() > 0.0);
+    let (lo, hi) = study.calibration.band_deg();
+    assert!(row.mean_deg.unwrap() >= lo && row.mean_deg.unwrap() <= hi);
+    let rule = dir.stage(Stage::Verify).join("acceptance.json");
+    assert!(rule.is_file());
+    let lineage = Lineage::read_beside(&dir.stage(Stage::Verify).join("verification.csv")).unwrap();
+    assert!(
+        lineage.inputs.iter().any(|i| i.role == "acceptance"),
+        "{lineage:?}"
+    );
+
+    // The family: μ and μ_r trade off along 30 μ + 40 μ_r = const, so the
+    // kept points spread along that line and hardly across it.
+    // In the unit cube (μ_r first: parameters are sorted) the line is
+    // 12 u_r + 21 u_μ = const, whose direction is (21, −12)/√585.
+    let family = &outcome.family;
+    assert!(family.kept > 10);
+    assert!(family.directions[0].variance_share > 0.9, "{family:?}");
+    let along = [21.0 / 585f64.sqrt(), -12.0 / 585f64.sqrt()];
+    let cos: f64 = family.directions[0]
+        .loadings
+        .iter()
+        .zip(along)
+        .map(|(a, b)| a * b)
+        .sum();
+    assert!(cos.abs() > 0.99, "{family:?}");
+
+    // Every table but the wall-time cells is a pure function of the study.
+    let (dir_b, _) = run(&tmp.path().join("b"));
+    for file in [
+        "noise/noise.csv",
+        "batch/replicates.csv",
+        "batch/angles.csv",
+        "train/gp.json",
+        "train/surrogates.json",
+        "search/clusters.csv",
+        "search/family.json",
+        "verify/acceptance.json",
+        "verify/verification.csv",
+    ] {
+        assert_eq!(
+            std::fs::read(dir.path().join(file)).unwrap(),
+            std::fs::read(dir_b.path().join(file)).unwrap(),
+            "{file}"
+        );
+    }
+}
+
+#[test]
+fn adaptive_batches_stop_at_the_band_or_the_budget() {
+    let tmp = tempfile::tempdir().unwrap();
+    // A target between the design's points: 47° (μ ≈ 0.8, μ_r ≈ 0.08 and
+    // along the line), a corner the 12-point design may miss.
+    let (study, path) = study(
+        tmp.path(),
+        &[("/calibration/target_angle_deg", json!(47.0))],
+    );
+    let store = Store::open(tmp.path().join("s")).unwrap();
+    let dir = StudyDir::new(&tmp.path().join("s"), &study, &path);
+    let outcome = calibrate_noise_aware(
+        &dir,
+        &study,
+        &store,
+        &pool(),
+        &options(&study, true),
+        fake,
+        &mut |_| {},
+    )
+    .unwrap();
+    let a = outcome.adaptive.expect("the adaptive stage ran");
+    assert!(a.runs <= 8, "{a:?}");
+    match a.stop {
+        Stop::Reached => {
+            let (_, index, mean) = a.hit.clone().unwrap();
+            let (lo, hi) = study.calibration.band_deg();
+            assert!(mean >= lo && mean <= hi);
+            // Either a design, noise or adaptive point; adaptive ones are
+            // indexed from ADAPTIVE_INDEX on.
+            assert!(index < 12 || index == NOISE_INDEX || index >= ADAPTIVE_INDEX);
+        }
+        Stop::Budget => assert!(a.runs + 4 > 8, "{a:?}"),
+    }
+    assert_eq!(outcome.runs.adaptive, a.runs);
+}
+
+#[test]
+fn the_noise_stage_and_the_study_say_what_is_wrong() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Without a noise_aware block the stage says what it needs.
+    let v = common::example("calibrate-smoke/study.json");
+    let plain = parse_study(&v.to_string()).unwrap();
+    let store = Store::open(tmp.path().join("s")).unwrap();
+    let dir = StudyDir::new(&tmp.path().join("s"), &plain, Path::new("smoke.json"));
+    let err = noise(&dir, &plain, &store, &pool(), fake).unwrap_err();
+    assert!(err.to_string().contains("no `noise_aware` block"), "{err}");
+
+    // Bad noise-aware fields are named with their values.
+    let (mut study, _) = study(tmp.path(), &[]);
+    let spec = study.noise_aware.as_mut().unwrap();
+    spec.noise_seeds = 2;
+    spec.verification_seeds = 3;
+    spec.min_probability = 1.0;
+    let errors = validate_study(&study).unwrap_err().to_string();
+    for field in [
+        "noise_aware.noise_seeds",
+        "noise_aware.verification_seeds",
+        "noise_aware.min_probability",
+    ] {
+        assert!(errors.contains(field), "{field}: {errors}");
+    }
+
+    // A response the scene does not have is refused before any run.
+    let (study, path) = study_with_response(tmp.path());
+    let dir = StudyDir::new(&tmp.path().join("r"), &study, &path);
+    let store = Store::open(tmp.path().join("r")).unwrap();
+    let err = noise(&dir, &study, &store, &pool(), fake).unwrap_err();
+    assert!(err.to_string().contains("angle_cone_deg"), "{err}");
+}
+
+fn study_with_response(dir: &Path) -> (Study, std::path::PathBuf) {
+    study(dir, &[("/calibration/response", json!("angle_cone_deg"))])
+}
