@@ -17,7 +17,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use repose::calibrate::{Stage, StudyDir};
-use repose::commands::calibrate;
+use repose::commands::{calibrate, CalibrateFlags};
 use repose::manifest::parse_study;
 use repose::scenes::plan::Limits;
 
@@ -63,7 +63,8 @@ fn chain(store: &Path, jobs: usize) -> StudyDir {
         store,
         Some(&path),
         jobs,
-        CANDIDATES,
+        Some(CANDIDATES),
+        CalibrateFlags::default(),
         &Limits::default(),
         &mut out,
     )

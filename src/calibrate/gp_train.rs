@@ -20,10 +20,10 @@
 //! the adaptive points always train. Each surrogate predicts the validation
 //! rows' replicate means: R² (Eq. 7), RMSE, and the coverage of its 95 %
 //! predictive intervals — the fraction of validation means inside them. The
-//! GP's interval for a mean of nᵢ seeds is ± 1.96 √(latent variance + nugget
-//! + σ²/nᵢ). The network gives no spread of its own: its interval is ± 1.96 ×
-//! its RMSE on its own training rows (near zero when it interpolates them,
-//! which is what the coverage then shows).
+//! GP's interval for a mean of nᵢ seeds is ± 1.96 √(latent variance +
+//! nugget + σ²/nᵢ). The network gives no spread of its own: its interval is
+//! ± 1.96 × its RMSE on its own training rows (near zero when it
+//! interpolates them, which is what the coverage then shows).
 //!
 //! The GP used by the search is then fitted to every row (`train/gp.json`
 //! keeps its data and hyperparameters, so the search rebuilds it exactly).
@@ -142,11 +142,14 @@ pub struct GpOutcome {
     pub markdown: String,
 }
 
-/// Reads every replicates table the study has and pools the variance.
-fn gather(
-    dir: &StudyDir,
-    study: &Study,
-) -> Result<(Vec<(String, Replicated)>, Vec<PathBuf>), CalibrateError> {
+/// Simulated points by source (`design`, `noise`, `adaptive`).
+type Sourced = Vec<(String, Replicated)>;
+
+/// A predictor of the angle (degrees) at a physical point.
+pub type Predictor<'a> = &'a dyn Fn(&[f64]) -> f64;
+
+/// Reads every replicates table the study has, with the files read.
+fn gather(dir: &StudyDir, study: &Study) -> Result<(Sourced, Vec<PathBuf>), CalibrateError> {
     let design_file = dir.require(replicates_path(dir), Stage::Batch)?;
     let mut rows: Vec<(String, Replicated)> = read_replicates_csv(&design_file, study)?
         .into_iter()
@@ -268,7 +271,7 @@ pub fn train_gp(
     study: &Study,
     train_fraction: f64,
     seed: u64,
-    network: Option<&dyn Fn(&[f64]) -> f64>,
+    network: Option<Predictor>,
 ) -> Result<GpOutcome, CalibrateError> {
     let (rows, files) = gather(dir, study)?;
     let all: Vec<&(String, Replicated)> = rows.iter().collect();

@@ -35,6 +35,27 @@
 //!                                   (see [`curve`])
 //! ```
 //!
+//! A noise-aware study (`noise_aware` block, [`crate::manifest::NoiseAware`])
+//! runs each point with several packing seeds and adds ([`pipeline`]):
+//!
+//! ```text
+//!   noise/noise.csv, .md, .json     the centre of the ranges x noise seeds: σ,
+//!                                   95 % CI, cost per run, σ² x CPU s ([`noise`])
+//!   batch/replicates.csv            every replicate run; angles.csv holds the
+//!                                   replicate means ([`replicates`])
+//!   train/gp.json, surrogates.*     the Gaussian process beside the network,
+//!                                   validation R², RMSE and 95 % interval
+//!                                   coverage of both ([`gp_train`])
+//!   adaptive/replicates.csv         points the GP chose (`--adaptive`, [`adaptive`])
+//!   search/points.csv, clusters.*,  kept by the probability of the target band;
+//!   search/family.json              the family of consistent parameter sets
+//!                                   ([`gp_search`])
+//!   verify/acceptance.json          the acceptance rule, written before the runs
+//!   verify/verification.*, runs.csv every candidate x scene x seed: mean ± CI,
+//!                                   pass ([`verify_seeds`])
+//!   outcome.json                    the whole outcome (`calibrate --json`)
+//! ```
+//!
 //! The runs themselves stay where `repose run` puts them (`<store>/<id>/`), so a
 //! sample shared by two studies, or run by hand, is simulated once.
 //!
