@@ -1344,11 +1344,12 @@ pub fn calibrate(
             std::fs::create_dir_all(store_root).map_err(StoreError::io(store_root))?;
             let p = store_root.join("default-study.json");
             write_atomic(&p, DEFAULT_STUDY.as_bytes()).map_err(StoreError::io(&p))?;
-            writeln!(
-                out,
-                "calibrating the embedded default study ({})",
-                p.display()
-            )?;
+            let note = format!("calibrating the embedded default study ({})", p.display());
+            if flags.json {
+                eprintln!("{note}");
+            } else {
+                writeln!(out, "{note}")?;
+            }
             p
         }
     };

@@ -79,6 +79,7 @@ fn an_unreadable_input_file_exits_2_from_every_command() {
             "tradeoff",
             "sample",
             "batch",
+            "noise",
             "calibrate",
         ] {
             let out = repose(tmp.path(), &[command, file]);
