@@ -90,18 +90,25 @@ fn smoke_manifest_forms_a_measurable_pile() {
     // overlap is 0.5 % of the radius here and the blades crush nothing.
     let overlap = &r.traces["max_overlap_ratio"].values;
     assert!(overlap.iter().all(|&o| o < 0.2), "{overlap:?}");
-    // The one named response is the headline angle.
+    // The named responses: the headline angle and the whole-surface cone.
     let names: Vec<_> = catalogue("funnel_pile")
         .unwrap()
         .iter()
         .map(|s| s.name)
         .collect();
-    assert_eq!(names, ["angle_deg"]);
+    assert_eq!(names, ["angle_deg", "angle_cone_deg"]);
     assert_eq!(response(&r, "funnel_pile", "angle_deg").unwrap(), a);
+    let cone = r.measurements["angle_cone_deg"];
+    assert_eq!(response(&r, "funnel_pile", "angle_cone_deg").unwrap(), cone);
+    assert!(cone > 10.0 && cone < 80.0, "{cone}");
+    assert!(r.measurements["angle_cone_points"] >= 12.0);
     let err = response(&r, "funnel_pile", "angle_views")
         .unwrap_err()
         .to_string();
-    assert!(err.contains("its responses are: angle_deg"), "{err}");
+    assert!(
+        err.contains("its responses are: angle_deg, angle_cone_deg"),
+        "{err}"
+    );
 }
 
 /// The smoke funnel with particle–particle surface energy `gamma` (J/m²).
