@@ -587,11 +587,40 @@ reject!(
 reject!(
     study_parameter_set_once,
     study(),
-    "/fixed/particle_wall.steel.restitution",
+    "/fixed/particle_particle.restitution",
     Some(json!(0.5)),
-    "fixed.particle_wall.steel.restitution",
+    "fixed.particle_particle.restitution",
     "already sets"
 );
+
+/// A wall material named for a field is set by that address, and `*` covers
+/// the other walls (a funnel's brush with its own restitution beside one
+/// calibrated e_pw): not a double setting.
+#[test]
+fn study_named_wall_overrides_the_star() {
+    let doc = edit(
+        study(),
+        "/fixed/particle_wall.steel.restitution",
+        Some(json!(0.5)),
+    );
+    let parsed = parse_document(&doc.to_string(), None);
+    assert!(parsed.is_ok(), "{:?}", parsed.err().map(|e| e.to_string()));
+    // Named twice (calibrated and fixed) is still refused.
+    let twice = edit(
+        edit(
+            doc,
+            "/parameters/particle_wall.steel.restitution",
+            Some(json!({"min": 0.1, "max": 0.6})),
+        ),
+        "/fixed/particle_particle.restitution",
+        None,
+    );
+    let errors = errors(&twice);
+    assert!(
+        errors.iter().any(|e| e.contains("already sets")),
+        "{errors:#?}"
+    );
+}
 reject!(
     study_every_parameter_given,
     study(),
