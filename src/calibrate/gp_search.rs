@@ -27,7 +27,6 @@
 //! parameters needs thousands of points to be populated).
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 use nalgebra::{DMatrix, SymmetricEigen};
 use serde::{Deserialize, Serialize};
@@ -37,6 +36,7 @@ use super::gp_train::{gp_path, read_gp};
 use super::meanshift::{estimate_bandwidth, mean_shift};
 use super::noise::noise_aware;
 use super::search::SearchSettings;
+use super::verify::clusters_path;
 use super::{
     json_bytes, parameter_names, rng, to_physical, write_output, CalibrateError, Stage, Stream,
     StudyDir,
@@ -116,11 +116,6 @@ pub struct GpSearchOutcome {
     pub family: Family,
     /// The Markdown report (clusters and family).
     pub markdown: String,
-}
-
-/// `search/clusters.csv`.
-pub fn clusters_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Search).join("clusters.csv")
 }
 
 /// Runs the noise-aware search (see the module docs).

@@ -127,9 +127,37 @@ impl VerifyOutcome {
     }
 }
 
-/// `search/clusters.csv`.
-fn clusters_path(dir: &StudyDir) -> PathBuf {
+/// `search/clusters.csv` (written by the network's and the GP's search).
+pub fn clusters_path(dir: &StudyDir) -> PathBuf {
     dir.stage(Stage::Search).join("clusters.csv")
+}
+
+/// The centres of the first `candidates` clusters of `search/clusters.csv`:
+/// (group, physical point in parameter order), with the file read.
+pub(crate) fn read_candidates(
+    dir: &StudyDir,
+    study: &Study,
+    candidates: usize,
+) -> Result<(PathBuf, Vec<(u64, Vec<f64>)>), CalibrateError> {
+    if candidates == 0 {
+        return Err(CalibrateError::Settings(
+            "--candidates = 0: must be >= 1".into(),
+        ));
+    }
+    let clusters_file = dir.require(clusters_path(dir), Stage::Search)?;
+    let table = Table::read(&clusters_file)?;
+    let groups = table.numbers(&clusters_file, "group")?;
+    let columns = parameter_names(study)
+        .iter()
+        .map(|n| table.numbers(&clusters_file, n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let points = groups
+        .iter()
+        .enumerate()
+        .take(candidates)
+        .map(|(row, g)| (*g as u64, columns.iter().map(|c| c[row]).collect()))
+        .collect();
+    Ok((clusters_file, points))
 }
 
 /// `verify/verification.csv`.
@@ -150,32 +178,17 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    if candidates == 0 {
-        return Err(CalibrateError::Settings(
-            "--candidates = 0: must be >= 1".into(),
-        ));
-    }
-    let clusters_file = dir.require(clusters_path(dir), Stage::Search)?;
-    let table = Table::read(&clusters_file)?;
+    let (clusters_file, centres) = read_candidates(dir, study, candidates)?;
     let names = parameter_names(study);
-    let groups = table.numbers(&clusters_file, "group")?;
-    let columns = names
-        .iter()
-        .map(|n| table.numbers(&clusters_file, n))
-        .collect::<Result<Vec<_>, _>>()?;
     let scenes: Vec<_> = std::iter::once(&study.calibration)
         .chain(&study.verification)
         .collect();
     let mut planned = Vec::new();
-    for (row, group) in groups.iter().enumerate().take(candidates) {
-        let point = names
-            .iter()
-            .zip(&columns)
-            .map(|(n, c)| (n.clone(), c[row]))
-            .collect();
+    for (group, centre) in &centres {
+        let point = names.iter().cloned().zip(centre.iter().copied()).collect();
         for target in &scenes {
             let experiment = study
-                .experiment(&target.scene, &point, *group as u64)
+                .experiment(&target.scene, &point, *group)
                 .map_err(|errors| CalibrateError::InvalidPoint {
                     index: *group as usize,
                     errors,

@@ -21,14 +21,14 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::gp_search::clusters_path;
 use super::noise::noise_aware;
 use super::replicates::{replicates_csv, run_replicated, Replicated};
-use super::{json_bytes, parameter_names, write_output, CalibrateError, Stage, StudyDir};
+use super::verify::read_candidates;
+use super::{json_bytes, write_output, CalibrateError, Stage, StudyDir};
 use crate::exec::LocalPool;
 use crate::manifest::{Experiment, Study};
 use crate::report::markdown::MarkdownTable;
-use crate::report::table::{Cell, CsvWriter, Table};
+use crate::report::table::{Cell, CsvWriter};
 use crate::store::{RunDir, RunResult, Store};
 
 /// Fewest measured seeds a candidate needs to pass a scene (a mean with an
@@ -151,26 +151,8 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    if candidates == 0 {
-        return Err(CalibrateError::Settings(
-            "--candidates = 0: must be >= 1".into(),
-        ));
-    }
     let rule = acceptance(study)?;
-    let clusters_file = dir.require(clusters_path(dir), Stage::Search)?;
-    let table = Table::read(&clusters_file)?;
-    let names = parameter_names(study);
-    let groups = table.numbers(&clusters_file, "group")?;
-    let columns = names
-        .iter()
-        .map(|n| table.numbers(&clusters_file, n))
-        .collect::<Result<Vec<_>, _>>()?;
-    let points: Vec<(u64, Vec<f64>)> = groups
-        .iter()
-        .enumerate()
-        .take(candidates)
-        .map(|(row, g)| (*g as u64, columns.iter().map(|c| c[row]).collect()))
-        .collect();
+    let (clusters_file, points) = read_candidates(dir, study, candidates)?;
 
     // The rule goes on record before any verification run.
     dir.prepare(study, Stage::Verify)?;
