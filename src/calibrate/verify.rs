@@ -132,13 +132,16 @@ pub fn clusters_path(dir: &StudyDir) -> PathBuf {
     dir.stage(Stage::Search).join("clusters.csv")
 }
 
+/// Cluster centres to verify: (group, physical point in parameter order).
+pub(crate) type Centres = Vec<(u64, Vec<f64>)>;
+
 /// The centres of the first `candidates` clusters of `search/clusters.csv`:
 /// (group, physical point in parameter order), with the file read.
 pub(crate) fn read_candidates(
     dir: &StudyDir,
     study: &Study,
     candidates: usize,
-) -> Result<(PathBuf, Vec<(u64, Vec<f64>)>), CalibrateError> {
+) -> Result<(PathBuf, Centres), CalibrateError> {
     if candidates == 0 {
         return Err(CalibrateError::Settings(
             "--candidates = 0: must be >= 1".into(),
