@@ -1,6 +1,6 @@
 //! One library function per CLI subcommand; `main.rs` only parses arguments and
 //! calls these. Each writes its report to the given writer and returns a typed
-//! error whose [`CommandError::exit_code`] is 2 for invalid input and 1 for a
+//! error whose [`CommandError::exit_code`] is 3 while runs wait on Slurm, 2 for invalid input and 1 for a
 //! runtime failure.
 
 use std::io::{self, Write};
@@ -27,14 +27,14 @@ use crate::calibrate::verify::verify as run_verify;
 use crate::calibrate::verify_seeds::verify_seeds;
 use crate::calibrate::{CalibrateError, Stage, StudyDir};
 use crate::doe::diagnostics::Diagnostics;
-use crate::exec::LocalPool;
+use crate::exec::Executor;
 use crate::log::{inspect, InspectError};
 use crate::manifest::{
     read_document, read_experiment, ContentId, Document, DocumentKind, Experiment, ManifestError,
     Study,
 };
 use crate::scenes::plan::{plan as plan_run, Limits, OverLimit, RunPlan};
-use crate::scenes::protocol::{progress_enabled, set_quiet};
+use crate::scenes::protocol::set_quiet;
 use crate::scenes::responses::listing;
 use crate::scenes::run_logged;
 use crate::store::{
@@ -165,8 +165,13 @@ pub enum CommandError {
 }
 
 impl CommandError {
-    /// Process exit code: 2 when the user's input is at fault, 1 otherwise.
+    /// Process exit code: 3 when the runs are on their way on Slurm (queued
+    /// with `--no-wait`, or a `--dry-run` script to submit), 2 when the user's
+    /// input is at fault, 1 otherwise.
     pub fn exit_code(&self) -> u8 {
+        if crate::exec::ExecError::waiting_in(self) {
+            return 3;
+        }
         let invalid = match self {
             CommandError::Manifest { error, .. } => error.is_invalid_input(),
             CommandError::ValidationFailed { .. } => true,
@@ -179,7 +184,7 @@ impl CommandError {
             CommandError::Audit(AuditError::Path { .. } | AuditError::NothingToAudit(_)) => true,
             CommandError::Audit(AuditError::Store(e)) => e.is_invalid_input(),
             CommandError::Calibrate(e) => e.is_invalid_input(),
-            CommandError::Exec(_) => true,
+            CommandError::Exec(e) => e.is_invalid_input(),
             CommandError::Tradeoff(e) => e.is_invalid_input(),
             CommandError::Study(e) => e.is_invalid_input(),
             CommandError::RunFailed { .. }
@@ -642,17 +647,17 @@ pub fn tradeoff(
     store_root: &Path,
     manifest: &Path,
     options: &TradeoffOptions,
-    limits: &Limits,
+    exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
     let points = plan_sweep(&base, &options.knobs, options.replicates)?;
     let store = open_store(store_root)?;
-    let pool = LocalPool {
-        jobs: options.threads,
-        progress: progress_enabled(),
-        limits: *limits,
-    };
+    let out_dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| tradeoff_sweep::default_dir(&store, &base));
+    let pool = exec.in_study(&out_dir);
     let done = tradeoff_sweep::sweep(
         &store,
         &base,
@@ -660,7 +665,7 @@ pub fn tradeoff(
         &points,
         &options.knobs,
         &pool,
-        options.out_dir.clone(),
+        Some(out_dir),
     )?;
     write!(out, "{}", done.markdown)?;
     writeln!(out, "\nwritten: {}", done.dir.display())?;
@@ -675,8 +680,7 @@ pub fn learning_curve(
     store_root: &Path,
     study_path: &Path,
     sizes: Option<&[usize]>,
-    jobs: usize,
-    limits: &Limits,
+    exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
@@ -689,7 +693,7 @@ pub fn learning_curve(
             &mut io::stderr(),
         )?;
     }
-    batch_leaving_out_failures(store_root, study_path, jobs, limits, out)?;
+    batch_leaving_out_failures(store_root, study_path, exec, out)?;
     let store = open_store(store_root)?;
     let outcome = curve::learning_curve(&dir, &study, &store, sizes)?;
     write!(out, "\n{}", outcome.markdown)?;
@@ -820,15 +824,14 @@ pub struct CalibrateFlags {
 fn calibrate_noise_aware(
     store_root: &Path,
     path: &Path,
-    jobs: usize,
+    exec: &Executor,
     candidates: usize,
     flags: CalibrateFlags,
-    limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, path)?;
     let store = open_store(store_root)?;
-    let pool = study_pool(jobs, limits);
+    let pool = exec.in_study(dir.path());
     set_quiet(true);
     let options = NoiseAwareOptions {
         candidates,
@@ -886,13 +889,12 @@ fn calibrate_noise_aware(
 pub fn noise(
     store_root: &Path,
     study_path: &Path,
-    jobs: usize,
-    limits: &Limits,
+    exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
     let store = open_store(store_root)?;
-    let pool = study_pool(jobs, limits);
+    let pool = exec.in_study(dir.path());
     set_quiet(true);
     let outcome = run_noise(&dir, &study, &store, &pool, run_logged)?;
     write!(out, "{}", outcome.markdown)?;
@@ -908,11 +910,10 @@ pub fn noise(
 pub fn batch(
     store_root: &Path,
     study_path: &Path,
-    jobs: usize,
-    limits: &Limits,
+    exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (failed, total) = run_batch_and_report(store_root, study_path, jobs, limits, out)?;
+    let (failed, total) = run_batch_and_report(store_root, study_path, exec, out)?;
     if failed > 0 {
         return Err(CommandError::BatchIncomplete { failed, total });
     }
@@ -926,11 +927,10 @@ pub fn batch(
 fn batch_leaving_out_failures(
     store_root: &Path,
     study_path: &Path,
-    jobs: usize,
-    limits: &Limits,
+    exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (failed, total) = run_batch_and_report(store_root, study_path, jobs, limits, out)?;
+    let (failed, total) = run_batch_and_report(store_root, study_path, exec, out)?;
     if failed > 0 {
         writeln!(
             out,
@@ -946,17 +946,12 @@ fn batch_leaving_out_failures(
 fn run_batch_and_report(
     store_root: &Path,
     study_path: &Path,
-    jobs: usize,
-    limits: &Limits,
+    exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(usize, usize), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
     let store = open_store(store_root)?;
-    let settings = LocalPool {
-        jobs,
-        progress: progress_enabled(),
-        limits: *limits,
-    };
+    let settings = exec.in_study(dir.path());
     set_quiet(true);
     let outcome = run_batch(&dir, &study, &store, &settings, run_logged)?;
     writeln!(
@@ -1114,22 +1109,16 @@ pub fn search(
 pub fn verify(
     store_root: &Path,
     study_path: &Path,
-    jobs: usize,
+    exec: &Executor,
     candidates: usize,
-    limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     if is_design_study_file(study_path) {
-        let pool = study_pool(jobs, limits);
-        return rsm(store_root, study_path, &pool, false, out);
+        return rsm(store_root, study_path, exec, false, out);
     }
     let (study, dir) = open_study(store_root, study_path)?;
     let store = open_store(store_root)?;
-    let settings = LocalPool {
-        jobs,
-        progress: progress_enabled(),
-        limits: *limits,
-    };
+    let settings = exec.in_study(dir.path());
     set_quiet(true);
     if study.noise_aware.is_some() {
         let v = verify_seeds(&dir, &study, &store, &settings, candidates, run_logged)?;
@@ -1164,12 +1153,41 @@ fn is_design_study_file(path: &Path) -> bool {
     std::fs::read_to_string(path).is_ok_and(|t| is_design_study(&t))
 }
 
-/// The local executor of the design-study commands.
-pub fn study_pool(jobs: usize, limits: &Limits) -> LocalPool {
-    LocalPool {
-        jobs,
-        progress: progress_enabled(),
-        limits: *limits,
+/// `repose status STUDY`: where every run the study handed to Slurm stands
+/// (see [`crate::exec::slurm::status`]); a table, or with `json` one object.
+pub fn status(
+    store_root: &Path,
+    study_path: &Path,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let dir = if is_design_study_file(study_path) {
+        let (study, _) = open_design_study(store_root, study_path)?;
+        study::dir::StudyDir::path_in(store_root, &study)
+    } else {
+        open_study(store_root, study_path)?.1.path().to_path_buf()
+    };
+    let store = open_store(store_root)?;
+    let report = crate::exec::slurm::status::status(&store, dir.join("slurm"))?;
+    if json {
+        print_json(&report, out)
+    } else {
+        write!(out, "{}", report.text())?;
+        if report.runs.is_empty() {
+            writeln!(
+                out,
+                "(nothing submitted to Slurm yet: run a stage with --executor slurm)"
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// How an executor runs, for stage headings: `N at a time` or `on Slurm`.
+fn exec_label(exec: &Executor) -> String {
+    match &exec.slurm {
+        Some(_) => "on Slurm".to_string(),
+        None => format!("{} at a time", exec.jobs),
     }
 }
 
@@ -1210,12 +1228,13 @@ fn print_json<T: serde::Serialize>(value: &T, out: &mut dyn Write) -> Result<(),
 pub fn rsm(
     store_root: &Path,
     study_path: &Path,
-    pool: &LocalPool,
+    pool: &Executor,
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, store) = open_design_study(store_root, study_path)?;
-    let report = study::run_rsm(store_root, &study, &store, pool, &run_logged)?;
+    let pool = pool.in_study(&study::dir::StudyDir::path_in(store_root, &study));
+    let report = study::run_rsm(store_root, &study, &store, &pool, &run_logged)?;
     if json {
         print_json(&report, out)?;
     } else {
@@ -1257,13 +1276,14 @@ pub fn rsm_table(
 pub fn sensitivity(
     store_root: &Path,
     study_path: &Path,
-    pool: &LocalPool,
+    pool: &Executor,
     levels: study::sensitivity::Levels,
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, store) = open_design_study(store_root, study_path)?;
-    let outcome = study::run_sensitivity(store_root, &study, &store, pool, &run_logged, levels)?;
+    let pool = pool.in_study(&study::dir::StudyDir::path_in(store_root, &study));
+    let outcome = study::run_sensitivity(store_root, &study, &store, &pool, &run_logged, levels)?;
     if json {
         print_json(&outcome, out)?;
     } else {
@@ -1301,12 +1321,13 @@ pub fn sensitivity_table(
 pub fn screen(
     store_root: &Path,
     study_path: &Path,
-    pool: &LocalPool,
+    pool: &Executor,
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, store) = open_design_study(store_root, study_path)?;
-    let outcome = study::run_screen(store_root, &study, &store, pool, &run_logged)?;
+    let pool = pool.in_study(&study::dir::StudyDir::path_in(store_root, &study));
+    let outcome = study::run_screen(store_root, &study, &store, &pool, &run_logged)?;
     if json {
         print_json(&outcome, out)
     } else {
@@ -1332,10 +1353,9 @@ pub const DEFAULT_STUDY: &str = include_str!("../experiments/he2019-quick/study.
 pub fn calibrate(
     store_root: &Path,
     study_path: Option<&Path>,
-    jobs: usize,
+    exec: &Executor,
     candidates: Option<usize>,
     flags: CalibrateFlags,
-    limits: &Limits,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let path = match study_path {
@@ -1356,7 +1376,7 @@ pub fn calibrate(
     let study = read_study(&path)?;
     if study.noise_aware.is_some() {
         let candidates = candidates.unwrap_or(1);
-        return calibrate_noise_aware(store_root, &path, jobs, candidates, flags, limits, out);
+        return calibrate_noise_aware(store_root, &path, exec, candidates, flags, out);
     }
     let candidates = candidates.unwrap_or(3);
     if flags.adaptive || flags.json {
@@ -1368,8 +1388,8 @@ pub fn calibrate(
     let mut err = io::stderr();
     writeln!(out, "\n== 1/5 sample")?;
     sample(store_root, &path, &SampleSettings::default(), out, &mut err)?;
-    writeln!(out, "\n== 2/5 batch ({jobs} at a time)")?;
-    batch_leaving_out_failures(store_root, &path, jobs, limits, out)?;
+    writeln!(out, "\n== 2/5 batch ({})", exec_label(exec))?;
+    batch_leaving_out_failures(store_root, &path, exec, out)?;
     writeln!(out, "\n== 3/5 train")?;
     let options = TrainOptions {
         settings: TrainSettings::with_seed(study.design.seed),
@@ -1385,5 +1405,5 @@ pub fn calibrate(
         out,
     )?;
     writeln!(out, "\n== 5/5 verify ({candidates} candidate(s))")?;
-    verify(store_root, &path, jobs, candidates, limits, out)
+    verify(store_root, &path, exec, candidates, out)
 }

@@ -18,6 +18,8 @@ use repose::calibrate::train::{TableSpec, TrainOptions, DEFAULT_TRAIN_FRACTION};
 use repose::commands::{self, CommandError, KindArg, TradeoffOptions};
 use repose::dem::simulation::{NormalChoice, RollingChoice};
 use repose::doe::lhs::Placement;
+use repose::exec::slurm::SlurmSettings;
+use repose::exec::Executor;
 use repose::scenes::plan::Limits;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
 use repose::tradeoff::plan::{Knob, KNOB_NAMES};
@@ -110,6 +112,8 @@ enum Command {
         /// Print the whole screening as JSON on stdout.
         #[arg(long)]
         json: bool,
+        #[command(flatten)]
+        exec: ExecArgs,
     },
     /// Response-surface study: the design's runs (replicated), a full
     /// quadratic model and its ANOVA per response, the joint desirability
@@ -135,6 +139,8 @@ enum Command {
         /// How many clusters (largest first) to verify.
         #[arg(long, default_value_t = 3)]
         candidates: usize,
+        #[command(flatten)]
+        exec: ExecArgs,
     },
     /// The whole he2019 method: sample, batch, train, search, verify; for a
     /// noise-aware study, the noise floor first, replicates, a Gaussian-process
@@ -160,6 +166,8 @@ enum Command {
         /// go to stderr.
         #[arg(long)]
         json: bool,
+        #[command(flatten)]
+        exec: ExecArgs,
     },
     /// The noise floor of a noise-aware study: its calibration scene at the
     /// centre of the ranges with the study's noise seeds; σ, the 95 % CI of
@@ -170,6 +178,8 @@ enum Command {
         /// Runs at once, each single-threaded [default: the number of CPUs].
         #[arg(long)]
         jobs: Option<usize>,
+        #[command(flatten)]
+        exec: ExecArgs,
     },
     /// Measure what accuracy costs in time: sweep fidelity knobs around a scene
     /// manifest (one at a time, R replicates each) and tabulate angle error vs the
@@ -189,6 +199,8 @@ enum Command {
         /// Runs at once, each single-threaded [default: the number of CPUs].
         #[arg(long)]
         jobs: Option<usize>,
+        #[command(flatten)]
+        exec: ExecArgs,
     },
     /// Walk a study's outputs back to their manifests through the lineage records,
     /// re-hash every input file and check every referenced run; optionally re-run
@@ -222,13 +234,26 @@ enum Command {
     /// the diagnostics of a CSV table.
     Sample(SampleArgs),
     /// Run every sampled experiment not yet complete (cached, resumable) and
-    /// write the simulated-angle table.
+    /// write the simulated-angle table. With --executor slurm, as one Slurm
+    /// job array.
     Batch {
         /// Study manifest.
         study: PathBuf,
         /// Runs at once, each single-threaded [default: the number of CPUs].
         #[arg(long)]
         jobs: Option<usize>,
+        #[command(flatten)]
+        exec: ExecArgs,
+    },
+    /// Where every run a study handed to Slurm stands: pending, queued,
+    /// running, done or failed, with its Slurm job and array task (from
+    /// squeue and the store).
+    Status {
+        /// Study manifest (he2019 or design study).
+        study: PathBuf,
+        /// Print one JSON object (counts and one entry per run).
+        #[arg(long)]
+        json: bool,
     },
     /// Train the GA-BP network on the batch's angles (he2019 §3.2–3.4), sweeping
     /// the hidden size; or, with --table, on a CSV table.
@@ -236,6 +261,122 @@ enum Command {
     /// Predict resampled points, keep those within the target tolerance and
     /// cluster them by mean shift (he2019 §3.5, Table 2).
     Search(SearchArgs),
+}
+
+/// Where a stage's runs execute (every command that runs experiments).
+#[derive(clap::Args)]
+#[command(next_help_heading = "Executor (local pool or Slurm)")]
+struct ExecArgs {
+    /// Where runs execute: this machine's workers, or one Slurm job array per
+    /// stage (each task `repose run` against the same store; see README,
+    /// "Running on a cluster").
+    #[arg(long, value_enum, default_value_t = ExecutorKind::Local)]
+    executor: ExecutorKind,
+    /// Slurm: the partition (sbatch --partition).
+    #[arg(long, value_name = "NAME")]
+    partition: Option<String>,
+    /// Slurm: each task's time limit (sbatch --time, e.g. 2-00:00:00).
+    #[arg(long, value_name = "TIME")]
+    time_limit: Option<String>,
+    /// Slurm: each task's memory (sbatch --mem, e.g. 4G).
+    #[arg(long, value_name = "SIZE")]
+    mem: Option<String>,
+    /// Slurm: CPUs per task; the task's simulation runs on that many threads.
+    #[arg(long, value_name = "N")]
+    cpus_per_task: Option<u32>,
+    /// Slurm: the account to charge (sbatch --account).
+    #[arg(long, value_name = "NAME")]
+    account: Option<String>,
+    /// Slurm: a further #SBATCH line, verbatim (repeatable), e.g. --sbatch=--qos=high.
+    #[arg(long, value_name = "LINE")]
+    sbatch: Vec<String>,
+    /// Slurm: shell commands that put `repose` on the node's PATH (e.g.
+    /// "module load repose") [default: put this binary's directory first on PATH].
+    #[arg(long, value_name = "COMMANDS")]
+    setup: Option<String>,
+    /// Slurm: the most array tasks running at once (--array=…%M).
+    #[arg(long, value_name = "M")]
+    max_running: Option<u32>,
+    /// Slurm: write the job script and its task list, do not submit (exit 3).
+    #[arg(long)]
+    dry_run: bool,
+    /// Slurm: submit and return (exit 3) instead of waiting for the runs.
+    #[arg(long)]
+    no_wait: bool,
+    /// Slurm: submit again the runs whose last attempt failed (error.json).
+    #[arg(long)]
+    resubmit_failed: bool,
+    /// Slurm: seconds between queue polls while waiting.
+    #[arg(long, value_name = "S", default_value_t = 10.0)]
+    poll_seconds: f64,
+}
+
+/// The executors `--executor` names.
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum ExecutorKind {
+    /// Worker threads on this machine (--jobs of them).
+    Local,
+    /// A Slurm job array.
+    Slurm,
+}
+
+impl ExecArgs {
+    /// The executor these options describe; a Slurm option without
+    /// `--executor slurm` is refused, naming it.
+    fn executor(&self, jobs: usize, limits: Limits) -> Result<Executor, CommandError> {
+        let slurm_only = [
+            ("--partition", self.partition.is_some()),
+            ("--time-limit", self.time_limit.is_some()),
+            ("--mem", self.mem.is_some()),
+            ("--cpus-per-task", self.cpus_per_task.is_some()),
+            ("--account", self.account.is_some()),
+            ("--sbatch", !self.sbatch.is_empty()),
+            ("--setup", self.setup.is_some()),
+            ("--max-running", self.max_running.is_some()),
+            ("--dry-run", self.dry_run),
+            ("--no-wait", self.no_wait),
+            ("--resubmit-failed", self.resubmit_failed),
+        ];
+        let slurm = match self.executor {
+            ExecutorKind::Local => {
+                if let Some((flag, _)) = slurm_only.iter().find(|(_, set)| *set) {
+                    return Err(CommandError::Usage(format!(
+                        "{flag} is a Slurm option: add --executor slurm"
+                    )));
+                }
+                None
+            }
+            ExecutorKind::Slurm => {
+                if !(self.poll_seconds.is_finite() && self.poll_seconds > 0.0) {
+                    return Err(CommandError::Usage(format!(
+                        "--poll-seconds = {}: must be a number > 0",
+                        self.poll_seconds
+                    )));
+                }
+                Some(SlurmSettings {
+                    partition: self.partition.clone(),
+                    time_limit: self.time_limit.clone(),
+                    mem: self.mem.clone(),
+                    cpus_per_task: self.cpus_per_task.unwrap_or(1),
+                    account: self.account.clone(),
+                    extra: self.sbatch.clone(),
+                    setup: self.setup.clone(),
+                    max_running: self.max_running,
+                    dry_run: self.dry_run,
+                    wait: !self.no_wait,
+                    resubmit_failed: self.resubmit_failed,
+                    poll: std::time::Duration::from_secs_f64(self.poll_seconds),
+                    ..SlurmSettings::default()
+                })
+            }
+        };
+        Ok(Executor {
+            jobs,
+            progress: repose::scenes::protocol::progress_enabled(),
+            limits,
+            slurm,
+        })
+    }
 }
 
 /// Options of `repose sample`.
@@ -376,6 +517,8 @@ struct RsmArgs {
     /// Print the whole analysis as JSON on stdout.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    exec: ExecArgs,
 }
 
 #[derive(clap::Args)]
@@ -401,6 +544,8 @@ struct SensitivityArgs {
     /// Print the whole analysis as JSON on stdout (full precision).
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    exec: ExecArgs,
 }
 
 impl RsmArgs {
@@ -473,6 +618,8 @@ struct TradeoffArgs {
     /// Output directory (default <store>/tradeoff/<base id prefix>).
     #[arg(long)]
     out: Option<PathBuf>,
+    #[command(flatten)]
+    exec: ExecArgs,
 }
 
 impl TradeoffArgs {
@@ -637,10 +784,15 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             };
             commands::bench(&args.options(), args.json, &mut out, &mut progress)
         }
-        Command::Screen { study, jobs, json } => commands::screen(
+        Command::Screen {
+            study,
+            jobs,
+            json,
+            exec,
+        } => commands::screen(
             &cli.store,
             &study,
-            &commands::study_pool(default_jobs(jobs), &limits),
+            &exec.executor(default_jobs(jobs), limits)?,
             json,
             &mut out,
         ),
@@ -652,7 +804,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             (None, Some(study)) => commands::rsm(
                 &cli.store,
                 study,
-                &commands::study_pool(default_jobs(args.jobs), &limits),
+                &args.exec.executor(default_jobs(args.jobs), limits)?,
                 args.json,
                 &mut out,
             ),
@@ -681,7 +833,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
                 commands::sensitivity(
                     &cli.store,
                     study,
-                    &commands::study_pool(default_jobs(args.jobs), &limits),
+                    &args.exec.executor(default_jobs(args.jobs), limits)?,
                     levels,
                     args.json,
                     &mut out,
@@ -695,12 +847,12 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             study,
             jobs,
             candidates,
+            exec,
         } => commands::verify(
             &cli.store,
             &study,
-            default_jobs(jobs),
+            &exec.executor(default_jobs(jobs), limits)?,
             candidates,
-            &limits,
             &mut out,
         ),
         Command::Calibrate {
@@ -709,28 +861,36 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             candidates,
             adaptive,
             json,
+            exec,
         } => commands::calibrate(
             &cli.store,
             study.as_deref(),
-            default_jobs(jobs),
+            &exec.executor(default_jobs(jobs), limits)?,
             candidates,
             commands::CalibrateFlags { adaptive, json },
-            &limits,
             &mut out,
         ),
-        Command::Noise { study, jobs } => {
-            commands::noise(&cli.store, &study, default_jobs(jobs), &limits, &mut out)
-        }
+        Command::Noise { study, jobs, exec } => commands::noise(
+            &cli.store,
+            &study,
+            &exec.executor(default_jobs(jobs), limits)?,
+            &mut out,
+        ),
         Command::Tradeoff(args) => {
             let options = args.options().map_err(CommandError::Usage)?;
-            commands::tradeoff(&cli.store, &args.manifest, &options, &limits, &mut out)
+            let exec = args.exec.executor(options.threads, limits)?;
+            commands::tradeoff(&cli.store, &args.manifest, &options, &exec, &mut out)
         }
-        Command::LearningCurve { study, sizes, jobs } => commands::learning_curve(
+        Command::LearningCurve {
+            study,
+            sizes,
+            jobs,
+            exec,
+        } => commands::learning_curve(
             &cli.store,
             &study,
             sizes.as_deref(),
-            default_jobs(jobs),
-            &limits,
+            &exec.executor(default_jobs(jobs), limits)?,
             &mut out,
         ),
         Command::Audit { path, rerun, seed } => {
@@ -744,9 +904,13 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             command: RunsCommand::Show { prefix },
         } => commands::runs_show(&cli.store, &prefix, &mut out),
         Command::Sample(args) => sample(&cli.store, args, &mut out),
-        Command::Batch { study, jobs } => {
-            commands::batch(&cli.store, &study, default_jobs(jobs), &limits, &mut out)
-        }
+        Command::Batch { study, jobs, exec } => commands::batch(
+            &cli.store,
+            &study,
+            &exec.executor(default_jobs(jobs), limits)?,
+            &mut out,
+        ),
+        Command::Status { study, json } => commands::status(&cli.store, &study, json, &mut out),
         Command::Train(args) => train(&cli.store, args, &mut out),
         Command::Search(args) => {
             let settings = SearchSettings {

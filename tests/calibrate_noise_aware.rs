@@ -17,7 +17,7 @@ use repose::calibrate::search::SearchSettings;
 use repose::calibrate::surrogate::TrainSettings;
 use repose::calibrate::train::{TrainOptions, DEFAULT_TRAIN_FRACTION};
 use repose::calibrate::{Stage, StudyDir};
-use repose::exec::LocalPool;
+use repose::exec::Executor;
 use repose::manifest::{parse_study, validate_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
 use serde_json::{json, Value};
@@ -70,11 +70,12 @@ fn study(dir: &Path, edits: &[(&str, Value)]) -> (Study, std::path::PathBuf) {
     (parse_study(&v.to_string()).unwrap(), path)
 }
 
-fn pool() -> LocalPool {
-    LocalPool {
+fn pool() -> Executor {
+    Executor {
         jobs: 2,
         progress: false,
         limits: Default::default(),
+        slurm: None,
     }
 }
 

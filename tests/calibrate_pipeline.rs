@@ -17,7 +17,7 @@ use repose::calibrate::surrogate::TrainSettings;
 use repose::calibrate::train::{train_study, TrainOptions, DEFAULT_TRAIN_FRACTION};
 use repose::calibrate::verify::verify;
 use repose::calibrate::{CalibrateError, Stage, StudyDir};
-use repose::exec::LocalPool;
+use repose::exec::Executor;
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::scenes::run_experiment;
 use repose::store::{Lineage, RunDir, RunResult, RunStatus, Store};
@@ -71,11 +71,12 @@ impl Fake {
     }
 }
 
-fn settings(jobs: usize) -> LocalPool {
-    LocalPool {
+fn settings(jobs: usize) -> Executor {
+    Executor {
         jobs,
         progress: false,
         limits: Default::default(),
+        slurm: None,
     }
 }
 

@@ -12,7 +12,7 @@ use repose::calibrate::batch::{batch, read_design};
 use repose::calibrate::curve::{csv_header, learning_curve};
 use repose::calibrate::sample::{sample, SampleSettings};
 use repose::calibrate::{parameter_names, CalibrateError, Stage, StudyDir};
-use repose::exec::LocalPool;
+use repose::exec::Executor;
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
 use serde_json::json;
@@ -51,10 +51,11 @@ fn prepared(tmp: &Path) -> (Study, StudyDir, Store) {
     let store = Store::open(tmp.join("store")).unwrap();
     let dir = StudyDir::new(store.root(), &s, &path);
     sample(&dir, &s, &SampleSettings::default()).unwrap();
-    let settings = LocalPool {
+    let settings = Executor {
         jobs: 2,
         progress: false,
         limits: Default::default(),
+        slurm: None,
     };
     let out = batch(&dir, &s, &store, &settings, fake).unwrap();
     assert_eq!((out.total, out.failures.len()), (36, 1));

@@ -13,7 +13,7 @@ use common::{edit, example, repose, stderr, stdout};
 use repose::calibrate::batch::batch;
 use repose::calibrate::sample::{sample, SampleSettings};
 use repose::calibrate::{CalibrateError, StudyDir};
-use repose::exec::{ExecError, LocalPool};
+use repose::exec::{ExecError, Executor};
 use repose::manifest::{parse_experiment, parse_study, Experiment};
 use repose::scenes::plan::{plan, Limits, ENGINE_MAX_PARTICLES};
 use repose::scenes::run_experiment;
@@ -363,13 +363,14 @@ fn batch_refuses_over_limit_runs_before_running_any() {
         calls.fetch_add(1, Ordering::SeqCst);
         Ok(RunResult::new(e, "fake"))
     };
-    let settings = LocalPool {
+    let settings = Executor {
         jobs: 1,
         progress: false,
         limits: Limits {
             max_particles: 10,
             ..Limits::default()
         },
+        slurm: None,
     };
     let err = batch(&dir, &s, &store, &settings, runner).unwrap_err();
     assert!(

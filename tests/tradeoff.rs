@@ -12,11 +12,12 @@ use repose::tradeoff::{report, run, summarise};
 
 const GOLDEN: &str = "golden/tradeoff_drum_tiny.csv";
 
-fn pool(jobs: usize) -> repose::exec::LocalPool {
-    repose::exec::LocalPool {
+fn pool(jobs: usize) -> repose::exec::Executor {
+    repose::exec::Executor {
         jobs,
         progress: false,
         limits: repose::scenes::plan::Limits::default(),
+        slurm: None,
     }
 }
 

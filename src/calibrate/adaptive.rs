@@ -23,7 +23,7 @@ use super::{
     parameter_names, rng, to_physical, write_output, CalibrateError, Stage, Stream, StudyDir,
 };
 use crate::doe::lhs::{latin_hypercube, Placement};
-use crate::exec::LocalPool;
+use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::stats::gp::probability_in_band;
 use crate::store::{RunDir, RunResult, Store};
@@ -64,7 +64,7 @@ pub fn adaptive<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     seed: u64,
     runner: F,
     progress: &mut dyn FnMut(&str),

@@ -14,7 +14,7 @@ use serde_json::json;
 use super::replicates::{replicates_csv, run_replicated};
 use super::sample::{design_path, experiment_path};
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
-use crate::exec::{run_incomplete, LocalPool, Ran};
+use crate::exec::{run_incomplete, Executor, Ran};
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
 use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::store::{Depth, RunDir, RunResult, RunState, RunStatus, Store};
@@ -130,7 +130,7 @@ pub fn batch<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
-    settings: &LocalPool,
+    settings: &Executor,
     runner: F,
 ) -> Result<BatchOutcome, CalibrateError>
 where
@@ -265,7 +265,7 @@ fn batch_replicated<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
-    settings: &LocalPool,
+    settings: &Executor,
     runner: &F,
     design: &[DesignRow],
     replicates: u32,

@@ -234,7 +234,7 @@ impl CalibrateError {
             | CalibrateError::Train(_) => true,
             CalibrateError::Table(e) => !matches!(e, TableError::Io { .. }),
             CalibrateError::Store(e) => e.is_invalid_input(),
-            CalibrateError::Exec(_) => true,
+            CalibrateError::Exec(e) => e.is_invalid_input(),
             CalibrateError::Inconsistent { .. } | CalibrateError::NothingKept(_) => false,
         }
     }
@@ -254,9 +254,7 @@ impl StudyDir {
     /// study file as the user gave it (for messages).
     pub fn new(store_root: &Path, study: &Study, source: &Path) -> StudyDir {
         let id = study.id();
-        let path = store_root
-            .join("studies")
-            .join(format!("{}-{}", study.name, id.short(12)));
+        let path = crate::store::study_dir_path(store_root, &study.name, &id);
         StudyDir {
             store_root: store_root.to_path_buf(),
             path,

@@ -23,7 +23,7 @@ use serde_json::json;
 
 use super::replicates::{replicates_csv, run_replicated, wall_time_s, Replicated};
 use super::{json_bytes, to_physical, write_output, CalibrateError, Stage, StudyDir};
-use crate::exec::LocalPool;
+use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::store::{RunDir, RunResult, Store};
@@ -94,7 +94,7 @@ pub fn noise<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: F,
 ) -> Result<NoiseOutcome, CalibrateError>
 where

@@ -31,7 +31,7 @@ use super::search::{load_model, SearchSettings};
 use super::train::{train_study, TrainOptions};
 use super::verify_seeds::{verify_seeds, Acceptance, SeedVerifyRow};
 use super::{json_bytes, write_output, CalibrateError, Stage, StudyDir};
-use crate::exec::LocalPool;
+use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::store::{RunDir, RunResult, Store};
 
@@ -98,7 +98,7 @@ pub fn calibrate_noise_aware<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     options: &NoiseAwareOptions,
     runner: F,
     log: &mut dyn FnMut(&str),

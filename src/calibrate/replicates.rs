@@ -15,7 +15,7 @@
 //! angle.
 
 use super::CalibrateError;
-use crate::exec::{run_incomplete, LocalPool, Ran};
+use crate::exec::{run_incomplete, Executor, Ran};
 use crate::manifest::{ContentId, Experiment, Study, TargetScene};
 use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::scenes::responses::response;
@@ -103,7 +103,7 @@ pub fn run_replicated<E, F>(
     points: &[(u64, Vec<f64>)],
     replicates: u32,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: &F,
     retry_failed: bool,
 ) -> Result<(Vec<Replicated>, usize), CalibrateError>

@@ -27,7 +27,7 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
-use crate::exec::{run_incomplete, LocalPool, Ran};
+use crate::exec::{run_incomplete, Executor, Ran};
 use crate::manifest::{ContentId, Experiment, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::table::{Cell, CsvWriter, Table};
@@ -173,7 +173,7 @@ pub fn verify<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
-    settings: &LocalPool,
+    settings: &Executor,
     candidates: usize,
     runner: F,
 ) -> Result<VerifyOutcome, CalibrateError>

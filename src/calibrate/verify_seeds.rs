@@ -25,7 +25,7 @@ use super::noise::noise_aware;
 use super::replicates::{replicates_csv, run_replicated, Replicated};
 use super::verify::read_candidates;
 use super::{json_bytes, write_output, CalibrateError, Stage, StudyDir};
-use crate::exec::LocalPool;
+use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::table::{Cell, CsvWriter};
@@ -143,7 +143,7 @@ pub fn verify_seeds<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     candidates: usize,
     runner: F,
 ) -> Result<SeedVerifyOutcome, CalibrateError>

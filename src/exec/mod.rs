@@ -3,7 +3,7 @@
 //! stages, `repose tradeoff`) hands them to [`run_incomplete`], which runs
 //! what the store does not hold complete and leaves the results in the store.
 //!
-//! [`LocalPool`] is the executor of this machine: `jobs` worker threads take
+//! Without Slurm settings, [`Executor`] runs on this machine: `jobs` worker threads take
 //! runs from a shared queue; each runs its experiment inside its own
 //! one-thread rayon pool, so a run is single-threaded inside (the engine's
 //! results do not depend on its thread count anyway) and never steals another
@@ -15,16 +15,21 @@
 //!
 //! Before any run starts, every pending experiment's run plan is made
 //! ([`crate::scenes::plan`]): one whose scene and physics are inconsistent, or
-//! whose estimated cost exceeds [`LocalPool::limits`], refuses the whole call
+//! whose estimated cost exceeds [`Executor::limits`], refuses the whole call
 //! ([`ExecError::Refused`]), so a study never starts a run that cannot finish
 //! or would exhaust the machine.
 //!
 //! The runner is a parameter so tests can inject a fast fake; commands pass
 //! [`crate::scenes::run_experiment`] with the run's MCAP log, as `repose run`
-//! does. A cluster executor is a second implementation of this seam.
+//! does. With [`Executor::slurm`] set, the same pending experiments go to a
+//! Slurm job array instead ([`slurm`]): each task is `repose run` on the same
+//! store, so ids, results and the stages above are unchanged (the runner is
+//! then not called).
 
 pub mod progress;
+pub mod slurm;
 
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
@@ -33,6 +38,7 @@ use crate::manifest::{ContentId, Experiment};
 use crate::scenes::plan::{plan, Limits};
 use crate::store::{RunDir, RunResult, RunStatus, Store};
 use progress::BatchProgress;
+use slurm::SlurmSettings;
 
 /// Why experiments could not be handed to the executor.
 #[derive(Debug, thiserror::Error)]
@@ -50,11 +56,76 @@ pub enum ExecError {
         /// The rules it breaks, or the estimates above their limits.
         reason: String,
     },
+    /// Slurm refused or failed a request (sbatch, squeue) or its files could
+    /// not be written.
+    #[error("slurm: {0}")]
+    Slurm(String),
+    /// `--dry-run`: the job script is written, nothing was submitted.
+    #[error(
+        "wrote the job script {} for {runs} runs (--dry-run: not submitted); submit it with \
+         `sbatch {}`, then run this command again to collect the results \
+         (`repose status` shows where they stand)",
+        script.display(),
+        script.display()
+    )]
+    NotSubmitted {
+        /// Runs the script would run.
+        runs: usize,
+        /// The job script.
+        script: PathBuf,
+    },
+    /// `--no-wait`: runs are queued or running on Slurm.
+    #[error(
+        "{runs} runs are queued or running on Slurm (job {jobs}; files in {}); \
+         `repose status` shows where they stand; run this command again once they \
+         have left the queue (finished runs are never run again)",
+        dir.display()
+    )]
+    Queued {
+        /// Runs in the queue.
+        runs: usize,
+        /// Their Slurm job ids, comma-separated.
+        jobs: String,
+        /// The study's slurm directory.
+        dir: PathBuf,
+    },
 }
 
-/// The local executor: worker threads on this machine (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct LocalPool {
+impl ExecError {
+    /// The runs are on their way (queued, or a script waits to be submitted):
+    /// not a failure, but the stage has no results yet (exit code 3).
+    pub fn is_waiting(&self) -> bool {
+        matches!(
+            self,
+            ExecError::NotSubmitted { .. } | ExecError::Queued { .. }
+        )
+    }
+
+    /// Whether `error` or any of its causes is a waiting [`ExecError`] (see
+    /// [`ExecError::is_waiting`]): how the command line picks exit code 3.
+    pub fn waiting_in(error: &(dyn std::error::Error + 'static)) -> bool {
+        let mut e = Some(error);
+        while let Some(x) = e {
+            if x.downcast_ref::<ExecError>()
+                .is_some_and(ExecError::is_waiting)
+            {
+                return true;
+            }
+            e = x.source();
+        }
+        false
+    }
+
+    /// The error is in what the caller asked for (exit code 2).
+    pub fn is_invalid_input(&self) -> bool {
+        matches!(self, ExecError::Settings(_) | ExecError::Refused { .. })
+    }
+}
+
+/// The executor: worker threads on this machine, or Slurm job arrays when
+/// `slurm` is set (see the module docs).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Executor {
     /// Runs simulated at once (≥ 1).
     pub jobs: usize,
     /// Draw the progress bar on stderr.
@@ -62,6 +133,20 @@ pub struct LocalPool {
     /// Resource limits every pending run's plan must stay within; a run beyond
     /// them refuses the whole call before anything runs.
     pub limits: Limits,
+    /// Run on Slurm instead of this machine's workers (`--executor slurm`).
+    pub slurm: Option<SlurmSettings>,
+}
+
+impl Executor {
+    /// The same executor with its Slurm files in `<study_dir>/slurm` (unless a
+    /// directory was set already); a local executor is returned unchanged.
+    pub fn in_study(&self, study_dir: &Path) -> Executor {
+        let mut e = self.clone();
+        if let Some(s) = &mut e.slurm {
+            s.dir.get_or_insert_with(|| study_dir.join("slurm"));
+        }
+        e
+    }
 }
 
 /// What [`run_incomplete`] did.
@@ -78,7 +163,7 @@ pub struct Ran {
 pub fn run_incomplete<E, F>(
     experiments: &[Experiment],
     store: &Store,
-    settings: &LocalPool,
+    settings: &Executor,
     runner: &F,
 ) -> Result<Ran, ExecError>
 where
@@ -103,14 +188,17 @@ where
     }
     let cached = experiments.len() - pending.len();
     let mut progress = BatchProgress::new(settings.progress, experiments.len(), cached);
-    let failures = run_pending(
-        &pending,
-        experiments,
-        store,
-        settings.jobs,
-        runner,
-        &mut progress,
-    )?;
+    let failures = match &settings.slurm {
+        Some(slurm) => slurm::run(&pending, experiments, store, settings, slurm, &mut progress)?,
+        None => run_pending(
+            &pending,
+            experiments,
+            store,
+            settings.jobs,
+            runner,
+            &mut progress,
+        )?,
+    };
     progress.finish();
     Ok(Ran { cached, failures })
 }

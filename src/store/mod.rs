@@ -277,6 +277,13 @@ impl RunState {
 /// another process's claim); the CLI prints them on stderr.
 pub type Notices = Arc<dyn Fn(&str) + Send + Sync>;
 
+/// The directory of study `name` with id `id` in the store at `root`:
+/// `studies/<name>-<first 12 hex of the id>` (he2019 and design studies alike).
+pub fn study_dir_path(root: &Path, name: &str, id: &ContentId) -> PathBuf {
+    root.join("studies")
+        .join(format!("{name}-{}", id.short(12)))
+}
+
 /// Test-only fault injection: called between temp write and rename of every file.
 #[cfg(test)]
 type FaultHook = Box<dyn Fn(&Path) -> io::Result<()> + Send + Sync>;

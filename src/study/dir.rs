@@ -37,9 +37,7 @@ impl StudyDir {
     /// writes `study.json` (unchanged bytes if already there).
     pub fn prepare(store_root: &Path, study: &DesignStudy) -> Result<StudyDir, StudyError> {
         let id = study.id();
-        let path = store_root
-            .join("studies")
-            .join(format!("{}-{}", study.name, id.short(12)));
+        let path = StudyDir::path_in(store_root, study);
         let dir = StudyDir {
             store_root: store_root.to_path_buf(),
             path,
@@ -52,6 +50,12 @@ impl StudyDir {
             write_atomic(&file, bytes.as_bytes()).map_err(StoreError::io(&file))?;
         }
         Ok(dir)
+    }
+
+    /// Where `study`'s directory is in the store at `store_root`
+    /// (`studies/<name>-<first 12 hex of its id>`), without creating it.
+    pub fn path_in(store_root: &Path, study: &DesignStudy) -> PathBuf {
+        crate::store::study_dir_path(store_root, &study.name, &study.id())
     }
 
     /// The directory.

@@ -26,7 +26,7 @@ pub mod verify;
 
 use std::path::Path;
 
-use crate::exec::{ExecError, LocalPool};
+use crate::exec::{ExecError, Executor};
 use crate::manifest::{Experiment, ValidationErrors};
 use crate::store::{RunDir, RunResult, Store, StoreError};
 use spec::DesignStudy;
@@ -78,10 +78,10 @@ impl StudyError {
     /// True when the user's input (options, study, tables) is at fault.
     pub fn is_invalid_input(&self) -> bool {
         match self {
-            StudyError::Settings(_)
-            | StudyError::InvalidPoint { .. }
-            | StudyError::Design(_)
-            | StudyError::Exec(_) => true,
+            StudyError::Settings(_) | StudyError::InvalidPoint { .. } | StudyError::Design(_) => {
+                true
+            }
+            StudyError::Exec(e) => e.is_invalid_input(),
             StudyError::Analysis { .. } | StudyError::Plot(_) => false,
             StudyError::Table(e) => !matches!(e, crate::report::table::TableError::Io { .. }),
             StudyError::Store(e) => e.is_invalid_input(),
@@ -104,7 +104,7 @@ pub fn run_rsm<E, F>(
     store_root: &Path,
     study: &DesignStudy,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: &F,
 ) -> Result<RsmReport, StudyError>
 where
@@ -132,7 +132,7 @@ pub fn run_screen<E, F>(
     store_root: &Path,
     study: &DesignStudy,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: &F,
 ) -> Result<screen::Screen, StudyError>
 where
@@ -148,7 +148,7 @@ pub fn run_sensitivity<E, F>(
     store_root: &Path,
     study: &DesignStudy,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: &F,
     levels: sensitivity::Levels,
 ) -> Result<sensitivity::SensitivityOutcome, StudyError>

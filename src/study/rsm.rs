@@ -21,7 +21,7 @@ use super::StudyError;
 use crate::doe::box_behnken::box_behnken;
 use crate::doe::factorial::full_factorial;
 use crate::doe::Range;
-use crate::exec::LocalPool;
+use crate::exec::Executor;
 use crate::manifest::Experiment;
 use crate::report::plots::{contour, predicted_vs_actual, ContourGrid};
 use crate::report::table::{Cell, CsvWriter, Table};
@@ -182,7 +182,7 @@ pub fn rsm<E, F>(
     dir: &StudyDir,
     study: &DesignStudy,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: &F,
 ) -> Result<RsmOutcome, StudyError>
 where

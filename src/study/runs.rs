@@ -13,7 +13,7 @@ use std::path::Path;
 
 use super::spec::{packing_seed, DesignStudy, SeedStage};
 use super::StudyError;
-use crate::exec::{run_incomplete, LocalPool, Ran};
+use crate::exec::{run_incomplete, Executor, Ran};
 use crate::manifest::{ContentId, Experiment};
 use crate::report::table::{Cell, CsvWriter};
 use crate::scenes::responses::response;
@@ -148,7 +148,7 @@ pub fn needed_scenes(study: &DesignStudy) -> Vec<String> {
 pub fn run_points<E, F>(
     study: &DesignStudy,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: &F,
     stage: SeedStage,
     columns: Vec<String>,

@@ -12,7 +12,7 @@ use super::runs::{run_points, write_table, Point};
 use super::spec::{DesignStudy, SeedStage};
 use super::StudyError;
 use crate::doe::ofat::one_factor_at_a_time;
-use crate::exec::LocalPool;
+use crate::exec::Executor;
 use crate::manifest::Experiment;
 use crate::report::plots::{level_means, LevelPanel};
 use crate::report::table::{Cell, CsvWriter};
@@ -72,7 +72,7 @@ pub fn screen<E, F>(
     dir: &StudyDir,
     study: &DesignStudy,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: &F,
 ) -> Result<Screen, StudyError>
 where

@@ -16,7 +16,7 @@ use super::rsm::RsmOutcome;
 use super::runs::{run_points, write_table, Point};
 use super::spec::{DesignStudy, SeedStage};
 use super::StudyError;
-use crate::exec::LocalPool;
+use crate::exec::Executor;
 use crate::manifest::Experiment;
 use crate::report::table::{Cell, CsvWriter};
 use crate::stats::summary::mean_ci;
@@ -67,7 +67,7 @@ pub fn verify<E, F>(
     study: &DesignStudy,
     rsm: &RsmOutcome,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: &F,
 ) -> Result<Option<Verification>, StudyError>
 where
@@ -136,7 +136,7 @@ pub fn verify_points<E, F>(
     responses: &[String],
     predict: &dyn Fn(&str, &[f64]) -> Option<f64>,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: &F,
 ) -> Result<Option<Verification>, StudyError>
 where

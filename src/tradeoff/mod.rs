@@ -15,7 +15,7 @@ pub mod report;
 
 use std::path::{Path, PathBuf};
 
-use crate::exec::{run_incomplete, ExecError, LocalPool, Ran};
+use crate::exec::{run_incomplete, ExecError, Executor, Ran};
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::run_logged;
 use crate::stats::summary::{difference_ci, mean_ci, MeanCi};
@@ -40,7 +40,7 @@ impl SweepError {
     /// True when the user's input (limits, paths) is at fault.
     pub fn is_invalid_input(&self) -> bool {
         match self {
-            SweepError::Exec(_) => true,
+            SweepError::Exec(e) => e.is_invalid_input(),
             SweepError::Store(e) => e.is_invalid_input(),
         }
     }
@@ -57,6 +57,12 @@ pub struct Sweep {
     pub markdown: String,
 }
 
+/// Where a sweep around `base` writes by default:
+/// `<store>/tradeoff/<first 12 hex of the base id>`.
+pub fn default_dir(store: &Store, base: &Experiment) -> PathBuf {
+    store.root().join("tradeoff").join(base.id().short(12))
+}
+
 /// `repose tradeoff`: runs the planned `points` (see [`run`]), summarises
 /// them and writes tradeoff.csv / .md / .svg with one lineage record beside
 /// each (the knobs, the replicates, the base manifest file and every run id)
@@ -67,7 +73,7 @@ pub fn sweep(
     manifest: &Path,
     points: &[Point],
     knobs: &[plan::Knob],
-    pool: &LocalPool,
+    pool: &Executor,
     out_dir: Option<PathBuf>,
 ) -> Result<Sweep, SweepError> {
     let total: usize = points.iter().map(|p| p.replicates.len()).sum();
@@ -84,7 +90,7 @@ pub fn sweep(
     );
     let outcomes = run(store, points, pool)?;
     let rows = summarise(points, &outcomes);
-    let dir = out_dir.unwrap_or_else(|| store.root().join("tradeoff").join(base.id().short(12)));
+    let dir = out_dir.unwrap_or_else(|| default_dir(store, base));
     std::fs::create_dir_all(&dir).map_err(StoreError::io(&dir))?;
     let title = format!(
         "What accuracy costs: {} ({})",
@@ -147,7 +153,7 @@ pub struct Outcome {
 pub fn run(
     store: &Store,
     points: &[Point],
-    pool: &LocalPool,
+    pool: &Executor,
 ) -> Result<Vec<Vec<Outcome>>, ExecError> {
     let all: Vec<Experiment> = points
         .iter()

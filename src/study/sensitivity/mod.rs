@@ -48,7 +48,7 @@ use super::runs::{needed_scenes, run_points, write_table, Runs};
 use super::spec::{DesignStudy, SeedStage};
 use super::verify::{verify_points, Verification};
 use super::StudyError;
-use crate::exec::LocalPool;
+use crate::exec::Executor;
 use crate::manifest::Experiment;
 use crate::scenes::responses::{flow_rate_curve, observations};
 use crate::stats::nlls::{Model, PowerLaw};
@@ -133,7 +133,7 @@ pub fn sensitivity<E, F>(
     dir: &StudyDir,
     study: &DesignStudy,
     store: &Store,
-    pool: &LocalPool,
+    pool: &Executor,
     runner: &F,
     levels: Levels,
 ) -> Result<SensitivityOutcome, StudyError>

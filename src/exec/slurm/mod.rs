@@ -1,0 +1,424 @@
+//! The Slurm executor: a study's pending experiments as one job array.
+//!
+//! [`super::run_incomplete`] hands the experiments the store does not hold
+//! complete to [`run`] when the executor has [`SlurmSettings`]. It
+//!
+//! 1. asks `squeue` which of them are already queued or running under an
+//!    earlier submission of this study ([`ledger`]) and leaves those alone;
+//! 2. leaves a run that failed (its `error.json`) alone too, unless
+//!    [`SlurmSettings::resubmit_failed`], and reports its error;
+//! 3. writes the rest — their manifests, a task list and a job script
+//!    ([`script`]) — into the study's `slurm/` directory and submits one
+//!    `sbatch --array=0-(K-1)%M` (or, with `dry_run`, stops there and says
+//!    how to submit it by hand);
+//! 4. polls `squeue` ([`queue`]) every [`SlurmSettings::poll`] until none of
+//!    the study's runs is in the queue (unless `wait` is off: then it returns
+//!    [`ExecError::Queued`] at once), and
+//! 5. reads the outcome of each from the store: a sealed result, an
+//!    `error.json`, or neither (the task was cancelled, ran out of time or its
+//!    script failed: the error quotes the end of its log).
+//!
+//! Each task is `repose run` on one manifest against the same store, so it
+//! writes that run's files only (atomically, under the run's claim) and the
+//! results are byte-identical to the local pool's. The client writes nothing
+//! into run directories; the stage that called it writes its tables after
+//! collection. Killing the client loses nothing: finished runs are in the
+//! store, queued ones stay queued and are found again by the next call.
+
+pub mod ledger;
+pub mod queue;
+pub mod script;
+pub mod status;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use super::progress::BatchProgress;
+use super::{ExecError, Executor};
+use crate::manifest::{canonical_json, ContentId, Experiment};
+use crate::store::{Depth, RunState, Store};
+use ledger::{Ledger, Submission};
+use queue::{Queue, QueueState};
+
+/// How many tasks one job array holds at most: Slurm's default
+/// `MaxArraySize` is 1001 (indices 0–1000); more runs become several arrays.
+pub const MAX_ARRAY_TASKS: usize = 1000;
+
+/// What users set on clusters, and how the client waits.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SlurmSettings {
+    /// Where the job files go; `None`: `<store>/slurm`. Commands set it to the
+    /// study's `slurm/` directory ([`Executor::in_study`]).
+    pub dir: Option<PathBuf>,
+    /// The program each task runs (found on the node's PATH after `setup`).
+    pub program: String,
+    /// Shell lines run before `repose` on the node (e.g. `module load repose`);
+    /// `None`: put this client's own directory first on PATH (a binary on the
+    /// shared file system).
+    pub setup: Option<String>,
+    /// `--partition`.
+    pub partition: Option<String>,
+    /// `--time` (Slurm's formats, e.g. `2-00:00:00`).
+    pub time_limit: Option<String>,
+    /// `--mem` (e.g. `4G`).
+    pub mem: Option<String>,
+    /// `--account`.
+    pub account: Option<String>,
+    /// `--cpus-per-task` (≥ 1); each task's simulation runs on this many threads.
+    pub cpus_per_task: u32,
+    /// Further `#SBATCH` lines, verbatim (`--qos=high`).
+    pub extra: Vec<String>,
+    /// The array throttle M of `--array=0-(K-1)%M`: tasks running at once.
+    pub max_running: Option<u32>,
+    /// Write the job script without submitting it.
+    pub dry_run: bool,
+    /// Wait for the runs to leave the queue (else return [`ExecError::Queued`]).
+    pub wait: bool,
+    /// Submit runs again whose last attempt failed (left an `error.json`).
+    pub resubmit_failed: bool,
+    /// How often `squeue` is asked while waiting.
+    pub poll: Duration,
+}
+
+impl Default for SlurmSettings {
+    fn default() -> SlurmSettings {
+        SlurmSettings {
+            dir: None,
+            program: "repose".to_string(),
+            setup: None,
+            partition: None,
+            time_limit: None,
+            mem: None,
+            account: None,
+            cpus_per_task: 1,
+            extra: Vec::new(),
+            max_running: None,
+            dry_run: false,
+            wait: true,
+            resubmit_failed: false,
+            poll: Duration::from_secs(10),
+        }
+    }
+}
+
+impl SlurmSettings {
+    /// The settings' errors, each naming its flag.
+    pub fn check(&self) -> Result<(), ExecError> {
+        let bad = |m: String| Err(ExecError::Settings(m));
+        if self.cpus_per_task == 0 {
+            return bad("--cpus-per-task = 0: must be >= 1".to_string());
+        }
+        if self.max_running == Some(0) {
+            return bad("--max-running = 0: must be >= 1 (or absent: no throttle)".to_string());
+        }
+        if self.poll.is_zero() {
+            return bad("--poll-seconds = 0: must be > 0".to_string());
+        }
+        if self.program.trim().is_empty() {
+            return bad("--program is empty: name the repose binary tasks run".to_string());
+        }
+        for line in &self.extra {
+            if line.contains('\n') {
+                return bad(format!("--sbatch `{line}`: one #SBATCH line per flag"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The shell lines run before `repose` (see [`SlurmSettings::setup`]).
+    fn setup_lines(&self) -> Option<String> {
+        self.setup.clone().or_else(|| {
+            let exe = std::env::current_exe().ok()?;
+            let dir = exe.parent()?.display().to_string();
+            Some(format!("export PATH={}:\"$PATH\"", script::quote(&dir)))
+        })
+    }
+}
+
+/// The ledger of `settings` for a store.
+pub fn ledger_of(settings: &SlurmSettings, store: &Store) -> Ledger {
+    Ledger::new(
+        settings
+            .dir
+            .clone()
+            .unwrap_or_else(|| store.root().join("slurm")),
+    )
+}
+
+/// Which array task each in-flight run is: id → (job, task, state); a later
+/// submission's task wins over an earlier one.
+fn in_flight(
+    submissions: &[Submission],
+    queue: &Queue,
+) -> BTreeMap<ContentId, (String, usize, QueueState)> {
+    let mut out = BTreeMap::new();
+    for s in submissions {
+        let Some(job) = &s.job_id else { continue };
+        for (t, id) in s.ids.iter().enumerate() {
+            if let Some(e) = queue.task(job, t) {
+                out.insert(id.clone(), (job.clone(), t, e.state()));
+            }
+        }
+    }
+    out
+}
+
+/// Fills in the job id of submissions recorded before sbatch returned (a
+/// killed client, or a `--dry-run` script submitted by hand) from a job of
+/// the same name in the queue; `persist` writes the found ids to the ledger.
+fn adopt_named_jobs(
+    ledger: &Ledger,
+    submissions: &mut [Submission],
+    queue: &Queue,
+    persist: bool,
+) -> Result<(), ExecError> {
+    for s in submissions.iter_mut().filter(|s| s.job_id.is_none()) {
+        if let Some(job) = queue.job_named(&s.job_name) {
+            s.job_id = Some(job.to_string());
+            if persist {
+                ledger.record(s)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The last (job, task) that ran `id`, if any submission with a job id held it.
+fn last_task(submissions: &[Submission], id: &ContentId) -> Option<(String, usize)> {
+    submissions.iter().rev().find_map(|s| {
+        let job = s.job_id.as_ref()?;
+        let t = s.ids.iter().position(|x| x == id)?;
+        Some((job.clone(), t))
+    })
+}
+
+/// The stored error of a failed run, with its causes.
+fn failure_message(store: &Store, id: &ContentId) -> String {
+    let path = store.run_dir(id).error_path();
+    match store.load_error(id) {
+        Ok(Some(record)) => {
+            let mut m = record.error;
+            for c in record.causes {
+                m.push_str(": ");
+                m.push_str(&c);
+            }
+            format!("{m} (recorded in {})", path.display())
+        }
+        Ok(None) => format!("no error.json at {}", path.display()),
+        Err(e) => format!("its error.json cannot be read: {e}"),
+    }
+}
+
+/// Why a run that left the queue has neither a result nor an error: the end
+/// of its task's log.
+fn lost_message(ledger: &Ledger, submissions: &[Submission], id: &ContentId) -> String {
+    let Some((job, task)) = last_task(submissions, id) else {
+        return "never submitted".to_string();
+    };
+    let log = ledger.log(&job, task);
+    let tail = std::fs::read_to_string(&log)
+        .map(|text| {
+            let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+            lines[lines.len().saturating_sub(3)..].join(" | ")
+        })
+        .unwrap_or_else(|e| format!("(no log: {e})"));
+    format!(
+        "Slurm task {job}_{task} left the queue without a result or an error.json \
+         (cancelled, out of time or memory, or its job script failed); log {}: {tail}",
+        log.display()
+    )
+}
+
+/// Runs the experiments at `pending` (positions in `experiments`) on Slurm
+/// (see the module docs); returns the failures as (position, message), sorted.
+pub(super) fn run(
+    pending: &[usize],
+    experiments: &[Experiment],
+    store: &Store,
+    exec: &Executor,
+    settings: &SlurmSettings,
+    progress: &mut BatchProgress,
+) -> Result<Vec<(usize, String)>, ExecError> {
+    settings.check()?;
+    let ledger = ledger_of(settings, store);
+    let mut submissions = ledger.submissions()?;
+    let queue = match queue::snapshot() {
+        Ok(q) => q,
+        // A script written for submission by hand needs no Slurm here.
+        Err(_) if settings.dry_run => Queue::default(),
+        Err(e) => return Err(e),
+    };
+    adopt_named_jobs(&ledger, &mut submissions, &queue, true)?;
+    let flying = in_flight(&submissions, &queue);
+
+    let mut positions: BTreeMap<ContentId, Vec<usize>> = BTreeMap::new();
+    for &i in pending {
+        positions.entry(experiments[i].id()).or_default().push(i);
+    }
+    let mut failures = Vec::new();
+    let mut waiting = BTreeSet::new();
+    let mut to_submit = Vec::new();
+    for (id, at) in &positions {
+        if flying.contains_key(id) {
+            waiting.insert(id.clone());
+        } else if matches!(store.check(id, Depth::Sizes), RunState::Failed)
+            && !settings.resubmit_failed
+        {
+            progress.finished_one(true);
+            let m = failure_message(store, id);
+            failures.extend(at.iter().map(|&i| (i, m.clone())));
+        } else {
+            to_submit.push(at[0]);
+        }
+    }
+    for chunk in to_submit.chunks(MAX_ARRAY_TASKS) {
+        let s = prepare_submission(&ledger, chunk, experiments, store, exec, settings)?;
+        if settings.dry_run {
+            return Err(ExecError::NotSubmitted {
+                runs: to_submit.len(),
+                script: ledger.submission_dir(s.number).join("job.sh"),
+            });
+        }
+        let submitted = submit(&ledger, s)?;
+        waiting.extend(submitted.ids.iter().cloned());
+        submissions.push(submitted);
+    }
+    if !settings.wait && !waiting.is_empty() {
+        let jobs: BTreeSet<String> = in_flight(&submissions, &queue::snapshot()?)
+            .into_values()
+            .map(|(job, _, _)| job)
+            .collect();
+        return Err(ExecError::Queued {
+            runs: waiting.len(),
+            jobs: jobs.into_iter().collect::<Vec<_>>().join(", "),
+            dir: ledger.dir().to_path_buf(),
+        });
+    }
+    wait(
+        &ledger,
+        &submissions,
+        store,
+        settings,
+        waiting,
+        progress,
+        |id, m| failures.extend(positions[id].iter().map(|&i| (i, m.clone()))),
+    )?;
+    failures.sort();
+    Ok(failures)
+}
+
+/// Writes the manifests, task list, job script and record of a new
+/// submission of the experiments at `chunk` (not yet submitted).
+fn prepare_submission(
+    ledger: &Ledger,
+    chunk: &[usize],
+    experiments: &[Experiment],
+    store: &Store,
+    exec: &Executor,
+    settings: &SlurmSettings,
+) -> Result<Submission, ExecError> {
+    let number = ledger.claim_number()?;
+    let dir = ledger.submission_dir(number);
+    let store_root = std::path::absolute(store.root())
+        .map_err(|e| ExecError::Slurm(format!("{}: {e}", store.root().display())))?;
+    let mut tasks = String::new();
+    let mut ids = Vec::new();
+    for &i in chunk {
+        let id = experiments[i].id();
+        let path = std::path::absolute(ledger.manifest(&id))
+            .map_err(|e| ExecError::Slurm(format!("{}: {e}", ledger.dir().display())))?;
+        let bytes = canonical_json(&experiments[i]);
+        if std::fs::read(&path).ok().as_deref() != Some(bytes.as_bytes()) {
+            ledger::write(&path, bytes.as_bytes())?;
+        }
+        tasks.push_str(&format!("{}\n", path.display()));
+        ids.push(id);
+    }
+    let tasks_file = std::path::absolute(dir.join("tasks.txt"))
+        .map_err(|e| ExecError::Slurm(format!("{}: {e}", dir.display())))?;
+    ledger::write(&tasks_file, tasks.as_bytes())?;
+    let logs = std::path::absolute(ledger.logs())
+        .map_err(|e| ExecError::Slurm(format!("{}: {e}", ledger.dir().display())))?;
+    let job_name = job_name(ledger.dir(), number);
+    let with_setup = SlurmSettings {
+        setup: settings.setup_lines(),
+        ..settings.clone()
+    };
+    let text = script::job_script(&script::ScriptInputs {
+        settings: &with_setup,
+        limits: &exec.limits,
+        store: &store_root,
+        tasks_file: &tasks_file,
+        logs: &logs,
+        job_name: &job_name,
+        tasks: chunk.len(),
+    });
+    ledger::write(&dir.join("job.sh"), text.as_bytes())?;
+    let submission = Submission {
+        number,
+        job_name,
+        job_id: None,
+        ids,
+    };
+    ledger.record(&submission)?;
+    Ok(submission)
+}
+
+/// `repose-<12 hex of the ledger directory's sha256>-<number>`: unique per
+/// study and submission, so a job submitted by hand is found by its name.
+fn job_name(dir: &Path, number: u32) -> String {
+    let abs = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
+    let id = ContentId::of_bytes(abs.display().to_string().as_bytes());
+    format!("repose-{}-{number}", id.short(12))
+}
+
+/// Submits a prepared submission and records its job id.
+fn submit(ledger: &Ledger, mut s: Submission) -> Result<Submission, ExecError> {
+    let job = queue::submit(&ledger.submission_dir(s.number).join("job.sh"))?;
+    s.job_id = Some(job);
+    ledger.record(&s)?;
+    Ok(s)
+}
+
+/// Polls the queue until none of `waiting` is in it; reports each run's
+/// outcome to `failed` (id, message) as it leaves, counting it on `progress`.
+fn wait(
+    ledger: &Ledger,
+    submissions: &[Submission],
+    store: &Store,
+    settings: &SlurmSettings,
+    mut waiting: BTreeSet<ContentId>,
+    progress: &mut BatchProgress,
+    mut failed: impl FnMut(&ContentId, String),
+) -> Result<(), ExecError> {
+    let mut next_poll = Instant::now();
+    while !waiting.is_empty() {
+        let now = Instant::now();
+        if now < next_poll {
+            std::thread::sleep((next_poll - now).min(Duration::from_millis(500)));
+            progress.tick();
+            continue;
+        }
+        next_poll = now + settings.poll;
+        let flying = in_flight(submissions, &queue::snapshot()?);
+        let left: Vec<ContentId> = waiting
+            .iter()
+            .filter(|id| !flying.contains_key(*id))
+            .cloned()
+            .collect();
+        for id in left {
+            waiting.remove(&id);
+            let outcome = match store.check(&id, Depth::Sizes) {
+                RunState::Complete(_) => None,
+                RunState::Failed => Some(failure_message(store, &id)),
+                _ => Some(lost_message(ledger, submissions, &id)),
+            };
+            progress.finished_one(outcome.is_some());
+            if let Some(m) = outcome {
+                failed(&id, m);
+            }
+        }
+    }
+    Ok(())
+}
