@@ -5,7 +5,8 @@
 #   scripts/slurm-local.sh up      install (Debian packages, once), start munged,
 #                                  slurmctld and slurmd, wait until the node is idle;
 #                                  prints `SLURM_CONF=<file>` as its last line
-#   scripts/slurm-local.sh down    stop the three daemons by the pids in their pid files
+#   scripts/slurm-local.sh down    stop slurmd, slurmctld and (if `up` started it) munged
+#                                  by the pids in their pid files
 #   scripts/slurm-local.sh status  print whether the daemons run and the node's state
 #
 # Everything lives under $REPOSE_SLURM_DIR (default /tmp/repose-slurm): the
@@ -66,6 +67,8 @@ start_munge() {
     chown munge:munge /run/munge /var/lib/munge /var/log/munge
     chmod 0755 /run/munge
     runuser -u munge -- /usr/sbin/munged
+    # `down` stops munged only if this script started it.
+    mkdir -p "$DIR" && touch "$DIR/munged-started-here"
     for _ in $(seq 50); do
         if munge -n 2>/dev/null | unmunge >/dev/null 2>&1; then
             return 0
@@ -156,8 +159,10 @@ down() {
             kill "$(cat "$DIR/$name.pid")"
         fi
     done
-    if [[ -f /run/munge/munged.pid ]] && kill -0 "$(cat /run/munge/munged.pid)" 2>/dev/null; then
+    if [[ -f "$DIR/munged-started-here" && -f /run/munge/munged.pid ]] \
+        && kill -0 "$(cat /run/munge/munged.pid)" 2>/dev/null; then
         kill "$(cat /run/munge/munged.pid)"
+        rm -f "$DIR/munged-started-here"
     fi
     log "stopped"
 }

@@ -169,7 +169,14 @@ impl CommandError {
     /// with `--no-wait`, or a `--dry-run` script to submit), 2 when the user's
     /// input is at fault, 1 otherwise.
     pub fn exit_code(&self) -> u8 {
-        if crate::exec::ExecError::waiting_in(self) {
+        let exec = match self {
+            CommandError::Exec(e) => Some(e),
+            CommandError::Calibrate(CalibrateError::Exec(e)) => Some(e),
+            CommandError::Study(StudyError::Exec(e)) => Some(e),
+            CommandError::Tradeoff(tradeoff_sweep::SweepError::Exec(e)) => Some(e),
+            _ => None,
+        };
+        if exec.is_some_and(crate::exec::ExecError::is_waiting) {
             return 3;
         }
         let invalid = match self {

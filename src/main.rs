@@ -353,7 +353,7 @@ impl ExecArgs {
                         self.poll_seconds
                     )));
                 }
-                Some(SlurmSettings {
+                let settings = SlurmSettings {
                     partition: self.partition.clone(),
                     time_limit: self.time_limit.clone(),
                     mem: self.mem.clone(),
@@ -367,7 +367,9 @@ impl ExecArgs {
                     resubmit_failed: self.resubmit_failed,
                     poll: std::time::Duration::from_secs_f64(self.poll_seconds),
                     ..SlurmSettings::default()
-                })
+                };
+                settings.check()?;
+                Some(settings)
             }
         };
         Ok(Executor {

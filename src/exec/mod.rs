@@ -101,21 +101,6 @@ impl ExecError {
         )
     }
 
-    /// Whether `error` or any of its causes is a waiting [`ExecError`] (see
-    /// [`ExecError::is_waiting`]): how the command line picks exit code 3.
-    pub fn waiting_in(error: &(dyn std::error::Error + 'static)) -> bool {
-        let mut e = Some(error);
-        while let Some(x) = e {
-            if x.downcast_ref::<ExecError>()
-                .is_some_and(ExecError::is_waiting)
-            {
-                return true;
-            }
-            e = x.source();
-        }
-        false
-    }
-
     /// The error is in what the caller asked for (exit code 2).
     pub fn is_invalid_input(&self) -> bool {
         matches!(self, ExecError::Settings(_) | ExecError::Refused { .. })

@@ -199,9 +199,11 @@ fn failure_message(store: &Store, id: &ContentId) -> String {
     match store.load_error(id) {
         Ok(Some(record)) => {
             let mut m = record.error;
-            for c in record.causes {
-                m.push_str(": ");
-                m.push_str(&c);
+            for c in &record.causes {
+                if !m.contains(c.as_str()) {
+                    m.push_str(": ");
+                    m.push_str(c);
+                }
             }
             format!("{m} (recorded in {})", path.display())
         }
