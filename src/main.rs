@@ -373,10 +373,8 @@ impl ExecArgs {
             }
         };
         Ok(Executor {
-            jobs,
-            progress: repose::scenes::protocol::progress_enabled(),
-            limits,
             slurm,
+            ..Executor::local(jobs, limits)
         })
     }
 }

@@ -15,7 +15,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use repose::commands::{rsm, screen, study_pool};
+use repose::commands::{rsm, screen};
+use repose::exec::Executor;
 use repose::scenes::plan::Limits;
 use repose::study::spec::read_design_study;
 
@@ -64,7 +65,7 @@ fn run_rsm(store: &Path, jobs: usize) {
     rsm(
         store,
         &common::root().join(STUDY),
-        &study_pool(jobs, &Limits::default()),
+        &Executor::local(jobs, Limits::default()),
         false,
         &mut out,
     )
@@ -87,7 +88,7 @@ fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
     screen(
         &two,
         &common::root().join(STUDY),
-        &study_pool(2, &Limits::default()),
+        &Executor::local(2, Limits::default()),
         false,
         &mut out,
     )

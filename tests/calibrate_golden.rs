@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 
 use repose::calibrate::{Stage, StudyDir};
 use repose::commands::{calibrate, CalibrateFlags};
+use repose::exec::Executor;
 use repose::manifest::parse_study;
 use repose::scenes::plan::Limits;
 
@@ -62,10 +63,9 @@ fn chain(store: &Path, jobs: usize) -> StudyDir {
     calibrate(
         store,
         Some(&path),
-        jobs,
+        &Executor::local(jobs, Limits::default()),
         Some(CANDIDATES),
         CalibrateFlags::default(),
-        &Limits::default(),
         &mut out,
     )
     .unwrap_or_else(|e| panic!("calibrate failed: {e}\n{}", String::from_utf8_lossy(&out)));

@@ -18,7 +18,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use repose::commands::{sensitivity, study_pool};
+use repose::commands::sensitivity;
+use repose::exec::Executor;
 use repose::scenes::plan::Limits;
 use repose::study::sensitivity::Levels;
 use repose::study::spec::read_design_study;
@@ -64,7 +65,7 @@ fn run(store: &Path, jobs: usize) -> String {
     sensitivity(
         store,
         &common::root().join(STUDY),
-        &study_pool(jobs, &Limits::default()),
+        &Executor::local(jobs, Limits::default()),
         Levels::ALL,
         false,
         &mut out,
@@ -142,7 +143,7 @@ fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
     sensitivity(
         &two,
         &common::root().join(STUDY),
-        &study_pool(2, &Limits::default()),
+        &Executor::local(2, Limits::default()),
         Levels::ALL,
         true,
         &mut out,

@@ -123,6 +123,17 @@ pub struct Executor {
 }
 
 impl Executor {
+    /// This machine's pool of `jobs` workers within `limits`, with the
+    /// progress bar when stderr is a terminal.
+    pub fn local(jobs: usize, limits: Limits) -> Executor {
+        Executor {
+            jobs,
+            progress: crate::scenes::protocol::progress_enabled(),
+            limits,
+            slurm: None,
+        }
+    }
+
     /// The same executor with its Slurm files in `<study_dir>/slurm` (unless a
     /// directory was set already); a local executor is returned unchanged.
     pub fn in_study(&self, study_dir: &Path) -> Executor {

@@ -159,7 +159,7 @@ mod tests {
                 .record(&Submission {
                     number: n,
                     job_name: format!("repose-x-{n}"),
-                    job_id: (n % 2 == 0).then(|| (100 + n).to_string()),
+                    job_id: n.is_multiple_of(2).then(|| (100 + n).to_string()),
                     ids: vec![id('a'), id('b')],
                 })
                 .unwrap();

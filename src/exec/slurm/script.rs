@@ -146,12 +146,10 @@ mod tests {
         }
         // Every #SBATCH line comes before the first command (sbatch stops
         // reading them there).
-        let first_command = text.lines().position(|l| l == "set -euo pipefail").unwrap();
-        let last_sbatch = text
-            .lines()
-            .rposition(|l| l.starts_with("#SBATCH"))
-            .unwrap();
-        assert!(last_sbatch < first_command);
+        let lines: Vec<&str> = text.lines().collect();
+        let first_command = lines.iter().position(|l| *l == "set -euo pipefail");
+        let last_sbatch = lines.iter().rposition(|l| l.starts_with("#SBATCH"));
+        assert!(last_sbatch.unwrap() < first_command.unwrap());
         let last = text.lines().last().unwrap();
         assert!(
             last.starts_with("exec 'repose' --quiet --store '/shared/store' --max-particles "),
