@@ -7,7 +7,8 @@
 //!   (screen, rsm, verify), each run through [`exec`] into a response table.
 //! - [`calibrate`]: the he2019 stages (sample, batch, train, search, verify).
 //! - [`tradeoff`]: what accuracy costs in time (`repose tradeoff`).
-//! - [`exec`]: the one executor seam: runs experiments through the store.
+//! - [`exec`]: the one executor seam: runs experiments through the store, on
+//!   this machine's worker pool or as Slurm job arrays (`--executor slurm`).
 //! - [`mod@bench`]: the engine throughput benchmark (`repose bench`).
 //! - [`calibrate`]: the he2019 calibration stages (sample, batch, train,
 //!   search, verify) over a study's runs.
