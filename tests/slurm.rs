@@ -59,13 +59,16 @@ fn slurm() -> Option<Slurm> {
     })
 }
 
+/// `repose --store STORE ARGS…` from the repository root.
+fn repose_command(store: &Path, args: &[&str]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_repose"));
+    c.arg("--store").arg(store).args(args).current_dir(root());
+    c
+}
+
 fn repose(slurm: &Slurm, store: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_repose"))
-        .arg("--store")
-        .arg(store)
-        .args(args)
+    repose_command(store, args)
         .env("SLURM_CONF", &slurm.conf)
-        .current_dir(root())
         .output()
         .expect("run repose")
 }
@@ -330,43 +333,25 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
 #[test]
 fn slurm_options_need_the_slurm_executor() {
     let tmp = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_repose"))
-        .args(["--store"])
-        .arg(tmp.path())
-        .args([
-            "batch",
-            "experiments/calibrate-smoke/study.json",
-            "--partition",
-            "short",
-        ])
-        .current_dir(root())
-        .output()
-        .unwrap();
-    expect_code(&out, 2);
-    assert!(
-        text(&out.stderr).contains("--partition is a Slurm option: add --executor slurm"),
-        "{}",
-        text(&out.stderr)
-    );
-    let out = Command::new(env!("CARGO_BIN_EXE_repose"))
-        .args(["--store"])
-        .arg(tmp.path())
-        .args([
-            "batch",
-            "experiments/calibrate-smoke/study.json",
-            "--executor",
-            "slurm",
-            "--cpus-per-task",
-            "0",
-            "--dry-run",
-        ])
-        .current_dir(root())
-        .output()
-        .unwrap();
-    expect_code(&out, 2);
-    assert!(
-        text(&out.stderr).contains("--cpus-per-task = 0: must be >= 1"),
-        "{}",
-        text(&out.stderr)
-    );
+    let study = "experiments/calibrate-smoke/study.json";
+    for (args, message) in [
+        (
+            vec!["--partition", "short"],
+            "--partition is a Slurm option: add --executor slurm",
+        ),
+        (
+            vec!["--executor", "slurm", "--cpus-per-task", "0", "--dry-run"],
+            "--cpus-per-task = 0: must be >= 1",
+        ),
+        (
+            vec!["--executor", "slurm", "--max-running", "0"],
+            "--max-running = 0: must be >= 1",
+        ),
+    ] {
+        let mut all = vec!["batch", study];
+        all.extend(args);
+        let out = repose_command(tmp.path(), &all).output().unwrap();
+        expect_code(&out, 2);
+        assert!(text(&out.stderr).contains(message), "{}", text(&out.stderr));
+    }
 }
