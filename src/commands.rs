@@ -899,6 +899,14 @@ pub fn noise(
     exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
+    if let Ok(Document::Experiment(base)) = read_document(study_path, None) {
+        return Err(CommandError::Usage(format!(
+            "{}: an experiment manifest: give --seeds N to measure its noise over N packing seeds \
+             (experiment {})",
+            study_path.display(),
+            base.id().short(12)
+        )));
+    }
     let (study, dir) = open_study(store_root, study_path)?;
     let store = open_store(store_root)?;
     let pool = exec.in_study(dir.path());
@@ -907,6 +915,30 @@ pub fn noise(
     write!(out, "{}", outcome.markdown)?;
     writeln!(out, "  outputs: {}", dir.stage(Stage::Noise).display())?;
     Ok(())
+}
+
+/// `repose noise MANIFEST --seeds N`: one experiment over `seeds` packing
+/// seeds, each response's spread and precision per cost
+/// ([`crate::study::seed_noise`]); Markdown, or with `json` one object.
+pub fn scene_noise(
+    store_root: &Path,
+    manifest: &Path,
+    seeds: usize,
+    exec: &Executor,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
+    let store = open_store(store_root)?;
+    let exec = exec.in_study(&store_root.join("noise").join(base.id().short(12)));
+    set_quiet(true);
+    let noise = study::seed_noise::scene_noise(&base, seeds, &store, &exec, &run_logged)?;
+    if json {
+        print_json(&noise, out)
+    } else {
+        write!(out, "{}", study::seed_noise::markdown(&noise))?;
+        Ok(())
+    }
 }
 
 /// `repose batch STUDY`: runs every sampled experiment not yet complete

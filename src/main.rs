@@ -171,10 +171,19 @@ enum Command {
     },
     /// The noise floor of a noise-aware study: its calibration scene at the
     /// centre of the ranges with the study's noise seeds; σ, the 95 % CI of
-    /// the mean, the cost per run and σ² × CPU seconds.
+    /// the mean, the cost per run and σ² × CPU seconds. With an experiment
+    /// manifest and --seeds N: every response of its scene over N packing
+    /// seeds (its own and the next N − 1).
     Noise {
-        /// Study manifest (with a `noise_aware` block).
+        /// Study manifest (with a `noise_aware` block), or an experiment
+        /// manifest with --seeds.
         study: PathBuf,
+        /// Experiment manifests: how many packing seeds to run.
+        #[arg(long)]
+        seeds: Option<usize>,
+        /// Experiment manifests: print one JSON object.
+        #[arg(long, requires = "seeds")]
+        json: bool,
         /// Runs at once, each single-threaded [default: the number of CPUs].
         #[arg(long)]
         jobs: Option<usize>,
@@ -870,12 +879,19 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             commands::CalibrateFlags { adaptive, json },
             &mut out,
         ),
-        Command::Noise { study, jobs, exec } => commands::noise(
-            &cli.store,
-            &study,
-            &exec.executor(default_jobs(jobs), limits)?,
-            &mut out,
-        ),
+        Command::Noise {
+            study,
+            seeds,
+            json,
+            jobs,
+            exec,
+        } => {
+            let exec = exec.executor(default_jobs(jobs), limits)?;
+            match seeds {
+                Some(n) => commands::scene_noise(&cli.store, &study, n, &exec, json, &mut out),
+                None => commands::noise(&cli.store, &study, &exec, &mut out),
+            }
+        }
         Command::Tradeoff(args) => {
             let options = args.options().map_err(CommandError::Usage)?;
             let exec = args.exec.executor(options.threads, limits)?;

@@ -97,6 +97,29 @@ fn an_unreadable_input_file_exits_2_from_every_command() {
     }
 }
 
+/// `repose noise` on an experiment manifest needs --seeds; with too few
+/// seeds it says how many it needs; both before any run.
+#[test]
+fn noise_of_an_experiment_asks_for_seeds() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = "experiments/drum/smoke.json";
+    let out = repose(tmp.path(), &["noise", file]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("give --seeds N"), "{}", stderr(&out));
+    let out = repose(tmp.path(), &["noise", file, "--seeds", "1"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("--seeds = 1: at least 2"),
+        "{}",
+        stderr(&out)
+    );
+    let runs = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().file_name().len() == 64)
+        .count();
+    assert_eq!(runs, 0, "nothing ran");
+}
+
 /// serde_json says only "expected value" at a NaN; the report says why.
 #[test]
 fn a_nan_or_infinity_literal_is_explained() {

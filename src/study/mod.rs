@@ -10,6 +10,8 @@
 //! - [`screen`], [`rsm`], [`optimum`], [`verify`]: the stages and the joint
 //!   desirability optimum.
 //! - [`sensitivity`]: yan2015's three levels of parameter sensitivity.
+//! - [`seed_noise`]: one experiment over packing seeds: each response's
+//!   spread and its precision per cost (`repose noise MANIFEST`).
 //! - [`dir`]: where a study's outputs live and how they are written.
 //!
 //! The runs stay in the store (`<store>/<id>/`), so a run shared by two
@@ -20,6 +22,7 @@ pub mod optimum;
 pub mod rsm;
 pub mod runs;
 pub mod screen;
+pub mod seed_noise;
 pub mod sensitivity;
 pub mod spec;
 pub mod verify;
