@@ -279,3 +279,42 @@ fn the_noise_stage_and_the_study_say_what_is_wrong() {
 fn study_with_response(dir: &Path) -> (Study, std::path::PathBuf) {
     study(dir, &[("/calibration/response", json!("angle_cone_deg"))])
 }
+
+/// A replicated batch counts what it simulated: a failed run is neither
+/// "computed" nor retried by the next batch, and a second batch simulates
+/// nothing.
+#[test]
+fn a_replicated_batch_counts_what_it_simulated() {
+    use repose::calibrate::batch::batch;
+    use repose::calibrate::sample::sample;
+    let tmp = tempfile::tempdir().unwrap();
+    let (study, path) = study(tmp.path(), &[]);
+    let root = tmp.path().join("store");
+    let store = Store::open(&root).unwrap();
+    let dir = StudyDir::new(&root, &study, &path);
+    sample(&dir, &study, &SampleSettings::default()).unwrap();
+    // Sample 0's second replicate fails; sample 1's first completes without
+    // an angle (not measurable: a failure of the row, but a computed run).
+    let failing = |e: &Experiment, d: &RunDir| -> Result<RunResult, std::io::Error> {
+        let replicate = e.seeds.packing_seed - study.packing_seed;
+        match (e.seeds.sample_index, replicate) {
+            (0, 1) => Err(std::io::Error::other("injected failure")),
+            (1, 0) => Ok(RunResult::new(e, "fake")),
+            _ => fake(e, d),
+        }
+    };
+    let total = 24; // 12 samples x 2 replicates
+    let first = batch(&dir, &study, &store, &pool(), failing).unwrap();
+    assert_eq!(first.total, total);
+    assert_eq!(first.cached, 0);
+    assert_eq!(first.failures.len(), 2);
+    assert_eq!(
+        first.computed,
+        total - 1,
+        "every run but the failed one completed"
+    );
+    let second = batch(&dir, &study, &store, &pool(), failing).unwrap();
+    assert_eq!(second.cached, total, "nothing simulated again");
+    assert_eq!(second.computed, 0);
+    assert_eq!(second.failures.len(), 2, "the failures are still reported");
+}

@@ -46,7 +46,9 @@ pub struct Failure {
 pub struct BatchOutcome {
     /// Samples in the design.
     pub total: usize,
-    /// Runs complete before the batch started.
+    /// Runs this batch did not simulate: complete before it started (and,
+    /// for a noise-aware study, runs that had failed before: they are not
+    /// retried there).
     pub cached: usize,
     /// Runs simulated and completed by this batch.
     pub computed: usize,
@@ -279,7 +281,7 @@ where
         .map(|r| (r.index as u64, r.point.clone()))
         .collect();
     let total = design.len() * replicates as usize;
-    let (runs, cached) = run_replicated(
+    let (runs, tally) = run_replicated(
         study,
         &study.calibration,
         &points,
@@ -370,8 +372,8 @@ where
     write_output(&table, csv.finish().as_bytes(), &lineage)?;
     Ok(BatchOutcome {
         total,
-        cached,
-        computed: total - cached - failures.len().min(total - cached),
+        cached: tally.not_simulated,
+        computed: total - tally.not_simulated - tally.failed_now,
         failures,
         table,
     })

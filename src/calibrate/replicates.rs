@@ -93,9 +93,18 @@ pub fn check_response(target: &TargetScene) -> Result<(), CalibrateError> {
     }
 }
 
+/// How many of a [`run_replicated`] call's runs it simulated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Tally {
+    /// Runs not simulated: complete before, or failed before and not retried.
+    pub not_simulated: usize,
+    /// Runs simulated by this call that failed.
+    pub failed_now: usize,
+}
+
 /// Runs `replicates` packing seeds of every point in `target`'s scene (see the
-/// module docs) and reads their values back, with the number of runs this
-/// call did not simulate (complete before, or failed before and not retried).
+/// module docs) and reads their values back, with how many runs this call
+/// simulated ([`Tally`]).
 #[allow(clippy::too_many_arguments)]
 pub fn run_replicated<E, F>(
     study: &Study,
@@ -106,7 +115,7 @@ pub fn run_replicated<E, F>(
     pool: &Executor,
     runner: &F,
     retry_failed: bool,
-) -> Result<(Vec<Replicated>, usize), CalibrateError>
+) -> Result<(Vec<Replicated>, Tally), CalibrateError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
@@ -162,7 +171,11 @@ where
             runs,
         });
     }
-    Ok((out, not_simulated))
+    let tally = Tally {
+        not_simulated,
+        failed_now: failed_now.len(),
+    };
+    Ok((out, tally))
 }
 
 /// The value of a run the store holds: its response when complete, its
