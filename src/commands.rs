@@ -419,6 +419,11 @@ pub fn run(
     };
     writeln!(out, "run {id} ({how})")?;
     writeln!(out, "  directory: {}", dir.path().display())?;
+    if outcome == CacheOutcome::Computed {
+        // The engine's pool: RAYON_NUM_THREADS (a Slurm task sets it from
+        // SLURM_CPUS_PER_TASK), else the machine's CPUs.
+        writeln!(out, "  threads: {}", rayon::current_num_threads())?;
+    }
     writeln!(
         out,
         "  scene: {}  profile: {}  kernel: {}",

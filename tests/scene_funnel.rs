@@ -96,17 +96,26 @@ fn smoke_manifest_forms_a_measurable_pile() {
         .iter()
         .map(|s| s.name)
         .collect();
-    assert_eq!(names, ["angle_deg", "angle_cone_deg"]);
+    assert_eq!(names, ["angle_deg", "angle_cone_deg", "angle_2h_d_deg"]);
     assert_eq!(response(&r, "funnel_pile", "angle_deg").unwrap(), a);
     let cone = r.measurements["angle_cone_deg"];
     assert_eq!(response(&r, "funnel_pile", "angle_cone_deg").unwrap(), cone);
     assert!(cone > 10.0 && cone < 80.0, "{cone}");
     assert!(r.measurements["angle_cone_points"] >= 12.0);
+    // The height angle: atan of the pile's height over the platform's radius.
+    let h = r.measurements["pile_height_m"];
+    let expected = (h / 0.047).atan().to_degrees();
+    let height_angle = response(&r, "funnel_pile", "angle_2h_d_deg").unwrap();
+    assert!(
+        (height_angle - expected).abs() < 1e-12,
+        "{height_angle} vs {expected}"
+    );
+    assert!(height_angle > 10.0 && height_angle < 80.0, "{height_angle}");
     let err = response(&r, "funnel_pile", "angle_views")
         .unwrap_err()
         .to_string();
     assert!(
-        err.contains("its responses are: angle_deg, angle_cone_deg"),
+        err.contains("its responses are: angle_deg, angle_cone_deg, angle_2h_d_deg"),
         "{err}"
     );
 }

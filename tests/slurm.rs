@@ -236,7 +236,8 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
     };
     assert_eq!(row(&s, &cancelled)["state"], "pending", "{s}");
 
-    // The next batch waits for the queued runs and submits only the cancelled one.
+    // The next batch waits for the queued runs and submits only the cancelled
+    // one, which runs on the two CPUs it now asks for.
     let out = repose(
         &slurm,
         &cluster,
@@ -247,11 +248,20 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
             "slurm",
             "--poll-seconds",
             "0.5",
+            "--cpus-per-task",
+            "2",
         ],
     );
     expect_code(&out, 0);
     let third = submission(&dir, 3);
     assert_eq!(third["ids"], serde_json::json!([cancelled]), "{third}");
+    let log = std::fs::read_to_string(
+        dir.join("logs")
+            .join(format!("{}_0.log", third["job_id"].as_str().unwrap())),
+    )
+    .unwrap();
+    assert!(log.contains(", 2 thread(s)"), "{log}");
+    assert!(log.contains("  threads: 2\n"), "{log}");
     assert_eq!(submissions(&dir), 3);
     let s = status(&slurm, &cluster, study);
     assert_eq!(count(&s, "done"), 12, "{s}");

@@ -101,6 +101,16 @@
 //! flank, so it scatters less between packings (measured in
 //! `experiments/funnel_pile/README.md`); a study chooses it as its response
 //! (`response` of a target scene). The headline stays he2019's side view.
+//!
+//! The height angle `angle_2h_d_deg` = atan(2H/D) takes H, the highest
+//! particle top above the platform (`pile_height_m`), and D, the platform's
+//! diameter, as the fixed-base method does (cai2024's GB/T 16913 pile,
+//! [`super::static_pile`]). It assumes a cone whose base is the whole
+//! platform, which the funnel's protocol gives: the pile grows until it sheds
+//! over the rim (`removed` counts what fell). It reads one particle's height,
+//! so it uses no flank fit at all, and scatters less between packings than
+//! the side views (measured in `experiments/funnel_pile/README.md`); for a
+//! rounded or lumpy top it reads steeper than the flanks.
 
 pub mod fill;
 pub mod geometry;
@@ -178,6 +188,12 @@ pub fn pile_height_m(p: &Particles, geom: &FunnelGeometry) -> f64 {
         .zip(&radii)
         .map(|(x, r)| x.z + r)
         .fold(0.0, f64::max)
+}
+
+/// The height angle atan(2H/D) = atan(H/R) of a pile `height_m` high on a
+/// platform of radius `platform_radius_m`, degrees (see the module docs).
+pub fn height_angle_deg(height_m: f64, platform_radius_m: f64) -> f64 {
+    (height_m / platform_radius_m).atan().to_degrees()
 }
 
 /// The pile's angles (see the module docs) in the particles' current state.
@@ -489,7 +505,14 @@ pub fn simulate(
     put("left_in_funnel", (charged - discharged) as f64);
     put("removed", removed as f64);
     put("on_platform", on_platform as f64);
-    put("pile_height_m", pile_height_m(&w.particles, &geom));
+    let height = pile_height_m(&w.particles, &geom);
+    put("pile_height_m", height);
+    if height > 0.0 {
+        put(
+            "angle_2h_d_deg",
+            height_angle_deg(height, geom.platform_radius_m),
+        );
+    }
     Ok(FunnelOutcome {
         result,
         world: w.clone(),

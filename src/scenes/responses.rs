@@ -142,6 +142,12 @@ const FUNNEL_PILE: &[ResponseSpec] = &[
         "pile angle of repose on the platform from its whole surface: one cone with a free \
          axis fitted to the top particle of every column (10-90 % of the height)",
     ),
+    spec(
+        "angle_2h_d_deg",
+        "deg",
+        "height angle atan(2H/D), H the pile's height above the platform and D the \
+         platform's diameter (the fixed-base method of the static pile)",
+    ),
 ];
 
 const BAFFLE_LIFT: &[ResponseSpec] = &[spec(
@@ -240,6 +246,7 @@ fn read(kind: &str, name: &str) -> Option<Read> {
         ("pair", "pull_off_ratio") => Ratio("pull_off_force_n", "theory_pull_off_force_n"),
         ("funnel_pile", "angle_deg") => Key("angle_deg"),
         ("funnel_pile", "angle_cone_deg") => Key("angle_cone_deg"),
+        ("funnel_pile", "angle_2h_d_deg") => Key("angle_2h_d_deg"),
         ("baffle_lift", "angle_deg") => Key("static_angle_deg"),
         ("drum", "dynamic_angle_deg" | "static_angle_deg") => Key(known(DRUM, name)?),
         ("hopper", "alpha_deg") => Key("upper_angle_deg"),

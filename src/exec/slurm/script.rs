@@ -75,6 +75,10 @@ pub fn job_script(i: &ScriptInputs) -> String {
         quote(&i.tasks_file.display().to_string())
     );
     text.push_str("export RAYON_NUM_THREADS=\"${SLURM_CPUS_PER_TASK:-1}\"\n");
+    text.push_str(
+        "echo \"task ${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID} on $(hostname): $manifest, \
+         ${RAYON_NUM_THREADS} thread(s)\"\n",
+    );
     let _ = writeln!(
         text,
         "exec {} --quiet --store {} --max-particles {} --max-particle-steps {} \
