@@ -73,6 +73,13 @@ fn repose(slurm: &Slurm, store: &Path, args: &[&str]) -> Output {
         .expect("run repose")
 }
 
+/// `repose batch STUDY --executor slurm EXTRA…` against `store`.
+fn batch_on_slurm(slurm: &Slurm, store: &Path, study: &str, extra: &[&str]) -> Output {
+    let mut args = vec!["batch", study, "--executor", "slurm"];
+    args.extend_from_slice(extra);
+    repose(slurm, store, &args)
+}
+
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
 }
@@ -152,11 +159,7 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
 
     // --dry-run writes the script, submits nothing, and every run is pending.
     expect_code(&repose(&slurm, &cluster, &["sample", study]), 0);
-    let out = repose(
-        &slurm,
-        &cluster,
-        &["batch", study, "--executor", "slurm", "--dry-run"],
-    );
+    let out = batch_on_slurm(&slurm, &cluster, study, &["--dry-run"]);
     expect_code(&out, 3);
     assert!(
         text(&out.stderr).contains("--dry-run"),
@@ -177,20 +180,11 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
         "export PATH='{}':\"$PATH\"; if [ \"$SLURM_ARRAY_TASK_ID\" = 0 ]; then sleep 4; fi",
         bin.display()
     );
-    let out = repose(
+    let out = batch_on_slurm(
         &slurm,
         &cluster,
-        &[
-            "batch",
-            study,
-            "--executor",
-            "slurm",
-            "--max-running",
-            "1",
-            "--no-wait",
-            "--setup",
-            &setup,
-        ],
+        study,
+        &["--max-running", "1", "--no-wait", "--setup", &setup],
     );
     expect_code(&out, 3);
     assert!(
@@ -238,19 +232,11 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
 
     // The next batch waits for the queued runs and submits only the cancelled
     // one, which runs on the two CPUs it now asks for.
-    let out = repose(
+    let out = batch_on_slurm(
         &slurm,
         &cluster,
-        &[
-            "batch",
-            study,
-            "--executor",
-            "slurm",
-            "--poll-seconds",
-            "0.5",
-            "--cpus-per-task",
-            "2",
-        ],
+        study,
+        &["--poll-seconds", "0.5", "--cpus-per-task", "2"],
     );
     expect_code(&out, 0);
     let third = submission(&dir, 3);
