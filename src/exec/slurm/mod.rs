@@ -13,7 +13,8 @@
 //!    how to submit it by hand);
 //! 4. polls `squeue` ([`queue`]) every [`SlurmSettings::poll`] until none of
 //!    the study's runs is in the queue (unless `wait` is off: then it returns
-//!    [`ExecError::Queued`] at once), and
+//!    [`ExecError::Queued`] at once); a failed poll is retried, and only
+//!    [`SQUEUE_ATTEMPTS`] failures in a row end the wait, and
 //! 5. reads the outcome of each from the store: a sealed result, an
 //!    `error.json`, or neither (the task was cancelled, ran out of time or its
 //!    script failed: the error quotes the end of its log).
@@ -40,6 +41,10 @@ use crate::manifest::{canonical_json, ContentId, Experiment};
 use crate::store::{Depth, RunState, Store};
 use ledger::{Ledger, Submission};
 use queue::{Queue, QueueState};
+
+/// How many polls in a row `squeue` may fail while the client waits before
+/// the wait gives up with its error.
+pub const SQUEUE_ATTEMPTS: u32 = 5;
 
 /// How many tasks one job array holds at most: Slurm's default
 /// `MaxArraySize` is 1001 (indices 0–1000); more runs become several arrays.
@@ -395,6 +400,7 @@ fn wait(
     mut failed: impl FnMut(&ContentId, String),
 ) -> Result<(), ExecError> {
     let mut next_poll = Instant::now();
+    let mut squeue_failures = 0;
     while !waiting.is_empty() {
         let now = Instant::now();
         if now < next_poll {
@@ -403,7 +409,22 @@ fn wait(
             continue;
         }
         next_poll = now + settings.poll;
-        let flying = in_flight(submissions, &queue::snapshot()?);
+        // A busy controller times squeue out now and then; only a run of
+        // failures ends the wait (the runs stay queued; the next call resumes).
+        let queue = match queue::snapshot() {
+            Ok(q) => {
+                squeue_failures = 0;
+                q
+            }
+            Err(e) => {
+                squeue_failures += 1;
+                if squeue_failures >= SQUEUE_ATTEMPTS {
+                    return Err(e);
+                }
+                continue;
+            }
+        };
+        let flying = in_flight(submissions, &queue);
         let left: Vec<ContentId> = waiting
             .iter()
             .filter(|id| !flying.contains_key(*id))
