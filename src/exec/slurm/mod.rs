@@ -327,14 +327,12 @@ fn prepare_submission(
 ) -> Result<Submission, ExecError> {
     let number = ledger.claim_number()?;
     let dir = ledger.submission_dir(number);
-    let store_root = std::path::absolute(store.root())
-        .map_err(|e| ExecError::Slurm(format!("{}: {e}", store.root().display())))?;
+    let store_root = absolute(store.root())?;
     let mut tasks = String::new();
     let mut ids = Vec::new();
     for &i in chunk {
         let id = experiments[i].id();
-        let path = std::path::absolute(ledger.manifest(&id))
-            .map_err(|e| ExecError::Slurm(format!("{}: {e}", ledger.dir().display())))?;
+        let path = absolute(&ledger.manifest(&id))?;
         let bytes = canonical_json(&experiments[i]);
         if std::fs::read(&path).ok().as_deref() != Some(bytes.as_bytes()) {
             ledger::write(&path, bytes.as_bytes())?;
@@ -342,11 +340,9 @@ fn prepare_submission(
         tasks.push_str(&format!("{}\n", path.display()));
         ids.push(id);
     }
-    let tasks_file = std::path::absolute(dir.join("tasks.txt"))
-        .map_err(|e| ExecError::Slurm(format!("{}: {e}", dir.display())))?;
+    let tasks_file = absolute(&dir.join("tasks.txt"))?;
     ledger::write(&tasks_file, tasks.as_bytes())?;
-    let logs = std::path::absolute(ledger.logs())
-        .map_err(|e| ExecError::Slurm(format!("{}: {e}", ledger.dir().display())))?;
+    let logs = absolute(&ledger.logs())?;
     let job_name = job_name(ledger.dir(), number);
     let with_setup = SlurmSettings {
         setup: settings.setup_lines(),
@@ -370,6 +366,12 @@ fn prepare_submission(
     };
     ledger.record(&submission)?;
     Ok(submission)
+}
+
+/// `path` made absolute (tasks start in Slurm's working directory, not the
+/// client's); an error names the path.
+fn absolute(path: &Path) -> Result<PathBuf, ExecError> {
+    std::path::absolute(path).map_err(|e| ExecError::Slurm(format!("{}: {e}", path.display())))
 }
 
 /// `repose-<12 hex of the ledger directory's sha256>-<number>`: unique per

@@ -119,38 +119,28 @@ pub fn status(store: &Store, dir: PathBuf) -> Result<StatusReport, ExecError> {
                 .and_then(|b| serde_json::from_slice::<Experiment>(&b).ok())
                 .map_or_else(|| "?".to_string(), |e| e.scene.kind().to_string());
             let last = last_task(&submissions, id);
-            let (state, job, task, note) = match (store.check(id, Depth::Sizes), flying.get(id)) {
-                (RunState::Complete(_), _) => (
-                    TaskState::Done,
-                    last.clone().map(|l| l.0),
-                    last.map(|l| l.1),
-                    None,
-                ),
-                (_, Some((job, task, q))) => {
-                    let state = match q {
-                        QueueState::Queued => TaskState::Queued,
-                        QueueState::Running => TaskState::Running,
-                    };
-                    (state, Some(job.clone()), Some(*task), None)
+            let (state, note) = match (store.check(id, Depth::Sizes), flying.get(id)) {
+                (RunState::Complete(_), _) => (TaskState::Done, None),
+                (_, Some((_, _, QueueState::Queued))) => (TaskState::Queued, None),
+                (_, Some((_, _, QueueState::Running))) => (TaskState::Running, None),
+                (RunState::Failed, _) => {
+                    (TaskState::Failed, Some(super::failure_message(store, id)))
                 }
-                (RunState::Failed, _) => (
-                    TaskState::Failed,
-                    last.clone().map(|l| l.0),
-                    last.map(|l| l.1),
-                    Some(super::failure_message(store, id)),
-                ),
                 (_, None) => {
                     let note = match &last {
                         None => "never submitted (a --dry-run script not yet submitted?)",
                         Some(_) => "left the queue without a result (cancelled or lost)",
                     };
-                    (
-                        TaskState::Pending,
-                        last.clone().map(|l| l.0),
-                        last.map(|l| l.1),
-                        Some(note.to_string()),
-                    )
+                    (TaskState::Pending, Some(note.to_string()))
                 }
+            };
+            // A queued or running run names the task in the queue; any other
+            // the last task that held it.
+            let (job, task) = match (state, flying.get(id)) {
+                (TaskState::Queued | TaskState::Running, Some((job, task, _))) => {
+                    (Some(job.clone()), Some(*task))
+                }
+                _ => last.unzip(),
             };
             let submission = job
                 .as_deref()
