@@ -824,7 +824,7 @@ pub fn sample_diagnose(
 /// Switches of `repose calibrate`.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct CalibrateFlags {
-    /// Adaptive batches after the initial design (noise-aware studies).
+    /// Adaptive rounds after the initial design (noise-aware studies).
     pub adaptive: bool,
     /// Print the outcome as JSON on stdout (stage reports go to stderr).
     pub json: bool,

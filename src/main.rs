@@ -156,9 +156,10 @@ enum Command {
         /// noise-aware study, whose candidate runs every scene with several seeds].
         #[arg(long)]
         candidates: Option<usize>,
-        /// Noise-aware studies: after the initial design, add batches of
-        /// points chosen by the Gaussian process until a point's replicate
-        /// mean is inside the target band or the study's run budget is spent.
+        /// Noise-aware studies: after the initial design, add rounds of
+        /// points chosen by the Gaussian process, each led by a candidate run
+        /// with the verification's seeds, until a candidate's mean is inside
+        /// the target band or the study's run budget is spent.
         #[arg(long)]
         adaptive: bool,
         /// Noise-aware studies: print the outcome (noise floor, surrogate

@@ -2,14 +2,14 @@
 //! fast fake runner whose angle is a known smooth function plus packing
 //! noise: noise floor, replicated batch, GP beside the network, the
 //! probability search with its family report, the acceptance rule recorded
-//! before verification, multi-seed verification, adaptive batches, and the
+//! before verification, multi-seed verification, adaptive rounds, and the
 //! errors a user meets.
 
 mod common;
 
 use std::path::Path;
 
-use repose::calibrate::adaptive::{Stop, ADAPTIVE_INDEX};
+use repose::calibrate::adaptive::{Stop, ADAPTIVE_INDEX, ROUND_STRIDE};
 use repose::calibrate::noise::{noise, NOISE_INDEX};
 use repose::calibrate::pipeline::{calibrate_noise_aware, NoiseAwareOptions};
 use repose::calibrate::sample::SampleSettings;
@@ -206,40 +206,79 @@ fn a_noise_aware_calibration_lands_a_verified_candidate_and_reproduces() {
 }
 
 #[test]
-fn adaptive_batches_stop_at_the_band_or_the_budget() {
+fn adaptive_rounds_stop_at_a_passing_candidate_or_the_budget() {
     let tmp = tempfile::tempdir().unwrap();
     // A target between the design's points: 47° (μ ≈ 0.8, μ_r ≈ 0.08 and
-    // along the line), a corner the 12-point design may miss.
+    // along the line), a corner the 12-point design may miss. A round is a
+    // candidate × 5 seeds and one more point × 2 seeds: 7 runs, so 21 allow
+    // three rounds.
     let (study, path) = study(
         tmp.path(),
-        &[("/calibration/target_angle_deg", json!(47.0))],
+        &[
+            ("/calibration/target_angle_deg", json!(47.0)),
+            ("/noise_aware/adaptive/max_runs", json!(21)),
+        ],
     );
-    let store = Store::open(tmp.path().join("s")).unwrap();
-    let dir = StudyDir::new(&tmp.path().join("s"), &study, &path);
-    let outcome = calibrate_noise_aware(
-        &dir,
-        &study,
-        &store,
-        &pool(),
-        &options(&study, true),
-        fake,
-        &mut |_| {},
-    )
-    .unwrap();
-    let a = outcome.adaptive.expect("the adaptive stage ran");
-    assert!(a.runs <= 8, "{a:?}");
+    let root = tmp.path().join("s");
+    let store = Store::open(&root).unwrap();
+    let dir = StudyDir::new(&root, &study, &path);
+    let run = || {
+        calibrate_noise_aware(
+            &dir,
+            &study,
+            &store,
+            &pool(),
+            &options(&study, true),
+            fake,
+            &mut |_| {},
+        )
+        .unwrap()
+    };
+    let outcome = run();
+    let a = outcome.adaptive.clone().expect("the adaptive stage ran");
+    // Design points whose 2-seed mean falls in the band do not end the
+    // stage: at least one candidate is run with the verification's seeds.
+    assert!(a.rounds >= 1 && a.runs >= 7 && a.runs <= 21, "{a:?}");
+    assert_eq!(a.runs % 7, 0, "whole rounds of 5 + 2 runs: {a:?}");
+    let (lo, hi) = study.calibration.band_deg();
     match a.stop {
         Stop::Reached => {
-            let (_, index, mean) = a.hit.clone().unwrap();
-            let (lo, hi) = study.calibration.band_deg();
-            assert!(mean >= lo && mean <= hi);
-            // Either a design, noise or adaptive point; adaptive ones are
-            // indexed from ADAPTIVE_INDEX on.
-            assert!(index < 12 || index == NOISE_INDEX || index >= ADAPTIVE_INDEX);
+            let hit = a.hit.clone().unwrap();
+            assert_eq!(
+                hit.index,
+                ADAPTIVE_INDEX + ROUND_STRIDE * (a.rounds as u64 - 1)
+            );
+            assert_eq!(hit.seeds, 5);
+            assert!(hit.measured >= 3);
+            assert!(hit.mean_deg >= lo && hit.mean_deg <= hi, "{hit:?}");
         }
-        Stop::Budget => assert!(a.runs + 4 > 8, "{a:?}"),
+        Stop::Budget => assert!(a.runs + 7 > 21, "{a:?}"),
     }
     assert_eq!(outcome.runs.adaptive, a.runs);
+    // The table holds each round's candidate with 5 seeds and its explorer
+    // with 2, in round order.
+    let table = std::fs::read_to_string(dir.stage(Stage::Adaptive).join("replicates.csv")).unwrap();
+    let mut per_index: Vec<(u64, usize)> = Vec::new();
+    for line in table.lines().skip(1) {
+        let index: u64 = line.split(',').next().unwrap().parse().unwrap();
+        match per_index.last_mut() {
+            Some((i, n)) if *i == index => *n += 1,
+            _ => per_index.push((index, 1)),
+        }
+    }
+    let expected: Vec<(u64, usize)> = (0..a.rounds as u64)
+        .flat_map(|k| {
+            let first = ADAPTIVE_INDEX + ROUND_STRIDE * k;
+            [(first, 5), (first + 1, 2)]
+        })
+        .collect();
+    assert_eq!(per_index, expected);
+    // Run again: the stage resumes from its table and simulates nothing.
+    let again = run().adaptive.unwrap();
+    assert_eq!(
+        (again.rounds, again.runs, again.stop),
+        (a.rounds, a.runs, a.stop)
+    );
 }
 
 #[test]

@@ -1,24 +1,37 @@
-//! `repose calibrate --adaptive`: after the initial design, batches of
-//! points chosen by the GP surrogate until a simulated point's replicate
-//! mean is inside the target band or the run budget is spent
+//! `repose calibrate --adaptive`: after the initial design, rounds of points
+//! chosen by the GP surrogate until one of its candidates passes the
+//! acceptance rule in the calibration scene, or the run budget is spent
 //! (`noise_aware.adaptive` of the study).
 //!
-//! Each batch: the GP is refitted to every point simulated so far
+//! Each round: the GP is refitted to every point simulated so far
 //! ([`super::gp_train::fit_model`]); a pool of [`POOL`] Latin-hypercube
-//! points (the adaptive stream, one sub-stream per batch) is scored by the
-//! probability that its angle lies in the band; the batch takes the best
-//! point, then the best of those at least [`MIN_SEPARATION`] (unit cube)
-//! from every point taken, and so on, so one batch does not spend its runs
-//! on one spot. Each point runs `replicates` seeds; the points are indexed
-//! from [`ADAPTIVE_INDEX`] on and written to `adaptive/replicates.csv`,
-//! which the GP's training then includes. A killed stage resumes: the table
-//! is rewritten after every batch and the runs are cached.
+//! points (the adaptive stream, one sub-stream per round) is scored by the
+//! probability that its angle lies in the band. The best point is the
+//! round's **candidate** and runs `verification_seeds` packing seeds, as
+//! verification would; the next best at least [`MIN_SEPARATION`] (unit cube)
+//! from every point taken, up to `batch` points in all, explore with
+//! `replicates` seeds each, so one round does not spend its runs on one
+//! spot. The stage stops when a candidate has at least
+//! [`MIN_MEASURED`] measured seeds whose mean lies in the band (the
+//! verification's rule), or when the next round would pass `max_runs`.
+//!
+//! A design point or the noise floor's centre whose mean happens to fall in
+//! the band does not end the stage: a 2-seed mean is one draw of a noisy
+//! pile (at he2019-quick's noise a 2-seed mean lands in the ±5 % band by
+//! chance from a true angle 4° away), so only a point run with the
+//! verification's seeds counts, and a failed candidate's seeds become data
+//! for the next fit. Round k's points are indexed from [`ADAPTIVE_INDEX`] +
+//! [`ROUND_STRIDE`] × k, the candidate first; they are written to
+//! `adaptive/replicates.csv`, which the GP's training then includes. A killed
+//! stage resumes: the table is rewritten after every round and the runs are
+//! cached.
 
 use serde::Serialize;
 use serde_json::json;
 
 use super::gp_train::{adaptive_path, fit_model};
 use super::replicates::{read_replicates_csv, replicates_csv, run_replicated, Replicated};
+use super::verify_seeds::MIN_MEASURED;
 use super::{
     parameter_names, rng, to_physical, write_output, CalibrateError, Stage, Stream, StudyDir,
 };
@@ -30,36 +43,53 @@ use crate::store::{RunDir, RunResult, Store};
 
 /// `sample_index` of the first adaptive point.
 pub const ADAPTIVE_INDEX: u64 = 2_000_000_000;
-/// Points scored per batch.
+/// Points scored per round.
 pub const POOL: usize = 2000;
-/// Smallest distance between two points of one batch (unit cube).
+/// Smallest distance between two points of one round (unit cube).
 pub const MIN_SEPARATION: f64 = 0.15;
+/// Index distance between the points of two rounds: round k's points are
+/// `ADAPTIVE_INDEX + ROUND_STRIDE * k + j`, its candidate `j = 0`.
+pub const ROUND_STRIDE: u64 = 1000;
 
 /// Why the adaptive stage stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Stop {
-    /// A simulated point's replicate mean is inside the band.
+    /// A round's candidate passed the acceptance rule in the band.
     Reached,
-    /// The next batch would exceed the run budget.
+    /// The next round would exceed the run budget.
     Budget,
 }
 
 /// What the adaptive stage did.
 #[derive(Debug, Clone, Serialize)]
 pub struct AdaptiveOutcome {
-    /// Batches run (by this call and before).
-    pub batches: usize,
+    /// Rounds run (by this call and before).
+    pub rounds: usize,
     /// Runs the adaptive points took.
     pub runs: usize,
     /// Why it stopped.
     pub stop: Stop,
-    /// The simulated point whose mean is in the band, if any: (source,
-    /// sample index, mean).
-    pub hit: Option<(String, u64, f64)>,
+    /// The candidate that passed, if any.
+    pub hit: Option<Hit>,
 }
 
-/// Runs the adaptive batches (see the module docs), seeded by `seed`.
+/// An adaptive candidate that passed in the calibration scene.
+#[derive(Debug, Clone, Serialize)]
+pub struct Hit {
+    /// Its `sample_index`.
+    pub index: u64,
+    /// Parameter values, physical units, in the study's parameter order.
+    pub point: Vec<f64>,
+    /// Seeds it ran.
+    pub seeds: usize,
+    /// Seeds that measured the response.
+    pub measured: usize,
+    /// Mean of the measured seeds, degrees.
+    pub mean_deg: f64,
+}
+
+/// Runs the adaptive rounds (see the module docs), seeded by `seed`.
 pub fn adaptive<E, F>(
     dir: &StudyDir,
     study: &Study,
@@ -80,46 +110,55 @@ where
     } else {
         Vec::new()
     };
-    let per_point = spec.replicates as usize;
-    let batch = spec.adaptive.batch as usize;
-    let budget = spec.adaptive.max_runs as usize;
     let (lo, hi) = study.calibration.band_deg();
     let names = parameter_names(study);
+    let seeds = spec.verification_seeds as usize;
+    let explore = spec.replicates as usize;
+    let round_runs = seeds + (spec.adaptive.batch as usize).saturating_sub(1) * explore;
+    let budget = spec.adaptive.max_runs as usize;
     loop {
-        let model = fit_model(dir, study, seed)?;
-        let batches = points.len().div_ceil(batch.max(1));
+        let rounds = points
+            .iter()
+            .map(|p| (p.index - ADAPTIVE_INDEX) / ROUND_STRIDE + 1)
+            .max()
+            .unwrap_or(0) as usize;
         let runs: usize = points.iter().map(|p| p.runs.len()).sum();
-        let hit = (0..model.data.y.len())
-            .find(|&i| model.data.y[i] >= lo && model.data.y[i] <= hi)
-            .map(|i| {
-                (
-                    model.data.source[i].clone(),
-                    model.data.index[i],
-                    model.data.y[i],
-                )
+        let hit = points
+            .iter()
+            .filter(|p| (p.index - ADAPTIVE_INDEX).is_multiple_of(ROUND_STRIDE))
+            .find_map(|p| {
+                let v = p.values();
+                let mean = p.mean()?;
+                (v.len() >= MIN_MEASURED && mean >= lo && mean <= hi).then(|| Hit {
+                    index: p.index,
+                    point: p.point.clone(),
+                    seeds: p.runs.len(),
+                    measured: v.len(),
+                    mean_deg: mean,
+                })
             });
         if hit.is_some() {
             return Ok(AdaptiveOutcome {
-                batches,
+                rounds,
                 runs,
                 stop: Stop::Reached,
                 hit,
             });
         }
-        if runs + batch * per_point > budget {
+        if runs + round_runs > budget {
             return Ok(AdaptiveOutcome {
-                batches,
+                rounds,
                 runs,
                 stop: Stop::Budget,
                 hit: None,
             });
         }
-        let gp = model.process()?;
+        let gp = fit_model(dir, study, seed)?.process()?;
         let pool_points = latin_hypercube(
             POOL,
             names.len(),
             Placement::Random,
-            &mut rng(seed, Stream::Adaptive, batches as u64),
+            &mut rng(seed, Stream::Adaptive, rounds as u64),
         );
         let mut scored: Vec<(f64, usize)> = pool_points
             .iter()
@@ -143,40 +182,49 @@ where
             });
             if far {
                 chosen.push(u);
-                if chosen.len() == batch {
+                if chosen.len() == spec.adaptive.batch as usize {
                     break;
                 }
             }
         }
-        let first = ADAPTIVE_INDEX + points.len() as u64;
-        let new: Vec<(u64, Vec<f64>)> = chosen
+        let first = ADAPTIVE_INDEX + ROUND_STRIDE * rounds as u64;
+        let mut new: Vec<(u64, Vec<f64>)> = chosen
             .iter()
             .enumerate()
             .map(|(k, u)| (first + k as u64, to_physical(study, u)))
             .collect();
         progress(&format!(
-            "adaptive batch {}: {} point(s) x {} seed(s), best P(in band) {:.2}",
-            batches + 1,
-            new.len(),
-            spec.replicates,
-            scored.first().map_or(0.0, |s| s.0)
+            "adaptive round {}: candidate x {seeds} seeds (P(in band) {:.2}), {} more point(s) x {explore} seeds",
+            rounds + 1,
+            scored.first().map_or(0.0, |s| s.0),
+            new.len().saturating_sub(1),
         ));
-        let (ran, _) = run_replicated(
-            study,
-            &study.calibration,
-            &new,
-            spec.replicates,
-            store,
-            pool,
-            &runner,
-            false,
-        )?;
+        let explorers = new.split_off(1.min(new.len()));
+        let mut ran = Vec::new();
+        for (group, replicates) in [
+            (&new, spec.verification_seeds),
+            (&explorers, spec.replicates),
+        ] {
+            let (r, _) = run_replicated(
+                study,
+                &study.calibration,
+                group,
+                replicates,
+                store,
+                pool,
+                &runner,
+                false,
+            )?;
+            ran.extend(r);
+        }
         points.extend(ran);
         dir.prepare(study, Stage::Adaptive)?;
         let mut lineage = dir.lineage(
             Stage::Adaptive,
-            json!({ "batch": batch, "max_runs": budget, "pool": POOL,
+            json!({ "batch": spec.adaptive.batch, "max_runs": budget, "pool": POOL,
                     "min_separation": MIN_SEPARATION, "seed": seed,
+                    "candidate_seeds": seeds, "explore_seeds": explore,
+                    "min_measured": MIN_MEASURED,
                     "score": "probability of the target band under the GP" }),
         );
         for r in points.iter().flat_map(|p| &p.runs) {

@@ -123,7 +123,7 @@ pub enum Stream {
     Search = 3,
     /// The genetic algorithm (one sub-stream per hidden size).
     Genetic = 4,
-    /// The adaptive stage's candidate pools (one sub-stream per batch).
+    /// The adaptive stage's candidate pools (one sub-stream per round).
     Adaptive = 5,
 }
 
@@ -151,7 +151,7 @@ pub enum Stage {
     LearningCurve,
     /// `repose noise`: the noise floor of a noise-aware study.
     Noise,
-    /// The adaptive batches of `repose calibrate --adaptive`.
+    /// The adaptive rounds of `repose calibrate --adaptive`.
     Adaptive,
 }
 

@@ -6,7 +6,7 @@
 //! sample ──▶ sample/design.csv              the study's Latin hypercube
 //! batch  ──▶ batch/replicates.csv, angles.csv  R seeds per sample, their means
 //! train  ──▶ train/model.json (GA-BP, he2019), train/gp.json, surrogates.md
-//! adaptive (--adaptive) ──▶ adaptive/replicates.csv, then train again
+//! adaptive (--adaptive) ──▶ adaptive/replicates.csv (rounds until a GP candidate passes), then train again
 //! search ──▶ search/points.csv, clusters.csv/.md, family.json
 //! verify ──▶ verify/acceptance.json (first), verification.csv/.md, runs.csv
 //! ```
@@ -40,7 +40,7 @@ use crate::store::{RunDir, RunResult, Store};
 pub struct NoiseAwareOptions {
     /// Candidates (clusters, largest first) to verify.
     pub candidates: usize,
-    /// Run the adaptive batches after the initial design.
+    /// Run the adaptive rounds after the initial design.
     pub adaptive: bool,
     /// The sample stage's settings.
     pub sample: SampleSettings,
@@ -144,13 +144,13 @@ where
         log("== adaptive");
         let a = adaptive(dir, study, store, pool, seed, &runner, &mut |m| log(m))?;
         log(&format!(
-            "stopped ({:?}) after {} batch(es), {} run(s){}",
+            "stopped ({:?}) after {} round(s), {} run(s){}",
             a.stop,
-            a.batches,
+            a.rounds,
             a.runs,
             a.hit.as_ref().map_or(String::new(), |h| format!(
-                "; {} point {} at {:.2}°",
-                h.0, h.1, h.2
+                "; candidate {} at {:.2}° ({} of {} seeds measured)",
+                h.index, h.mean_deg, h.measured, h.seeds
             ))
         ));
         gp = train_gp(dir, study, fraction, seed, Some(&net))?;

@@ -100,7 +100,8 @@ pub struct NoiseAware {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Adaptive {
-    /// Points per batch (≥ 1); each runs `replicates` seeds.
+    /// Points per adaptive round (≥ 1): the GP's candidate runs
+    /// `verification_seeds` seeds, the others `replicates` seeds each.
     pub batch: u32,
     /// Most DEM runs the adaptive stage may add (≥ 1).
     pub max_runs: u32,
