@@ -251,6 +251,23 @@ fn adaptive_rounds_stop_at_a_passing_candidate_or_the_budget() {
             assert_eq!(hit.seeds, 5);
             assert!(hit.measured >= 3);
             assert!(hit.mean_deg >= lo && hit.mean_deg <= hi, "{hit:?}");
+            // Verification judges the candidate that ended the stage in
+            // every scene; in the calibration scene with the adaptive runs
+            // themselves (same mean, counted once).
+            let rows: Vec<_> = outcome
+                .verification
+                .iter()
+                .filter(|r| r.group as u64 == hit.index)
+                .collect();
+            assert_eq!(rows.len(), 1 + study.verification.len());
+            let own = rows
+                .iter()
+                .find(|r| r.scene == study.calibration.name)
+                .unwrap();
+            assert_eq!(own.mean_deg, Some(hit.mean_deg));
+            assert!(own.pass && outcome.calibrated);
+            let per_candidate = 5 * (1 + study.verification.len());
+            assert_eq!(outcome.runs.verification, 2 * per_candidate - 5);
         }
         Stop::Budget => assert!(a.runs + 7 > 21, "{a:?}"),
     }

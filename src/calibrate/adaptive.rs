@@ -89,6 +89,39 @@ pub struct Hit {
     pub mean_deg: f64,
 }
 
+/// The first round candidate among `points` with at least [`MIN_MEASURED`]
+/// measured seeds whose mean lies in `band` (degrees): the acceptance rule
+/// of verification, applied to the calibration scene.
+fn passing(points: &[Replicated], band: (f64, f64)) -> Option<Hit> {
+    points
+        .iter()
+        .filter(|p| (p.index - ADAPTIVE_INDEX).is_multiple_of(ROUND_STRIDE))
+        .find_map(|p| {
+            let v = p.values();
+            let mean = p.mean()?;
+            (v.len() >= MIN_MEASURED && mean >= band.0 && mean <= band.1).then(|| Hit {
+                index: p.index,
+                point: p.point.clone(),
+                seeds: p.runs.len(),
+                measured: v.len(),
+                mean_deg: mean,
+            })
+        })
+}
+
+/// The adaptive stage's passing candidate, when the stage has run and found
+/// one (`adaptive/replicates.csv`): verification re-simulates it in every
+/// scene beside the search's candidates, so the point that ended the stage
+/// is the one judged.
+pub fn passing_candidate(dir: &StudyDir, study: &Study) -> Result<Option<Hit>, CalibrateError> {
+    let path = adaptive_path(dir);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let points = read_replicates_csv(&path, study)?;
+    Ok(passing(&points, study.calibration.band_deg()))
+}
+
 /// Runs the adaptive rounds (see the module docs), seeded by `seed`.
 pub fn adaptive<E, F>(
     dir: &StudyDir,
@@ -123,20 +156,7 @@ where
             .max()
             .unwrap_or(0) as usize;
         let runs: usize = points.iter().map(|p| p.runs.len()).sum();
-        let hit = points
-            .iter()
-            .filter(|p| (p.index - ADAPTIVE_INDEX).is_multiple_of(ROUND_STRIDE))
-            .find_map(|p| {
-                let v = p.values();
-                let mean = p.mean()?;
-                (v.len() >= MIN_MEASURED && mean >= lo && mean <= hi).then(|| Hit {
-                    index: p.index,
-                    point: p.point.clone(),
-                    seeds: p.runs.len(),
-                    measured: v.len(),
-                    mean_deg: mean,
-                })
-            });
+        let hit = passing(&points, (lo, hi));
         if hit.is_some() {
             return Ok(AdaptiveOutcome {
                 rounds,

@@ -60,7 +60,8 @@ pub struct RunCounts {
     pub design: usize,
     /// Adaptive points × replicates.
     pub adaptive: usize,
-    /// Verification (candidates × scenes × seeds).
+    /// Verification (candidates × scenes × seeds, less the adaptive
+    /// candidate's calibration-scene runs, which `adaptive` counts).
     pub verification: usize,
 }
 
@@ -159,23 +160,24 @@ where
     log("== search");
     let found = gp_search(dir, study, &options.search)?;
     log(&found.markdown);
+    let adaptive_hit = adaptive_outcome.as_ref().and_then(|a| a.hit.as_ref());
     log(&format!(
         "== verify: {} candidate(s) x {} scene(s) x {} seeds",
-        options.candidates.min(found.candidates.len()),
+        options.candidates.min(found.candidates.len()) + usize::from(adaptive_hit.is_some()),
         1 + study.verification.len(),
         spec.verification_seeds
     ));
     let v = verify_seeds(dir, study, store, pool, options.candidates, &runner)?;
     log(&v.markdown);
-    let verified_candidates = options.candidates.min(found.candidates.len());
     let calibrated = v
         .rows
         .iter()
         .any(|r| r.scene == study.calibration.name && r.pass);
-    let verified = (0..verified_candidates).any(|k| {
-        let group = found.candidates[k].group;
-        v.rows.iter().filter(|r| r.group == group).all(|r| r.pass)
-    });
+    // Every verified candidate: the search's and the adaptive one.
+    let verified = v
+        .rows
+        .iter()
+        .any(|c| v.rows.iter().filter(|r| r.group == c.group).all(|r| r.pass));
     let outcome = CalibrationOutcome {
         study: study.name.clone(),
         study_id: dir.id().to_string(),
@@ -183,7 +185,17 @@ where
             noise: floor.floor.seeds,
             design: b.total,
             adaptive: adaptive_outcome.as_ref().map_or(0, |a| a.runs),
-            verification: v.rows.iter().map(|r| r.seeds).sum(),
+            // The adaptive candidate's calibration-scene runs are the
+            // adaptive stage's, counted there.
+            verification: v
+                .rows
+                .iter()
+                .filter(|r| {
+                    !(adaptive_hit.is_some_and(|h| h.index as usize == r.group)
+                        && r.scene == study.calibration.name)
+                })
+                .map(|r| r.seeds)
+                .sum(),
         },
         noise_floor: floor.floor,
         adaptive: adaptive_outcome,

@@ -14,6 +14,15 @@
 //! its lineage record, before the first verification run — from the study
 //! (whose id fixes them), so they cannot be chosen after the result is
 //! seen; the verification table's lineage names that file.
+//!
+//! # Candidates
+//!
+//! The search's largest clusters' centres (`--candidates`, numbered by
+//! cluster group) and, when `calibrate --adaptive` ended on one, the
+//! adaptive candidate that passed in the calibration scene, under its sample
+//! index (≥ [`super::adaptive::ADAPTIVE_INDEX`]). Its calibration-scene runs
+//! are the adaptive stage's own (the same manifests, so the store returns
+//! them), and it is judged in every other scene like the search's.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -21,6 +30,8 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
+use super::adaptive::passing_candidate;
+use super::gp_train::adaptive_path;
 use super::noise::noise_aware;
 use super::replicates::{replicates_csv, run_replicated, Replicated};
 use super::verify::read_candidates;
@@ -152,13 +163,20 @@ where
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
     let rule = acceptance(study)?;
-    let (clusters_file, points) = read_candidates(dir, study, candidates)?;
+    let (clusters_file, mut points) = read_candidates(dir, study, candidates)?;
+    let adaptive = passing_candidate(dir, study)?;
+    if let Some(hit) = &adaptive {
+        points.push((hit.index, hit.point.clone()));
+    }
 
     // The rule goes on record before any verification run.
     dir.prepare(study, Stage::Verify)?;
-    let rule_lineage = dir
+    let mut rule_lineage = dir
         .lineage(Stage::Verify, json!({ "record": "acceptance rule" }))
         .with_input(dir.input("clusters", &clusters_file)?);
+    if adaptive.is_some() {
+        rule_lineage = rule_lineage.with_input(dir.input("adaptive", &adaptive_path(dir))?);
+    }
     write_output(&acceptance_path(dir), &json_bytes(&rule), &rule_lineage)?;
 
     let targets: Vec<_> = std::iter::once(&study.calibration)
