@@ -17,9 +17,9 @@
 //!
 //! A design point or the noise floor's centre whose mean happens to fall in
 //! the band does not end the stage: a 2-seed mean is one draw of a noisy
-//! pile (at he2019-quick's noise a 2-seed mean lands in the ±5 % band by
-//! chance from a true angle 4° away), so only a point run with the
-//! verification's seeds counts, and a failed candidate's seeds become data
+//! pile (at he2019-quick's seed σ of 4.1°, a 2-seed mean from a true angle
+//! 4° below its 47.8° target lands in the ±5 % band about 3 times in 10), so
+//! only a point run with the verification's seeds counts, and a failed candidate's seeds become data
 //! for the next fit. Round k's points are indexed from [`ADAPTIVE_INDEX`] +
 //! [`ROUND_STRIDE`] × k, the candidate first; they are written to
 //! `adaptive/replicates.csv`, which the GP's training then includes. A killed
