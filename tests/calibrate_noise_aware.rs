@@ -10,8 +10,10 @@ mod common;
 use std::path::Path;
 
 use repose::calibrate::adaptive::{Stop, ADAPTIVE_INDEX, ROUND_STRIDE};
+use repose::calibrate::gp_train::adaptive_path;
 use repose::calibrate::noise::{noise, NOISE_INDEX};
-use repose::calibrate::pipeline::{calibrate_noise_aware, NoiseAwareOptions};
+use repose::calibrate::pipeline::{calibrate_noise_aware, CalibrationOutcome, NoiseAwareOptions};
+use repose::calibrate::replicates::read_replicates_csv;
 use repose::calibrate::sample::SampleSettings;
 use repose::calibrate::search::SearchSettings;
 use repose::calibrate::surrogate::TrainSettings;
@@ -92,6 +94,20 @@ fn options(study: &Study, adaptive: bool) -> NoiseAwareOptions {
     }
 }
 
+/// The whole noise-aware calibration with the fake runner.
+fn calibrate(dir: &StudyDir, study: &Study, store: &Store, adaptive: bool) -> CalibrationOutcome {
+    calibrate_noise_aware(
+        dir,
+        study,
+        store,
+        &pool(),
+        &options(study, adaptive),
+        fake,
+        &mut |_| {},
+    )
+    .unwrap()
+}
+
 fn sd(v: &[f64]) -> f64 {
     let m = v.iter().sum::<f64>() / v.len() as f64;
     (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
@@ -104,16 +120,7 @@ fn a_noise_aware_calibration_lands_a_verified_candidate_and_reproduces() {
     let run = |root: &Path| {
         let store = Store::open(root).unwrap();
         let dir = StudyDir::new(root, &study, &path);
-        let outcome = calibrate_noise_aware(
-            &dir,
-            &study,
-            &store,
-            &pool(),
-            &options(&study, false),
-            fake,
-            &mut |_| {},
-        )
-        .unwrap();
+        let outcome = calibrate(&dir, &study, &store, false);
         (dir, outcome)
     };
     let (dir, outcome) = run(&tmp.path().join("a"));
@@ -222,18 +229,7 @@ fn adaptive_rounds_stop_at_a_passing_candidate_or_the_budget() {
     let root = tmp.path().join("s");
     let store = Store::open(&root).unwrap();
     let dir = StudyDir::new(&root, &study, &path);
-    let run = || {
-        calibrate_noise_aware(
-            &dir,
-            &study,
-            &store,
-            &pool(),
-            &options(&study, true),
-            fake,
-            &mut |_| {},
-        )
-        .unwrap()
-    };
+    let run = || calibrate(&dir, &study, &store, true);
     let outcome = run();
     let a = outcome.adaptive.clone().expect("the adaptive stage ran");
     // Design points whose 2-seed mean falls in the band do not end the
@@ -274,15 +270,11 @@ fn adaptive_rounds_stop_at_a_passing_candidate_or_the_budget() {
     assert_eq!(outcome.runs.adaptive, a.runs);
     // The table holds each round's candidate with 5 seeds and its explorer
     // with 2, in round order.
-    let table = std::fs::read_to_string(dir.stage(Stage::Adaptive).join("replicates.csv")).unwrap();
-    let mut per_index: Vec<(u64, usize)> = Vec::new();
-    for line in table.lines().skip(1) {
-        let index: u64 = line.split(',').next().unwrap().parse().unwrap();
-        match per_index.last_mut() {
-            Some((i, n)) if *i == index => *n += 1,
-            _ => per_index.push((index, 1)),
-        }
-    }
+    let per_index: Vec<(u64, usize)> = read_replicates_csv(&adaptive_path(&dir), &study)
+        .unwrap()
+        .iter()
+        .map(|p| (p.index, p.runs.len()))
+        .collect();
     let expected: Vec<(u64, usize)> = (0..a.rounds as u64)
         .flat_map(|k| {
             let first = ADAPTIVE_INDEX + ROUND_STRIDE * k;
