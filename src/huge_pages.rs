@@ -13,15 +13,11 @@
 //! gives huge pages only to memory that asks for them, which the system
 //! allocator never does.
 //!
-//! Measured on the benchmark bed (`repose bench --n 50`, one thread,
-//! 2026-11-23, a noisy shared 2-vCPU host): system-wide THP `always` against
-//! `madvise` with the system allocator, four alternating pairs: 5.65–6.27
-//! against 5.13–5.42 Mps/s (+10 %); this allocator against the system
-//! allocator run at the same time on the two cores, three pairs: 5.53–5.73
-//! against 4.95–5.64 (+4 %, within the host's noise for single pairs). The
-//! price is paid once per allocation: the first touch of each 2 MiB page
+//! The price is paid once per allocation: the first touch of each 2 MiB page
 //! zeroes all of it and may wait for the kernel to compact memory (Debian's
 //! default `defrag=madvise`).
+//!
+//! Measurements and what was tried: docs/performance.md ("src/huge_pages.rs").
 //!
 //! # How
 //!
@@ -40,9 +36,9 @@ use std::ptr;
 pub const HUGE_PAGE_BYTES: usize = 2 << 20;
 /// Allocations at least this large (bytes, 512 KiB) get their own huge-page
 /// mapping: low enough to cover a 50,000-particle bed's per-particle arrays of
-/// 16 bytes per particle and up (a 4 MiB threshold left half of the swept
-/// memory on 4 KiB pages and measured no gain), high enough that the padding to
-/// whole 2 MiB pages wastes at most 1.5 MiB on each of a few dozen arrays.
+/// 16 bytes per particle and up (a 4 MiB threshold would leave half of the
+/// swept memory on 4 KiB pages), high enough that the padding to whole 2 MiB
+/// pages wastes at most 1.5 MiB on each of a few dozen arrays.
 pub const HUGE_THRESHOLD_BYTES: usize = 1 << 19;
 
 /// The allocator: install it with `#[global_allocator]` in a binary.

@@ -26,18 +26,17 @@
 //!
 //! # Cost
 //!
-//! Measured on the 2-core dev machine (release build): a sphere is about
-//! 110 bytes of protobuf before compression (position, identity orientation,
-//! size and colour as doubles) and 15 (1 000 particles, smooth motion) to 62
-//! (20 000 scattered particles) bytes per particle-frame after zstd, written
-//! at 0.35–1.1 µs per particle-frame; a point-cloud point is 20 bytes raw,
-//! 10 compressed, 0.14 µs. Above [`writer::SPHERE_LIMIT`] (20 000) particles a
-//! sphere frame would take ~22 ms to write against ~3 ms for a cloud, and
-//! Foxglove's 3D panel would decode and draw as many sphere primitives, so the
-//! cloud is used instead (viewer-side decode time is not measured here). A log
-//! costs ~3 ms fixed (temp file, fsync, rename, directory fsync); a pair run
-//! with its ~30–220 frames writes 15–42 kB, most of it the two copies of the
-//! `foxglove.SceneUpdate` descriptor (data section and summary).
+//! A sphere is a `foxglove.SceneUpdate` primitive with position, identity
+//! orientation, size and colour as doubles; a point-cloud point is five
+//! float32 (20 bytes). A sphere therefore costs several times a cloud point
+//! in bytes and in time to write, and Foxglove's 3D panel decodes and draws
+//! one primitive per sphere, so above [`writer::SPHERE_LIMIT`] (20 000)
+//! particles a frame is a cloud instead. Every log also pays a fixed cost
+//! for its temp file, fsync, rename and directory fsync, and carries the
+//! `foxglove.SceneUpdate` descriptor twice (data section and summary), which
+//! is most of a short run's log.
+//!
+//! Measurements: docs/performance.md ("src/log/mod.rs").
 
 pub mod frames;
 pub mod inspect;

@@ -142,9 +142,11 @@ impl<B: Boundary> PairKernel<'_, B> {
 
     /// [`run`](Self::run) compiled for AVX-512 (see [`has_avx512`](crate::dem::lanes::has_avx512)): the
     /// whole loop, contact laws and sink included, is inlined here so that
-    /// all of it gets the 32 registers; 6 % faster on the dense bed at 5,120
-    /// particles, one thread (2026-11-26, four side-by-side pairs). Eight
-    /// contacts at a time (two four-lane halves) was 12 % slower than four.
+    /// all of it gets the 32 registers, which makes it faster than the
+    /// portable copy. It too takes four contacts at a time: eight (two
+    /// four-lane halves) were slower.
+    ///
+    /// Measured: docs/performance.md ("src/dem/simulation/pair_kernel.rs").
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx512cd")]
     fn run_avx512<N: NormalModel, R: RollingModel, S: PairSink>(

@@ -12,7 +12,7 @@
 //! Results never depend on the team: each share's work and the order its
 //! results are combined in are fixed by the caller.
 //!
-//! Measurements, and what was tried and not kept, are in `docs/performance.md`.
+//! Measurements and what was tried: docs/performance.md ("src/dem/simulation/team.rs").
 
 use std::any::Any;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
@@ -30,9 +30,10 @@ const SPIN: Duration = Duration::from_micros(50);
 /// How long a helper waits for the next task, yielding, before it parks: a
 /// paused simulation stops costing CPU after this. Parking is kept for long
 /// pauses only: waking a parked thread is a system call, dearer on a virtual
-/// machine, and parking at every neighbour rebuild ran 13.2–16.0 Mps/s
-/// against 15.9–16.9 for spinning through it (5,120 particles, two threads,
-/// 2026-11-26, on a noisy host).
+/// machine, and parking at every neighbour rebuild was slower than spinning
+/// through it.
+///
+/// Measured: docs/performance.md ("src/dem/simulation/team.rs").
 const PARK_AFTER: Duration = Duration::from_millis(5);
 
 /// A task handed to the members: `task(t)` runs share `t`. Lifetime-erased;
@@ -48,18 +49,11 @@ unsafe impl Send for TaskRef {}
 /// job of a member that has not started its own (see
 /// [`Team::for_each`]).
 ///
-/// Two per member let a member take over the second half of a held-up
-/// share. Measured while every extra tile boundary still cost the particles
-/// beyond it a gather from a per-pair buffer (before the blocks of `tiles`,
-/// which now fix the sums whatever the tiles): interleaved runs on
-/// 2026-11-26 (`repose bench --threads 1,2 --segments 5`, two-thread
-/// speedup per round, 10:58–11:08 on a loaded host) gave 1.61, 1.67, 1.70
-/// at 5,120 and 1.48, 1.65, 1.93 at 50,000 with one job per member, and
-/// 1.48, 1.42, 1.52 and 1.80, 1.76, 1.78 with two. With the blocks, more
-/// jobs per member need more blocks: eight blocks at 5,120 particles with
-/// four jobs per member ran 3 % slower on two threads in quiet rounds and
-/// no better in disturbed ones (2026-11-26, 13:54–13:57, alternating;
-/// `docs/performance.md`).
+/// More jobs per member would let a member take over part of a held-up
+/// share, but with the blocks of `tiles` more jobs need more blocks, and
+/// they were no better when a member was held up and slower when none was.
+///
+/// Measured: docs/performance.md ("src/dem/simulation/team.rs").
 pub(super) const JOBS_PER_MEMBER: usize = 1;
 
 /// Runs `jobs` on `team` (see [`Team::for_each`]), or all of them here in

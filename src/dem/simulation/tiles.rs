@@ -21,7 +21,7 @@
 //! the single tile still writes the partials: that is what keeps its result
 //! the same as on two.
 //!
-//! Measurements, and what was tried and not kept, are in `docs/performance.md`.
+//! Measurements and what was tried: docs/performance.md ("src/dem/simulation/tiles.rs").
 
 use super::pair_kernel::{Motion, PairForce, PairSink};
 use crate::dem::neighbor::offsets_of;
@@ -32,11 +32,10 @@ use crate::dem::vec3::Vec3;
 /// are cut at equal shares of the pairs, so one may hold fewer). A block boundary costs a
 /// partial for about one cell slab of particles, on any thread count, and a
 /// team of more members than blocks leaves the extra members without a tile
-/// in the pair sweep. On the benchmark bed (`repose bench`, settled 3,000
-/// steps, 2026-11-26) the partials numbered 444 at 5,120 particles (2
-/// blocks), 3,523 at 20,480 (8) and 11,126 at 50,000 (16), and twice as
-/// many with 1,000 particles per block; one thread ran within the host's
-/// noise (±3 %) of the same bed with two blocks at 5,120 and at 50,000.
+/// in the pair sweep. At this size the partials cost one thread no
+/// measurable time against the same bed cut into two blocks.
+///
+/// Measured: docs/performance.md ("src/dem/simulation/tiles.rs").
 const PARTICLES_PER_BLOCK: usize = 2_500;
 
 /// Most blocks: enough tiles for a team of this many members.
@@ -207,8 +206,9 @@ impl Tiles {
     /// Particle `i`'s sum of pair forces (N) and torques (N·m): its own sum
     /// `own` plus its partials (of all `partials`) in block order. Always
     /// inlined: left to the compiler, the gather called it and one thread
-    /// ran 5 % slower at 5,120 particles (9.70 and 9.78 against 10.28 and
-    /// 10.30 Mps/s, alternating, 2026-11-26).
+    /// ran slower.
+    ///
+    /// Measured: docs/performance.md ("src/dem/simulation/tiles.rs").
     #[inline(always)]
     pub(super) fn pair_sum(
         &self,
