@@ -20,8 +20,6 @@ use crate::calibrate::pipeline::{
 use crate::calibrate::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
 use crate::calibrate::search::load_model;
 use crate::calibrate::search::{search as run_search, SearchSettings};
-use crate::calibrate::surrogate::TrainSettings;
-use crate::calibrate::train::DEFAULT_TRAIN_FRACTION;
 use crate::calibrate::train::{train_study, train_table, TableSpec, TrainOptions, TrainOutcome};
 use crate::calibrate::verify::verify as run_verify;
 use crate::calibrate::verify_seeds::verify_seeds;
@@ -42,6 +40,8 @@ use crate::store::{
 };
 use crate::study::spec::{is_design_study, parse_design_study, read_design_study, DesignStudy};
 use crate::study::{self, StudyError};
+use crate::surrogate::ga_bp::TrainSettings;
+use crate::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use crate::tradeoff as tradeoff_sweep;
 use crate::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
 

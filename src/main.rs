@@ -8,20 +8,21 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use repose::bench::BenchOptions;
-use repose::calibrate::genetic::GaSettings;
-use repose::calibrate::levenberg::LmSettings;
-use repose::calibrate::meanshift::Kernel;
 use repose::calibrate::sample::SampleSettings;
 use repose::calibrate::search::SearchSettings;
-use repose::calibrate::surrogate::TrainSettings;
-use repose::calibrate::train::{TableSpec, TrainOptions, DEFAULT_TRAIN_FRACTION};
+use repose::calibrate::train::{TableSpec, TrainOptions};
 use repose::commands::{self, CommandError, KindArg, TradeoffOptions};
 use repose::dem::simulation::{NormalChoice, RollingChoice};
 use repose::doe::lhs::Placement;
 use repose::exec::slurm::SlurmSettings;
 use repose::exec::Executor;
 use repose::scenes::plan::Limits;
+use repose::search::meanshift::Kernel;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
+use repose::surrogate::ga_bp::genetic::GaSettings;
+use repose::surrogate::ga_bp::levenberg::LmSettings;
+use repose::surrogate::ga_bp::TrainSettings;
+use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use repose::tradeoff::plan::{Knob, KNOB_NAMES};
 
 /// Huge pages for the engine's large arrays (see `repose::huge_pages`).

@@ -8,12 +8,10 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use repose::calibrate::sample::diagnose_table;
-use repose::calibrate::surrogate::TrainSettings;
-use repose::calibrate::train::{
-    train_table, TableSpec, TrainOptions, TrainOutcome, DEFAULT_TRAIN_FRACTION,
-};
+use repose::calibrate::train::{train_table, TableSpec, TrainOptions, TrainOutcome};
 use repose::report::table::Table;
 use repose::stats::metrics::r_squared;
+use repose::surrogate::ga_bp::{TrainSettings, DEFAULT_TRAIN_FRACTION};
 
 const TABLE: &str = "experiments/he2019-table-a1/table_a1.csv";
 const GOLDEN: &str = "golden/he2019_table_a1_sweep.csv";

@@ -16,12 +16,13 @@ use repose::calibrate::pipeline::{calibrate_noise_aware, CalibrationOutcome, Noi
 use repose::calibrate::replicates::read_replicates_csv;
 use repose::calibrate::sample::SampleSettings;
 use repose::calibrate::search::SearchSettings;
-use repose::calibrate::surrogate::TrainSettings;
-use repose::calibrate::train::{TrainOptions, DEFAULT_TRAIN_FRACTION};
+use repose::calibrate::train::TrainOptions;
 use repose::calibrate::{Stage, StudyDir};
 use repose::exec::Executor;
 use repose::manifest::{parse_study, validate_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
+use repose::surrogate::ga_bp::TrainSettings;
+use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use serde_json::{json, Value};
 
 /// Seed-to-seed standard deviation of the fake angle, degrees.

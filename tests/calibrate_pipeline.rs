@@ -13,14 +13,15 @@ use std::sync::Mutex;
 use repose::calibrate::batch::{angles_path, batch, read_angles};
 use repose::calibrate::sample::{design_path, experiment_path, sample, SampleSettings};
 use repose::calibrate::search::{search, SearchSettings};
-use repose::calibrate::surrogate::TrainSettings;
-use repose::calibrate::train::{train_study, TrainOptions, DEFAULT_TRAIN_FRACTION};
+use repose::calibrate::train::{train_study, TrainOptions};
 use repose::calibrate::verify::verify;
 use repose::calibrate::{CalibrateError, Stage, StudyDir};
 use repose::exec::Executor;
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::scenes::run_experiment;
 use repose::store::{Lineage, RunDir, RunResult, RunStatus, Store};
+use repose::surrogate::ga_bp::TrainSettings;
+use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use serde_json::{json, Value};
 use sha2::{Digest, Sha256};
 

@@ -17,10 +17,10 @@
 //!
 //! A design point or the noise floor's centre whose mean happens to fall in
 //! the band does not end the stage: a 2-seed mean is one draw of a noisy
-//! pile (at he2019-quick's seed σ of 4.1°, a 2-seed mean from a true angle
-//! 4° below its 47.8° target lands in the ±5 % band about 3 times in 10), so
-//! only a point run with the verification's seeds counts, and a failed candidate's seeds become data
-//! for the next fit. Round k's points are indexed from [`ADAPTIVE_INDEX`] +
+//! pile and lands in the band from well outside it often enough to matter
+//! (the measured chance: docs/performance.md, "src/calibrate/adaptive.rs"), so
+//! only a point run with the verification's seeds counts, and a failed
+//! candidate's seeds become data for the next fit. Round k's points are indexed from [`ADAPTIVE_INDEX`] +
 //! [`ROUND_STRIDE`] × k, the candidate first; they are written to
 //! `adaptive/replicates.csv`, which the GP's training then includes. A killed
 //! stage resumes: the table is rewritten after every round and the runs are
@@ -32,14 +32,13 @@ use serde_json::json;
 use super::gp_train::{adaptive_path, fit_model};
 use super::replicates::{read_replicates_csv, replicates_csv, run_replicated, Replicated};
 use super::verify_seeds::MIN_MEASURED;
-use super::{
-    parameter_names, rng, to_physical, write_output, CalibrateError, Stage, Stream, StudyDir,
-};
+use super::{parameter_names, to_physical, write_output, CalibrateError, Stage, StudyDir};
 use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
-use crate::stats::gp::probability_in_band;
+use crate::search::acquisition::probability_in_band;
 use crate::store::{RunDir, RunResult, Store};
+use crate::streams::{rng, Stream};
 
 /// `sample_index` of the first adaptive point.
 pub const ADAPTIVE_INDEX: u64 = 2_000_000_000;

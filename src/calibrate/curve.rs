@@ -39,14 +39,15 @@ use serde_json::json;
 
 use super::batch::{read_angles, read_design, AngleRow};
 use super::search::{find, SearchSettings};
-use super::surrogate::{sweep, Dataset, TrainSettings};
-use super::train::{input_scales, DEFAULT_TRAIN_FRACTION};
+use super::train::input_scales;
 use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
 use crate::manifest::{ContentId, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::{learning_curve_plot, CurvePoint};
 use crate::report::table::{Cell, CsvWriter};
 use crate::store::{Store, TimingRecord};
+use crate::surrogate::ga_bp::{split_at, DEFAULT_TRAIN_FRACTION};
+use crate::surrogate::ga_bp::{sweep, Dataset, TrainSettings};
 
 /// One size of the learning curve.
 #[derive(Debug, Clone, PartialEq)]
@@ -147,7 +148,7 @@ pub fn learning_curve(
             message: "its rows differ from sample/design.csv: rerun `repose batch`".to_string(),
         });
     }
-    let capacity = (design.len() as f64 * DEFAULT_TRAIN_FRACTION).round() as usize;
+    let capacity = split_at(design.len(), DEFAULT_TRAIN_FRACTION);
     let sizes = sizes.map_or_else(|| default_sizes(capacity), <[usize]>::to_vec);
     check_sizes(&sizes, capacity)?;
     let wall: Vec<Option<f64>> = design

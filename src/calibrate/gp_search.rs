@@ -9,18 +9,13 @@
 //! target (1 ∓ tolerance). Points with P ≥ `min_probability` are kept: a
 //! point the surrogate knows little about is not kept on a lucky mean, and
 //! one it knows well is kept only when its mean is inside. The kept points
-//! are clustered by mean shift as in he2019 (§3.5, [`super::meanshift`]),
+//! are clustered by mean shift as in he2019 (§3.5, [`crate::search::meanshift`]),
 //! and the clusters (largest first) are the candidates `verify` re-simulates.
 //!
 //! # The family
 //!
-//! One angle rarely pins every parameter: the kept points spread along the
-//! directions the target does not constrain. `family.md` gives each
-//! parameter's mean, standard deviation and range over the kept points, and
-//! the principal directions of the kept points in the unit cube of the
-//! ranges (eigenvectors of their covariance, largest variance first): a
-//! direction with a large share is a combination of parameters the target
-//! leaves free; one with a small share is what the target determines.
+//! `family.md` reports the parameter sets consistent with the target
+//! ([`crate::search::band::family`]).
 //!
 //! The resampling is `10 × samples` points of a Latin hypercube from the
 //! search stream (the GP is cheap to evaluate; a narrow band in five
@@ -28,25 +23,24 @@
 
 use std::fmt::Write as _;
 
-use nalgebra::{DMatrix, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use super::gp_train::{gp_path, read_gp};
-use super::meanshift::{estimate_bandwidth, mean_shift};
 use super::noise::noise_aware;
 use super::search::SearchSettings;
 use super::verify::clusters_path;
 use super::{
-    json_bytes, parameter_names, rng, to_physical, write_output, CalibrateError, Stage, Stream,
-    StudyDir,
+    json_bytes, parameter_names, to_physical, write_output, CalibrateError, Stage, StudyDir,
 };
-use crate::doe::lhs::latin_hypercube;
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::scatter_matrix;
 use crate::report::table::{Cell, CsvWriter};
-use crate::stats::gp::probability_in_band;
+use crate::search::acquisition::probability_in_band;
+use crate::search::band::{bandwidth, family, kept, resample, Criterion, Family};
+use crate::search::meanshift::mean_shift;
+use crate::surrogate::Prediction;
 
 /// Resampled points per point of the network's search.
 pub const RESAMPLE_FACTOR: usize = 10;
@@ -66,45 +60,6 @@ pub struct Candidate {
     pub predicted_sd_deg: f64,
     /// Probability of the band at the centre.
     pub probability: f64,
-}
-
-/// One parameter's spread over the kept points.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Spread {
-    /// The parameter.
-    pub parameter: String,
-    /// Mean, physical units.
-    pub mean: f64,
-    /// Standard deviation, physical units.
-    pub sd: f64,
-    /// Smallest kept value.
-    pub min: f64,
-    /// Largest kept value.
-    pub max: f64,
-    /// sd over the width of the range.
-    pub relative_sd: f64,
-}
-
-/// A principal direction of the kept points (unit cube).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Direction {
-    /// Share of the kept points' total variance along it.
-    pub variance_share: f64,
-    /// Unit vector, one loading per parameter.
-    pub loadings: Vec<f64>,
-}
-
-/// The parameter sets consistent with the target.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Family {
-    /// Resampled points.
-    pub resampled: usize,
-    /// Kept points.
-    pub kept: usize,
-    /// Per-parameter spread.
-    pub spread: Vec<Spread>,
-    /// Principal directions, largest share first.
-    pub directions: Vec<Direction>,
 }
 
 /// What the search did.
@@ -129,21 +84,24 @@ pub fn gp_search(
     let gp = model.process()?;
     let names = parameter_names(study);
     let samples = settings.samples * RESAMPLE_FACTOR;
-    let unit = latin_hypercube(
-        samples,
-        names.len(),
-        settings.placement,
-        &mut rng(settings.seed, Stream::Search, 1),
-    );
+    let unit = resample(samples, names.len(), settings.placement, settings.seed, 1);
     let (lo, hi) = study.calibration.band_deg();
     let predictions: Vec<_> = unit.iter().map(|u| gp.predict(u)).collect();
+    let criterion = Criterion::Probability {
+        lo,
+        hi,
+        min: spec.min_probability,
+    };
     let probability: Vec<f64> = predictions
         .iter()
-        .map(|p| probability_in_band(p.mean, p.sd, lo, hi))
+        .map(|p| {
+            criterion.score(&Prediction {
+                mean: p.mean,
+                sd: Some(p.sd),
+            })
+        })
         .collect();
-    let kept: Vec<usize> = (0..unit.len())
-        .filter(|&i| probability[i] >= spec.min_probability)
-        .collect();
+    let kept = kept(&criterion, &probability);
     if kept.is_empty() {
         let best = (0..unit.len())
             .max_by(|&a, &b| probability[a].total_cmp(&probability[b]))
@@ -156,10 +114,7 @@ pub fn gp_search(
         )));
     }
     let kept_unit: Vec<Vec<f64>> = kept.iter().map(|&i| unit[i].clone()).collect();
-    let bandwidth = match settings.bandwidth {
-        Some(h) => h,
-        None => estimate_bandwidth(&kept_unit, settings.quantile),
-    };
+    let bandwidth = bandwidth(&kept_unit, settings.bandwidth, settings.quantile);
     let clustering = if bandwidth > 0.0 {
         mean_shift(&kept_unit, settings.kernel, bandwidth)
     } else {
@@ -183,7 +138,8 @@ pub fn gp_search(
             }
         })
         .collect();
-    let family = family(study, &names, &kept_unit, samples);
+    let ranges: Vec<(f64, f64)> = study.parameters.values().map(|r| (r.min, r.max)).collect();
+    let family = family(&names, &ranges, &kept_unit, samples);
 
     let mut label = vec![None; unit.len()];
     for (&i, &l) in kept.iter().zip(&clustering.labels) {
@@ -260,73 +216,6 @@ pub fn gp_search(
         family,
         markdown,
     })
-}
-
-/// The family report of the kept points (see the module docs).
-fn family(study: &Study, names: &[String], kept_unit: &[Vec<f64>], resampled: usize) -> Family {
-    let n = kept_unit.len();
-    let d = names.len();
-    let mean_u: Vec<f64> = (0..d)
-        .map(|j| kept_unit.iter().map(|u| u[j]).sum::<f64>() / n as f64)
-        .collect();
-    let denom = (n.max(2) - 1) as f64;
-    let cov = DMatrix::from_fn(d, d, |a, b| {
-        kept_unit
-            .iter()
-            .map(|u| (u[a] - mean_u[a]) * (u[b] - mean_u[b]))
-            .sum::<f64>()
-            / denom
-    });
-    let spread = study
-        .parameters
-        .iter()
-        .enumerate()
-        .map(|(j, (name, r))| {
-            let width = r.max - r.min;
-            let values: Vec<f64> = kept_unit.iter().map(|u| r.min + u[j] * width).collect();
-            let sd = cov[(j, j)].sqrt() * width;
-            Spread {
-                parameter: name.clone(),
-                mean: r.min + mean_u[j] * width,
-                sd,
-                min: values.iter().copied().fold(f64::INFINITY, f64::min),
-                max: values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-                relative_sd: sd / width,
-            }
-        })
-        .collect();
-    let eigen = SymmetricEigen::new(cov);
-    let total: f64 = eigen.eigenvalues.iter().map(|v| v.max(0.0)).sum();
-    let mut order: Vec<usize> = (0..d).collect();
-    order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
-    let directions = order
-        .into_iter()
-        .map(|k| {
-            let mut v: Vec<f64> = eigen.eigenvectors.column(k).iter().copied().collect();
-            // Sign convention: the largest loading positive (deterministic).
-            let big = v
-                .iter()
-                .copied()
-                .fold(0.0f64, |m, x| if x.abs() > m.abs() { x } else { m });
-            if big < 0.0 {
-                v.iter_mut().for_each(|x| *x = -*x);
-            }
-            Direction {
-                variance_share: if total > 0.0 {
-                    eigen.eigenvalues[k].max(0.0) / total
-                } else {
-                    0.0
-                },
-                loadings: v,
-            }
-        })
-        .collect();
-    Family {
-        resampled,
-        kept: n,
-        spread,
-        directions,
-    }
 }
 
 fn markdown(

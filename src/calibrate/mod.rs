@@ -80,59 +80,27 @@
 //! reads has not run, naming the command to run first.
 //!
 //! Randomness comes from ChaCha8 streams of the study's design seed (or a seed
-//! given on the command line), one stream per purpose ([`Stream`]).
+//! given on the command line), one stream per purpose ([`crate::streams::Stream`]).
 
 pub mod adaptive;
 pub mod batch;
 pub mod curve;
-pub mod genetic;
 pub mod gp_search;
 pub mod gp_train;
-pub mod levenberg;
-pub mod meanshift;
-pub mod network;
 pub mod noise;
-pub mod objective;
 pub mod pipeline;
 pub mod replicates;
 pub mod sample;
 pub mod search;
-pub mod surrogate;
 pub mod train;
 pub mod verify;
 pub mod verify_seeds;
 
 use std::path::{Path, PathBuf};
 
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-
 use crate::manifest::{canonical_json, ContentId, Study, ValidationErrors};
 use crate::report::table::TableError;
 use crate::store::{write_atomic, InputRef, Lineage, StoreError};
-
-/// The purposes that draw random numbers; each gets its own ChaCha stream of
-/// a seed, so adding draws to one never shifts another.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stream {
-    /// The sampled design's strata positions and permutations.
-    Design = 1,
-    /// Exchanges of the optimised Latin hypercube.
-    Optimise = 2,
-    /// The search stage's resampled points.
-    Search = 3,
-    /// The genetic algorithm (one sub-stream per hidden size).
-    Genetic = 4,
-    /// The adaptive stage's candidate pools (one sub-stream per round).
-    Adaptive = 5,
-}
-
-/// The ChaCha8 stream for `purpose` (and sub-stream `index`) of `seed`.
-pub fn rng(seed: u64, purpose: Stream, index: u64) -> ChaCha8Rng {
-    let mut r = ChaCha8Rng::seed_from_u64(seed);
-    r.set_stream(((purpose as u64) << 32) | (index & 0xffff_ffff));
-    r
-}
 
 /// The stages, in pipeline order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -217,7 +185,7 @@ pub enum CalibrateError {
     Exec(#[from] crate::exec::ExecError),
     /// Training could not run.
     #[error(transparent)]
-    Train(#[from] surrogate::TrainError),
+    Train(#[from] crate::surrogate::ga_bp::TrainError),
     /// The search kept no point.
     #[error("{0}")]
     NothingKept(String),

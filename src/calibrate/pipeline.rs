@@ -23,7 +23,7 @@ use serde_json::json;
 
 use super::adaptive::{adaptive, AdaptiveOutcome};
 use super::batch::batch;
-use super::gp_search::{gp_search, Candidate, Family};
+use super::gp_search::{gp_search, Candidate};
 use super::gp_train::{train_gp, SurrogateMetrics};
 use super::noise::{noise, NoiseFloor};
 use super::sample::{sample, SampleSettings};
@@ -33,6 +33,7 @@ use super::verify_seeds::{verify_seeds, Acceptance, SeedVerifyRow};
 use super::{json_bytes, write_output, CalibrateError, Stage, StudyDir};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
+use crate::search::band::Family;
 use crate::store::{RunDir, RunResult, Store};
 
 /// Options of a noise-aware calibration.

@@ -17,13 +17,14 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use super::{
-    create_dir, json_bytes, parameter_names, rng, serde_name, to_physical, write_file,
-    write_output, CalibrateError, Stage, Stream, StudyDir,
+    create_dir, json_bytes, parameter_names, serde_name, to_physical, write_file, write_output,
+    CalibrateError, Stage, StudyDir,
 };
 use crate::doe::diagnostics::{diagnose, unit_scaled, Diagnostics};
 use crate::doe::lhs::{latin_hypercube, optimise, Optimisation, Placement};
 use crate::manifest::{canonical_json, DesignKind, Study};
 use crate::report::table::{Cell, CsvWriter, Table};
+use crate::streams::{rng, Stream};
 
 /// Options of the sample stage.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

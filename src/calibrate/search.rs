@@ -9,7 +9,7 @@
 //! equivalent of he2019's Table 2.
 //!
 //! The bandwidth is given (unit-scaled) or estimated from the kept points by
-//! [`super::meanshift::estimate_bandwidth`] with a configurable quantile
+//! [`crate::search::meanshift::estimate_bandwidth`] with a configurable quantile
 //! (default 0.3, scikit-learn's); both choices are recorded.
 
 use std::fmt::Write;
@@ -18,17 +18,18 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::meanshift::{estimate_bandwidth, mean_shift, Kernel};
-use super::surrogate::Model;
 use super::{
-    parameter_names, rng, serde_name, to_physical, write_output, CalibrateError, Stage, Stream,
-    StudyDir,
+    parameter_names, serde_name, to_physical, write_output, CalibrateError, Stage, StudyDir,
 };
-use crate::doe::lhs::{latin_hypercube, Placement};
+use crate::doe::lhs::Placement;
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::scatter_matrix;
 use crate::report::table::{Cell, CsvWriter};
+use crate::search::band::{bandwidth, kept, resample, Criterion};
+use crate::search::meanshift::{mean_shift, Kernel};
+use crate::surrogate::ga_bp::Model;
+use crate::surrogate::Prediction;
 
 /// Options of the search stage.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -213,7 +214,7 @@ pub struct Found {
     /// Bandwidth used (unit-scaled).
     pub bandwidth: f64,
     /// The mean-shift result on the kept points.
-    pub clustering: super::meanshift::Clustering,
+    pub clustering: crate::search::meanshift::Clustering,
     /// The clusters, largest first.
     pub clusters: Vec<ClusterRow>,
 }
@@ -228,18 +229,24 @@ pub fn find(
     settings.check()?;
     let target = &study.calibration;
     let names = parameter_names(study);
-    let unit = latin_hypercube(
+    let unit = resample(
         settings.samples,
         names.len(),
         settings.placement,
-        &mut rng(settings.seed, Stream::Search, 0),
+        settings.seed,
+        0,
     );
     let physical: Vec<Vec<f64>> = unit.iter().map(|u| to_physical(study, u)).collect();
     let predicted: Vec<f64> = physical.iter().map(|x| model.predict(x)).collect();
-    let deviation = |p: f64| (p - target.target_angle_deg).abs() / target.target_angle_deg;
-    let kept: Vec<usize> = (0..predicted.len())
-        .filter(|&i| deviation(predicted[i]) <= target.tolerance_fraction)
+    let criterion = Criterion::Tolerance {
+        target: target.target_angle_deg,
+        fraction: target.tolerance_fraction,
+    };
+    let deviation: Vec<f64> = predicted
+        .iter()
+        .map(|&mean| criterion.score(&Prediction { mean, sd: None }))
         .collect();
+    let kept = kept(&criterion, &deviation);
     if kept.is_empty() {
         let lo = predicted.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = predicted.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -253,10 +260,7 @@ pub fn find(
         )));
     }
     let kept_unit: Vec<Vec<f64>> = kept.iter().map(|&i| unit[i].clone()).collect();
-    let bandwidth = match settings.bandwidth {
-        Some(h) => h,
-        None => estimate_bandwidth(&kept_unit, settings.quantile),
-    };
+    let bandwidth = bandwidth(&kept_unit, settings.bandwidth, settings.quantile);
     if bandwidth <= 0.0 {
         return Err(CalibrateError::Settings(format!(
             "the estimated bandwidth is 0 ({} kept point(s), quantile {}): raise --quantile or give --bandwidth",

@@ -9,7 +9,7 @@
 //!
 //! Outputs (each with its lineage record): `sweep.csv` (one row per hidden
 //! size: the Fig. 12 table), `model.json` (the kept network, see
-//! [`super::surrogate::Model`]), `parity.svg` (Fig. 13: predicted against
+//! [`crate::surrogate::ga_bp::Model`]), `parity.svg` (Fig. 13: predicted against
 //! simulated, train and validation marked) and `summary.json` (the split, the
 //! kept size and, for a table with printed predictions, their R²).
 
@@ -19,7 +19,6 @@ use serde::Serialize;
 use serde_json::json;
 
 use super::batch::read_angles;
-use super::surrogate::{sweep, Dataset, Scale, Sweep, TrainSettings};
 use super::{
     create_dir, json_bytes, parameter_names, serde_name, write_output, CalibrateError, Stage,
     StudyDir,
@@ -30,9 +29,7 @@ use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::stats::metrics::r_squared;
 use crate::store::InputRef;
 use crate::store::Lineage;
-
-/// he2019's split: 80 of 120 samples train.
-pub const DEFAULT_TRAIN_FRACTION: f64 = 2.0 / 3.0;
+use crate::surrogate::ga_bp::{sweep, Dataset, Scale, Sweep, TrainSettings};
 
 /// Options of the train stage.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -100,7 +97,7 @@ impl TrainOptions {
 
     /// The row index where validation starts for `n` rows.
     fn split_at(&self, n: usize) -> usize {
-        (n as f64 * self.train_fraction).round() as usize
+        crate::surrogate::ga_bp::split_at(n, self.train_fraction)
     }
 }
 

@@ -7,8 +7,8 @@
 //!   and the experiments it generates.
 //! - [`crate::exec`]: the one seam through which every stage runs experiments.
 //! - [`runs`]: points × replicates × scenes → executor → response table.
-//! - [`screen`], [`rsm`], [`optimum`], [`verify`]: the stages and the joint
-//!   desirability optimum.
+//! - [`screen`], [`rsm`], [`verify`]: the stages (the joint desirability
+//!   optimum is [`crate::search::desirability`]).
 //! - [`sensitivity`]: yan2015's three levels of parameter sensitivity.
 //! - [`seed_noise`]: one experiment over packing seeds: each response's
 //!   spread and its precision per cost (`repose noise MANIFEST`).
@@ -18,7 +18,6 @@
 //! stages or studies is simulated once, and a killed stage resumes.
 
 pub mod dir;
-pub mod optimum;
 pub mod rsm;
 pub mod runs;
 pub mod screen;

@@ -14,7 +14,6 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use super::dir::{write_output, StudyDir};
-use super::optimum::{maximise, Goal, Search};
 use super::runs::{run_points, write_table, Point, Runs};
 use super::spec::{DesignSpec, DesignStudy, SeedStage};
 use super::StudyError;
@@ -25,6 +24,7 @@ use crate::exec::Executor;
 use crate::manifest::Experiment;
 use crate::report::plots::{contour, predicted_vs_actual, ContourGrid};
 use crate::report::table::{Cell, CsvWriter, Table};
+use crate::search::desirability::{maximise, Goal, Search};
 use crate::stats::rsm::{fit_quadratic, AnovaRow, RsmFit};
 use crate::store::{RunDir, RunResult, Store};
 

@@ -17,37 +17,39 @@
 //! the size), computes sequentially, and the sweep collects results in size
 //! order, so the outcome is bit-identical on any number of threads.
 //!
-//! Refinement is Levenberg–Marquardt ([`super::levenberg`], as MATLAB's
+//! Refinement is Levenberg–Marquardt ([`levenberg`], as MATLAB's
 //! `trainlm` that he2019 used), not Adam. he2019 gives none of the GA or LM
-//! settings; the defaults here and what they were measured to do on Table A1
-//! (rows 1–80 train, 81–120 validate, seed 0; `golden/he2019_table_a1_sweep.csv`):
+//! settings; the defaults here and why:
 //!
-//! - GA: 40 genomes, 60 generations ([`GaSettings::default`]). On Table A1 the
-//!   GA changes which local minimum LM reaches for some sizes but does not
-//!   raise the best validation R² (0.9107 at h = 3 with or without it); it is
-//!   kept because the method prescribes it and it costs ~0.1 s.
-//! - LM: at most 200 accepted steps. The budget acts as early stopping: with
-//!   1000 steps (trainlm's default maximum) h = 3 converges after 219 steps to
-//!   the same network, but networks with h ≥ 5 fit the 80 training rows' noise
-//!   and fail on the validation rows (R² 0.51 at h = 5, negative beyond).
-//!   trainlm itself stops on a validation subset it draws from the training
-//!   data; the validation rows here are never used for training.
-//! - No weight decay (λ = 0). λ = 0.001 flattens the sweep (every size ≈ 0.907).
+//! - GA: 40 genomes, 60 generations ([`GaSettings::default`]), kept because
+//!   the method prescribes it (on Table A1 it changes which local minimum LM
+//!   reaches, not the best validation R²).
+//! - LM: at most 200 accepted steps. The budget acts as early stopping:
+//!   networks with many hidden neurons fit the training rows' noise long
+//!   before trainlm's 1000-step maximum. trainlm itself stops on a validation
+//!   subset it draws from the training data; the validation rows here are
+//!   never used for training.
+//! - No weight decay (λ = 0): on Table A1 a small decay flattens the sweep.
 //!
-//! The whole Table A1 sweep (10 sizes) takes 0.23 s of CPU (0.9 s wall on the
-//! shared development machine); validation R² of the kept network for seeds
-//! 0–5: 0.908–0.917.
+//! Measured on Table A1 (the sweep with and without the GA, LM budgets, weight
+//! decay, CPU time, seeds): docs/performance.md ("src/surrogate/ga_bp").
+
+pub mod genetic;
+pub mod levenberg;
+pub mod network;
+pub mod objective;
 
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::genetic::{evolve, GaSettings};
-use super::levenberg::{refine, LmSettings, LmStop};
-use super::network::Shape;
-use super::objective::Objective;
-use super::{rng, Stream};
 use crate::stats::metrics::{mse, r_squared};
+use crate::streams::{rng, Stream};
+use crate::surrogate::{Prediction, Surrogate, SurrogateError, Table};
+use genetic::{evolve, GaSettings};
+use levenberg::{refine, LmSettings, LmStop};
+use network::Shape;
+use objective::Objective;
 
 /// A linear map of one quantity from `[min, max]` onto [−1, 1].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -154,7 +156,7 @@ pub struct Model {
     pub hidden: usize,
     /// Hidden activation (always `logistic`).
     pub activation: String,
-    /// Weights and thresholds, laid out as in [`super::network`].
+    /// Weights and thresholds, laid out as in [`network`].
     pub parameters: Vec<f64>,
 }
 
@@ -211,6 +213,83 @@ impl Model {
 
 /// The `kind` of a saved [`Model`].
 pub const MODEL_KIND: &str = "ga_bp_network";
+
+/// he2019's split: 80 of 120 samples train, the rest validate (and choose
+/// the hidden size).
+pub const DEFAULT_TRAIN_FRACTION: f64 = 2.0 / 3.0;
+
+/// The row index where validation starts for `rows` rows split at
+/// `train_fraction` (rounded to the nearest row).
+pub fn split_at(rows: usize, train_fraction: f64) -> usize {
+    (rows as f64 * train_fraction).round() as usize
+}
+
+/// Settings of the network as a [`Surrogate`]: the sweep's settings and the
+/// fraction of the table's rows (the first ones) that train; the rest
+/// validate and choose the hidden size.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GaBpSettings {
+    /// The hidden-size sweep, GA and LM.
+    pub train: TrainSettings,
+    /// Fraction of the rows, in table order, that train (0 < f < 1).
+    pub train_fraction: f64,
+}
+
+impl Default for GaBpSettings {
+    /// [`TrainSettings::with_seed`] 0 and he2019's two-thirds split.
+    fn default() -> Self {
+        GaBpSettings {
+            train: TrainSettings::with_seed(0),
+            train_fraction: DEFAULT_TRAIN_FRACTION,
+        }
+    }
+}
+
+impl Surrogate for Model {
+    type Settings = GaBpSettings;
+    const KIND: &'static str = MODEL_KIND;
+
+    /// The sweep's kept network; the response's column is named `response`.
+    fn fit(table: &Table, settings: &GaBpSettings) -> Result<Self, SurrogateError> {
+        table.check()?;
+        let n = table.y.len();
+        let cut = split_at(n, settings.train_fraction);
+        let data = Dataset {
+            inputs: table
+                .names
+                .iter()
+                .zip(table.ranges)
+                .map(|(name, (min, max))| Scale {
+                    name: name.clone(),
+                    min: *min,
+                    max: *max,
+                })
+                .collect(),
+            target: "response".to_string(),
+            rows: table.x.to_vec(),
+            targets: table.y.to_vec(),
+            train: (0..cut).collect(),
+            validation: (cut..n).collect(),
+        };
+        sweep(&data, &settings.train)
+            .map(|s| s.model)
+            .map_err(|e| SurrogateError::Fit {
+                kind: MODEL_KIND,
+                message: e.to_string(),
+            })
+    }
+
+    fn predict(&self, x: &[f64]) -> Prediction {
+        Prediction {
+            mean: Model::predict(self, x),
+            sd: None,
+        }
+    }
+
+    fn parameter_count(&self) -> usize {
+        self.parameters.len()
+    }
+}
 
 /// One row of the hidden-size sweep (the Fig. 12 table).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

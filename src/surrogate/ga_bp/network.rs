@@ -9,7 +9,7 @@
 //! [ W1 (h × m, row j = hidden neuron j) | b1 (h) | w2 (h) | b2 ]
 //! ```
 //!
-//! Inputs and output are in scaled units (see [`super::surrogate::Scale`]);
+//! Inputs and output are in scaled units (see [`super::Scale`]);
 //! the network itself knows nothing of physical units.
 
 /// Shape of a one-hidden-layer network.

@@ -5,7 +5,7 @@
 //! gradient component falls below `min_gradient`, or when μ exceeds `mu_max`.
 //! trainlm's defaults are μ₀ = 0.001, μ_dec = 0.1, μ_inc = 10, μ_max = 1e10,
 //! min_grad = 1e-7 ([`LmSettings::default`]); the 200-step budget is ours and
-//! doubles as early stopping (see [`super::surrogate`] for what it does on
+//! doubles as early stopping (see [`super`] for what it does on
 //! he2019's Table A1).
 //!
 //! The weight decay of [`Objective`] enters as augmented residuals √λ θ, so
@@ -133,7 +133,7 @@ pub fn refine(objective: &Objective, theta: &[f64], settings: &LmSettings) -> Lm
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calibrate::network::Shape;
+    use crate::surrogate::ga_bp::network::Shape;
 
     #[test]
     fn recovers_a_network_that_generated_the_data() {
