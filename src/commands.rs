@@ -39,11 +39,11 @@ use crate::store::{
     write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, RunSummary, Store, StoreError,
 };
 use crate::study::spec::{is_design_study, parse_design_study, read_design_study, DesignStudy};
+use crate::study::tradeoff as tradeoff_sweep;
+use crate::study::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
 use crate::study::{self, StudyError};
 use crate::surrogate::ga_bp::TrainSettings;
 use crate::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
-use crate::tradeoff as tradeoff_sweep;
-use crate::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
 
 /// Which kind of manifest a file holds, as chosen on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -646,14 +646,12 @@ pub struct TradeoffOptions {
     pub knobs: Vec<Knob>,
     /// Replicates per point (packing seeds), ≥ 2.
     pub replicates: usize,
-    /// Runs in parallel.
-    pub threads: usize,
     /// Output directory (default `<store>/tradeoff/<first 12 hex of the base id>`).
     pub out_dir: Option<PathBuf>,
 }
 
 /// `repose tradeoff MANIFEST`: sweeps fidelity knobs around the manifest's
-/// scene (see [`crate::tradeoff`]), writes tradeoff.csv / .md / .svg with a
+/// scene (see [`crate::study::tradeoff`]), writes tradeoff.csv / .md / .svg with a
 /// lineage record, and prints the Markdown table.
 pub fn tradeoff(
     store_root: &Path,

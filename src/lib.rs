@@ -6,7 +6,6 @@
 //! - [`study`]: studies as data — the design-study manifest and its stages
 //!   (screen, rsm, verify), each run through [`exec`] into a response table.
 //! - [`calibrate`]: the he2019 stages (sample, batch, train, search, verify).
-//! - [`tradeoff`]: what accuracy costs in time (`repose tradeoff`).
 //! - [`exec`]: the one executor seam: runs experiments through the store, on
 //!   this machine's worker pool or as Slurm job arrays (`--executor slurm`).
 //! - [`mod@bench`]: the engine throughput benchmark (`repose bench`).
@@ -54,4 +53,3 @@ pub mod store;
 pub mod streams;
 pub mod study;
 pub mod surrogate;
-pub mod tradeoff;

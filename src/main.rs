@@ -19,11 +19,11 @@ use repose::exec::Executor;
 use repose::scenes::plan::Limits;
 use repose::search::meanshift::Kernel;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
+use repose::study::tradeoff::plan::{Knob, KNOB_NAMES};
 use repose::surrogate::ga_bp::genetic::GaSettings;
 use repose::surrogate::ga_bp::levenberg::LmSettings;
 use repose::surrogate::ga_bp::TrainSettings;
 use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
-use repose::tradeoff::plan::{Knob, KNOB_NAMES};
 
 /// Huge pages for the engine's large arrays (see `repose::huge_pages`).
 #[cfg(target_os = "linux")]
@@ -623,9 +623,10 @@ struct TradeoffArgs {
     /// Replicates (packing seeds) per point, >= 2.
     #[arg(long, default_value_t = 3)]
     replicates: usize,
-    /// Runs in parallel.
-    #[arg(long, default_value_t = 2)]
-    threads: usize,
+    /// Runs at once (default: the number of CPUs), as every command's
+    /// --jobs; --threads is its old name.
+    #[arg(long, alias = "threads")]
+    jobs: Option<usize>,
     /// Output directory (default <store>/tradeoff/<base id prefix>).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -666,7 +667,6 @@ impl TradeoffArgs {
         Ok(TradeoffOptions {
             knobs,
             replicates: self.replicates,
-            threads: self.threads,
             out_dir: self.out.clone(),
         })
     }
@@ -896,7 +896,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         }
         Command::Tradeoff(args) => {
             let options = args.options().map_err(CommandError::Usage)?;
-            let exec = args.exec.executor(options.threads, limits)?;
+            let exec = args.exec.executor(default_jobs(args.jobs), limits)?;
             commands::tradeoff(&cli.store, &args.manifest, &options, &exec, &mut out)
         }
         Command::LearningCurve {

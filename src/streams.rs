@@ -3,8 +3,20 @@
 //! candidate pools) comes from a ChaCha8 stream of one seed and one
 //! [`Stream`] purpose, so adding draws to one purpose never shifts another
 //! and the same seed gives the same draws on any machine and thread count.
+//!
+//! The packing seeds of a point's replicates follow one [`SeedRule`]. Both
+//! rules are inside the experiment ids of every committed study and cached
+//! run, so neither may change:
+//! - [`SeedRule::Offset`]: base, base + 1, … — he2019 studies (replicate r of
+//!   sample i runs the study's packing seed + r), the noise floor and the
+//!   tradeoff sweep (replicates of one manifest), where a replicate is "the
+//!   same experiment, next packing";
+//! - [`SeedRule::Drawn`]: the r-th draw of the ChaCha8 stream of (study seed,
+//!   [`SeedStage`], point), below 2³² so any JSON reader keeps it exact —
+//!   design studies, where every point of every stage gets unrelated
+//!   packings (a centre point repeated in a design gets a real pure error).
 
-use rand::SeedableRng;
+use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// The purposes that draw random numbers; each gets its own ChaCha stream of
@@ -30,4 +42,54 @@ pub fn rng(seed: u64, purpose: Stream, index: u64) -> ChaCha8Rng {
     let mut r = ChaCha8Rng::seed_from_u64(seed);
     r.set_stream(((purpose as u64) << 32) | (index & 0xffff_ffff));
     r
+}
+
+/// The design-study stages that draw packing seeds, each its own stream of
+/// [`SeedRule::Drawn`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SeedStage {
+    /// `repose screen`.
+    Screen = 1,
+    /// `repose rsm` (the design).
+    Design = 2,
+    /// `repose verify`.
+    Verify = 3,
+}
+
+/// How the replicates of one point get their packing seeds (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SeedRule {
+    /// Replicate r gets `base + r` (wrapping).
+    Offset {
+        /// The packing seed of replicate 0.
+        base: u64,
+    },
+    /// Replicate r gets the r-th draw (from 0) of the ChaCha8 stream of
+    /// (`seed`, `stage`, `point`).
+    Drawn {
+        /// The study's seed.
+        seed: u64,
+        /// The stage drawing.
+        stage: SeedStage,
+        /// The design point's index in its stage.
+        point: u64,
+    },
+}
+
+impl SeedRule {
+    /// The packing seed of `replicate`.
+    pub fn packing_seed(&self, replicate: u64) -> u64 {
+        match *self {
+            SeedRule::Offset { base } => base.wrapping_add(replicate),
+            SeedRule::Drawn { seed, stage, point } => {
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                rng.set_stream(((stage as u64) << 40) | (point & 0xff_ffff_ffff));
+                let mut value = 0;
+                for _ in 0..=replicate {
+                    value = rng.next_u32();
+                }
+                u64::from(value)
+            }
+        }
+    }
 }

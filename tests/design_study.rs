@@ -8,7 +8,8 @@ mod common;
 use serde_json::{json, Value};
 
 use repose::manifest::{Scene, ValidationErrors};
-use repose::study::spec::{packing_seed, DesignStudy, SeedStage};
+use repose::streams::{SeedRule, SeedStage};
+use repose::study::spec::DesignStudy;
 
 fn smoke() -> Value {
     common::example("cai2024-smoke/study.json")
@@ -260,16 +261,39 @@ fn replicate_seeds_are_distinct_and_deterministic() {
     for stage in [SeedStage::Screen, SeedStage::Design, SeedStage::Verify] {
         for point in 0..40 {
             for replicate in 0..8 {
-                let s = packing_seed(2024, stage, point, replicate);
-                assert_eq!(s, packing_seed(2024, stage, point, replicate));
+                let s = SeedRule::Drawn {
+                    seed: 2024,
+                    stage,
+                    point,
+                }
+                .packing_seed(replicate);
+                assert_eq!(
+                    s,
+                    SeedRule::Drawn {
+                        seed: 2024,
+                        stage,
+                        point
+                    }
+                    .packing_seed(replicate)
+                );
                 assert!(s < 1 << 32);
                 assert!(seen.insert(s), "seed {s} repeats");
             }
         }
     }
     assert_ne!(
-        packing_seed(1, SeedStage::Design, 0, 0),
-        packing_seed(2, SeedStage::Design, 0, 0)
+        SeedRule::Drawn {
+            seed: 1,
+            stage: SeedStage::Design,
+            point: 0
+        }
+        .packing_seed(0),
+        SeedRule::Drawn {
+            seed: 2,
+            stage: SeedStage::Design,
+            point: 0
+        }
+        .packing_seed(0)
     );
 }
 

@@ -21,6 +21,7 @@ use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::scenes::responses::response;
 use crate::stats::summary::{mean_ci, MeanCi};
 use crate::store::{ErrorRecord, RunDir, RunResult, RunStatus, Store, TimingRecord};
+use crate::streams::SeedRule;
 
 /// One packing seed of a point.
 #[derive(Debug, Clone, PartialEq)]
@@ -224,7 +225,10 @@ pub fn replicates_csv(study: &Study, points: &[Replicated]) -> String {
             let mut cells = vec![Cell::Integer(p.index)];
             cells.extend(p.point.iter().map(|v| Cell::Number(*v)));
             cells.push(Cell::Integer(u64::from(r.replicate)));
-            cells.push(Cell::Integer(study.packing_seed + u64::from(r.replicate)));
+            let rule = SeedRule::Offset {
+                base: study.packing_seed,
+            };
+            cells.push(Cell::Integer(rule.packing_seed(u64::from(r.replicate))));
             cells.push(Cell::Text(r.id.to_string()));
             cells.push(r.value.as_ref().map_or(Cell::Empty, |v| Cell::Number(*v)));
             cells.push(Cell::Text(

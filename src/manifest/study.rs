@@ -5,6 +5,7 @@
 //! calibrated (with ranges) and which are fixed, and names the calibration scene and
 //! the verification scenes with their measured target angles.
 
+use crate::streams::SeedRule;
 use std::collections::BTreeMap;
 use std::fmt;
 
@@ -310,7 +311,10 @@ impl Study {
             seeds: Seeds {
                 design_seed: self.design.seed,
                 sample_index,
-                packing_seed: self.packing_seed + u64::from(replicate),
+                packing_seed: SeedRule::Offset {
+                    base: self.packing_seed,
+                }
+                .packing_seed(u64::from(replicate)),
             },
             time_step: self.time_step,
             coarse_graining: self.coarse_graining,

@@ -12,6 +12,8 @@
 //! - [`sensitivity`]: yan2015's three levels of parameter sensitivity.
 //! - [`seed_noise`]: one experiment over packing seeds: each response's
 //!   spread and its precision per cost (`repose noise MANIFEST`).
+//! - [`tradeoff`]: what accuracy costs in time: fidelity knobs swept around
+//!   one experiment with replicates (`repose tradeoff`).
 //! - [`dir`]: where a study's outputs live and how they are written.
 //!
 //! The runs stay in the store (`<store>/<id>/`), so a run shared by two
@@ -24,6 +26,7 @@ pub mod screen;
 pub mod seed_noise;
 pub mod sensitivity;
 pub mod spec;
+pub mod tradeoff;
 pub mod verify;
 
 use std::path::Path;

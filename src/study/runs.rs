@@ -11,13 +11,14 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use super::spec::{packing_seed, DesignStudy, SeedStage};
+use super::spec::{DesignStudy, SeedStage};
 use super::StudyError;
 use crate::exec::{run_incomplete, Executor, Ran};
 use crate::manifest::{ContentId, Experiment};
 use crate::report::table::{Cell, CsvWriter};
 use crate::scenes::responses::response;
 use crate::store::{Depth, InputRef, RunDir, RunResult, RunState, Store};
+use crate::streams::SeedRule;
 
 /// One point of a stage, in actual units.
 #[derive(Debug, Clone, PartialEq)]
@@ -165,7 +166,12 @@ where
     for (k, p) in points.iter().enumerate() {
         let values: Vec<(&str, f64)> = p.values.iter().map(|(a, v)| (a.as_str(), *v)).collect();
         for r in 0..replicates {
-            let seed = packing_seed(study.seed, stage, p.index, r);
+            let seed = SeedRule::Drawn {
+                seed: study.seed,
+                stage,
+                point: p.index,
+            }
+            .packing_seed(u64::from(r));
             for s in &scenes {
                 let e = study
                     .experiment(s, &values, p.index, seed)

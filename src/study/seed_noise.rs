@@ -13,6 +13,7 @@
 //! The wall times are the only non-deterministic numbers; nothing is written
 //! besides the runs themselves.
 
+use crate::streams::SeedRule;
 use std::fmt::Write as _;
 
 use serde::Serialize;
@@ -67,7 +68,10 @@ pub struct SceneNoise {
 /// The experiment `base` with packing seed `base + r`.
 pub fn with_packing_offset(base: &Experiment, r: u64) -> Experiment {
     let mut e = base.clone();
-    e.seeds.packing_seed = base.seeds.packing_seed + r;
+    e.seeds.packing_seed = SeedRule::Offset {
+        base: base.seeds.packing_seed,
+    }
+    .packing_seed(r);
     e
 }
 

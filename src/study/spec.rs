@@ -24,15 +24,13 @@
 //!
 //! Every replicate is its own hashed experiment: its packing seed is drawn
 //! from the ChaCha8 stream of (study seed, stage, design point), one draw
-//! per replicate ([`packing_seed`]), so replicates differ, a centre point
+//! per replicate ([`SeedRule::Drawn`]), so replicates differ, a centre point
 //! repeated in the design gets fresh packings (and the lack-of-fit test a
 //! real pure error), and the same study gives the same seeds everywhere.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use rand::{RngCore, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -42,6 +40,9 @@ use crate::manifest::{
     Material, Profile, Scene, Seeds, TimeStep, ValidationErrors, PHYSICS_VERSION, SCHEMA_VERSION,
 };
 use crate::scenes::responses::catalogue;
+#[cfg(doc)]
+use crate::streams::SeedRule;
+pub use crate::streams::SeedStage;
 
 /// A design study (see the module docs).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -220,30 +221,6 @@ pub struct Verification {
     /// factor in actual units; the desirability optimum is always verified.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub points: BTreeMap<String, BTreeMap<String, f64>>,
-}
-
-/// The study stages that draw packing seeds, each its own stream.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SeedStage {
-    /// `repose screen`.
-    Screen = 1,
-    /// `repose rsm` (the design).
-    Design = 2,
-    /// `repose verify`.
-    Verify = 3,
-}
-
-/// The packing seed of `replicate` at design point `point` of `stage`: the
-/// `replicate`-th draw of the ChaCha8 stream (seed, stage, point), below 2³²
-/// so any JSON reader keeps it exact.
-pub fn packing_seed(seed: u64, stage: SeedStage, point: u64, replicate: u32) -> u64 {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(((stage as u64) << 40) | (point & 0xff_ffff_ffff));
-    let mut value = 0;
-    for _ in 0..=replicate {
-        value = rng.next_u32();
-    }
-    u64::from(value)
 }
 
 impl DesignStudy {

@@ -9,6 +9,7 @@
 //! mistaken for numerical error. Every point is an ordinary experiment:
 //! validated, hashed, cached and resumable.
 
+use crate::streams::SeedRule;
 use serde_json::json;
 
 use crate::manifest::{Experiment, ValidationErrors};
@@ -175,7 +176,10 @@ fn replicate(e: &Experiment, n: usize) -> Vec<Experiment> {
     (0..n as u64)
         .map(|r| {
             let mut x = e.clone();
-            x.seeds.packing_seed = e.seeds.packing_seed.wrapping_add(r);
+            x.seeds.packing_seed = SeedRule::Offset {
+                base: e.seeds.packing_seed,
+            }
+            .packing_seed(r);
             x
         })
         .collect()
