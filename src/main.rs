@@ -21,7 +21,7 @@ use repose::search::meanshift::Kernel;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
 use repose::study::tradeoff::plan::{Knob, KNOB_NAMES};
 use repose::surrogate::ga_bp::genetic::GaSettings;
-use repose::surrogate::ga_bp::levenberg::LmSettings;
+use repose::surrogate::ga_bp::levenberg::TrainlmSettings;
 use repose::surrogate::ga_bp::TrainSettings;
 use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 
@@ -458,7 +458,7 @@ struct TrainArgs {
     #[arg(long, default_value_t = GaSettings::default().generations)]
     ga_generations: usize,
     /// Levenberg-Marquardt steps.
-    #[arg(long, default_value_t = LmSettings::default().epochs)]
+    #[arg(long, default_value_t = TrainlmSettings::default().epochs)]
     lm_epochs: usize,
 }
 

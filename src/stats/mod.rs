@@ -36,6 +36,7 @@
 //! [`StatsError`] rather than a NaN in the output.
 
 pub mod gp;
+pub mod levenberg;
 pub mod metrics;
 pub mod nlls;
 pub mod oneway;

@@ -4,7 +4,8 @@
 //!
 //! # Iteration
 //!
-//! At the current p, with J the n × p Jacobian ∂f(p; xᵢ)/∂p_j and r = y − f,
+//! The one Levenberg–Marquardt loop of [`super::levenberg`] with
+//! Marquardt damping and these rules ([`NllsSettings::lm`]). At the current p, with J the n × p Jacobian ∂f(p; xᵢ)/∂p_j and r = y − f,
 //! the trial step δ solves (JᵀJ + λ·diag(JᵀJ)) δ = Jᵀr (Marquardt's scaling,
 //! so the damping is invariant to the units of each parameter) by Cholesky
 //! factorisation. A trial point with a smaller SSE is accepted and λ divided
@@ -13,7 +14,7 @@
 //! rejected and λ multiplied by 10 (towards a short steepest-descent step).
 //! Every trial step counts as one iteration.
 //!
-//! The fit has converged when any of these holds ([`LmSettings`]):
+//! The fit has converged when any of these holds ([`NllsSettings`]):
 //! - SSE = 0 (an exact fit);
 //! - the gradient is negligible: maxⱼ |(Jᵀr)ⱼ| / √((JᵀJ)ⱼⱼ · SSE) ≤
 //!   `gradient_tolerance` (the largest cosine between r and a column of J);
@@ -43,6 +44,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::{DMatrix, DVector};
 
+use super::levenberg::{minimise, Damping, LeastSquares, LmSettings, Stopping};
 use super::regression::ols_named;
 use super::summary::{f_survival, t_quantile};
 use super::{check_finite, StatsError};
@@ -68,7 +70,7 @@ pub trait Model {
 /// Iteration limit, initial damping and convergence tolerances of the
 /// Levenberg–Marquardt iteration (the module docs give the tests).
 #[derive(Debug, Clone, PartialEq)]
-pub struct LmSettings {
+pub struct NllsSettings {
     /// Most trial steps (accepted or rejected) before
     /// [`StatsError::NotConverged`]. Default 500.
     pub max_iterations: usize,
@@ -85,9 +87,29 @@ pub struct LmSettings {
     pub gradient_tolerance: f64,
 }
 
-impl Default for LmSettings {
-    fn default() -> Self {
+impl NllsSettings {
+    /// The settings of the one Levenberg–Marquardt loop: Marquardt damping
+    /// and these stopping rules.
+    pub fn lm(&self) -> LmSettings {
         LmSettings {
+            damping: Damping::Marquardt {
+                initial: self.lambda_initial,
+            },
+            stopping: Stopping {
+                exact: true,
+                max_trials: Some(self.max_iterations),
+                gradient_cosine: Some(self.gradient_tolerance),
+                objective_gain: Some(self.sse_tolerance),
+                step: Some(self.step_tolerance),
+                ..Stopping::default()
+            },
+        }
+    }
+}
+
+impl Default for NllsSettings {
+    fn default() -> Self {
+        NllsSettings {
             max_iterations: 500,
             lambda_initial: 1e-3,
             sse_tolerance: 1e-15,
@@ -185,7 +207,7 @@ pub fn fit<M: Model>(
     x: &[Vec<f64>],
     y: &[f64],
     start: &[f64],
-    settings: &LmSettings,
+    settings: &NllsSettings,
 ) -> Result<NllsFit, StatsError> {
     let names = model.parameter_names();
     let k = names.len();
@@ -216,82 +238,58 @@ pub fn fit<M: Model>(
         });
     }
     let yv = DVector::from_column_slice(y);
-    let mut p = DVector::from_column_slice(start);
-    let (values, mut jacobian) =
-        evaluate(model, x, p.as_slice()).map_err(|(i, j, value)| StatsError::NonFinite {
-            what: match j {
-                None => "model value at the start".to_string(),
-                Some(j) => format!("model gradient ∂f/∂{} at the start", names[j]),
-            },
-            index: i,
-            value,
-        })?;
-    let mut residuals = &yv - values;
-    let mut sse = residuals.norm_squared();
-    let mut lambda = settings.lambda_initial;
-    let mut iterations = 0;
-    'iterate: loop {
-        if sse == 0.0 {
-            break;
-        }
-        let jtj = jacobian.transpose() * &jacobian;
-        let jtr = jacobian.transpose() * &residuals;
-        let cosine = (0..k)
-            .map(|j| {
-                let d = jtj[(j, j)];
-                if d > 0.0 {
-                    jtr[j].abs() / (d * sse).sqrt()
-                } else {
-                    0.0
-                }
-            })
-            .fold(0.0, f64::max);
-        if cosine <= settings.gradient_tolerance {
-            break;
-        }
-        let max_diag = (0..k).map(|j| jtj[(j, j)]).fold(0.0, f64::max);
-        let floor = f64::EPSILON * max_diag;
-        // Inner loop: trial steps at the same Jacobian until one is accepted.
-        loop {
-            if iterations >= settings.max_iterations {
-                return Err(StatsError::NotConverged { iterations, sse });
-            }
-            iterations += 1;
-            let mut damped = jtj.clone();
-            for j in 0..k {
-                damped[(j, j)] += lambda * jtj[(j, j)].max(floor);
-            }
-            let Some(cholesky) = damped.cholesky() else {
-                lambda *= 10.0;
-                continue;
-            };
-            let step = cholesky.solve(&jtr);
-            let short =
-                step.norm() <= settings.step_tolerance * (p.norm() + settings.step_tolerance);
-            let trial = &p + &step;
-            if let Ok((values, trial_jacobian)) = evaluate(model, x, trial.as_slice()) {
-                let trial_residuals = &yv - values;
-                let trial_sse = trial_residuals.norm_squared();
-                if trial_sse < sse {
-                    let small_gain = sse - trial_sse <= settings.sse_tolerance * sse;
-                    p = trial;
-                    jacobian = trial_jacobian;
-                    residuals = trial_residuals;
-                    sse = trial_sse;
-                    lambda = (lambda / 10.0).max(f64::MIN_POSITIVE);
-                    if short || small_gain {
-                        break 'iterate;
-                    }
-                    continue 'iterate;
-                }
-            }
-            if short {
-                break 'iterate;
-            }
-            lambda *= 10.0;
+    evaluate(model, x, start).map_err(|(i, j, value)| StatsError::NonFinite {
+        what: match j {
+            None => "model value at the start".to_string(),
+            Some(j) => format!("model gradient ∂f/∂{} at the start", names[j]),
+        },
+        index: i,
+        value,
+    })?;
+    let problem = Problem { model, x, y: &yv };
+    let out = minimise(&problem, start, &settings.lm());
+    if !out.stop.converged() {
+        return Err(StatsError::NotConverged {
+            iterations: out.trials,
+            sse: out.objective,
+        });
+    }
+    let (values, jacobian) =
+        evaluate(model, x, &out.theta).expect("an accepted point has a finite model");
+    let residuals = &yv - values;
+    let p = DVector::from_column_slice(&out.theta);
+    inference(
+        names,
+        p,
+        &jacobian,
+        &yv,
+        &residuals,
+        out.objective,
+        out.trials,
+    )
+}
+
+/// A model and its data as the Levenberg–Marquardt problem: residuals
+/// f − y, objective SSE (NaN where the model or its gradient is not finite).
+struct Problem<'a, M> {
+    model: &'a M,
+    x: &'a [Vec<f64>],
+    y: &'a DVector<f64>,
+}
+
+impl<M: Model> LeastSquares for Problem<'_, M> {
+    fn objective(&self, theta: &[f64]) -> f64 {
+        match evaluate(self.model, self.x, theta) {
+            Ok((values, _)) => (self.y - values).norm_squared(),
+            Err(_) => f64::NAN,
         }
     }
-    inference(names, p, &jacobian, &yv, &residuals, sse, iterations)
+
+    fn linearise(&self, theta: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+        let (values, jacobian) =
+            evaluate(self.model, self.x, theta).expect("linearised at an accepted point");
+        (values - self.y, jacobian)
+    }
 }
 
 /// The covariance, intervals and fit statistics at the solution `p`.
@@ -406,7 +404,7 @@ impl Model for PowerLaw {
 /// starting from the log-linear ordinary least-squares fit
 /// ln y = ln A + Σⱼ bⱼ ln xⱼ (which minimises relative rather than absolute
 /// errors, so it is close to but not the nonlinear solution) with the default
-/// [`LmSettings`].
+/// [`NllsSettings`].
 ///
 /// Errors: those of [`fit`]; a row of x without one value per factor
 /// ([`StatsError::LengthMismatch`]); an x or y value ≤ 0 (it has no
@@ -464,7 +462,7 @@ pub fn fit_power_law(x: &[Vec<f64>], y: &[f64], factors: &[String]) -> Result<Nl
     let linear = ols_named(&log_x, &log_y, &model.parameter_names())?;
     let mut start = linear.coefficients;
     start[0] = start[0].exp();
-    fit(&model, x, y, &start, &LmSettings::default())
+    fit(&model, x, y, &start, &NllsSettings::default())
 }
 
 /// The flow-rate decay FR(t) = FR0 / (1 + (K·t)ⁿ) of yan2015 Eq. 20:
@@ -494,7 +492,7 @@ impl Model for FlowDecay {
 }
 
 /// Fits [`FlowDecay`] to the flow rates `flow_rate` at times `t_s` (s, > 0)
-/// with the default [`LmSettings`], from a start read off the data: FR0 =
+/// with the default [`NllsSettings`], from a start read off the data: FR0 =
 /// the largest flow rate; K = 1/t½ with t½ the first time after that maximum
 /// (times sorted) at which the flow rate has fallen to FR0/2, interpolated
 /// linearly between the observations either side (or the largest time when
@@ -542,7 +540,7 @@ pub fn fit_flow_decay(t_s: &[f64], flow_rate: &[f64]) -> Result<NllsFit, StatsEr
             vec![fr0, 1.0 / t_half, 2.0]
         }
     };
-    fit(&FlowDecay, &x, flow_rate, &start, &LmSettings::default())
+    fit(&FlowDecay, &x, flow_rate, &start, &NllsSettings::default())
 }
 
 /// Lack of fit against pure error for a fit with replicated x rows: whether
@@ -798,7 +796,7 @@ mod tests {
             [80.0, 0.5, -0.5, 0.5],
             [5.0, -0.3, 1.0, 0.0],
         ] {
-            let f = fit(&model, &x, &y, &start, &LmSettings::default()).unwrap();
+            let f = fit(&model, &x, &y, &start, &NllsSettings::default()).unwrap();
             check_power_law(&f);
         }
     }
@@ -865,7 +863,7 @@ mod tests {
                 &x,
                 &fr,
                 &[20.0, 3.0, 1.0],
-                &LmSettings::default(),
+                &NllsSettings::default(),
             )
             .unwrap(),
             fit(
@@ -873,7 +871,7 @@ mod tests {
                 &x,
                 &fr,
                 &[100.0, 0.2, 3.0],
-                &LmSettings::default(),
+                &NllsSettings::default(),
             )
             .unwrap(),
         ] {
@@ -938,7 +936,13 @@ mod tests {
         };
         let x = vec![vec![0.1], vec![0.2]];
         assert_eq!(
-            fit(&model, &x, &[1.0, 2.0], &[1.0, 0.5], &LmSettings::default()),
+            fit(
+                &model,
+                &x,
+                &[1.0, 2.0],
+                &[1.0, 0.5],
+                &NllsSettings::default()
+            ),
             Err(StatsError::TooFewObservations {
                 observations: 2,
                 parameters: 2
@@ -977,7 +981,7 @@ mod tests {
             &x,
             &[1.0, 2.0, 3.0, 4.0],
             &[1.0, 0.5],
-            &LmSettings::default(),
+            &NllsSettings::default(),
         )
         .unwrap_err();
         assert_eq!(
@@ -990,9 +994,9 @@ mod tests {
         ));
         // An iteration limit too small to converge.
         let (x, y) = power_law_data();
-        let settings = LmSettings {
+        let settings = NllsSettings {
             max_iterations: 2,
-            ..LmSettings::default()
+            ..NllsSettings::default()
         };
         let model = PowerLaw { factors: factors() };
         assert!(matches!(
@@ -1007,7 +1011,7 @@ mod tests {
             factors: vec!["e".to_string(), "mu_s".to_string()],
         };
         assert_eq!(
-            fit(&model, &x, &y, &[2.0, 0.0, 0.3], &LmSettings::default()),
+            fit(&model, &x, &y, &[2.0, 0.0, 0.3], &NllsSettings::default()),
             Err(StatsError::Singular {
                 what: "JᵀJ at the solution: parameter `e` is not determined by the data \
                        (its gradient column is a linear combination of the others')"

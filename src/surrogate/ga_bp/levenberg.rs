@@ -1,6 +1,7 @@
 //! Levenberg–Marquardt refinement of the network weights, as MATLAB's `trainlm`
-//! (used by he2019) does it: solve (JᵀJ + μI) δ = −Jᵀr, accept the step and
-//! divide μ by `mu_dec` when the sum of squares falls, else multiply μ by
+//! (used by he2019) does it: the one loop of [`crate::stats::levenberg`] with
+//! identity damping — solve (JᵀJ + μI) δ = −Jᵀr, accept the step and
+//! multiply μ by `mu_dec` when the sum of squares falls, else multiply μ by
 //! `mu_inc` and retry; stop after `epochs` accepted steps, when the largest
 //! gradient component falls below `min_gradient`, or when μ exceeds `mu_max`.
 //! trainlm's defaults are μ₀ = 0.001, μ_dec = 0.1, μ_inc = 10, μ_max = 1e10,
@@ -15,11 +16,12 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::objective::Objective;
+use crate::stats::levenberg::{minimise, Damping, LeastSquares, LmSettings, LmStop, Stopping};
 
-/// Settings of [`refine`].
+/// trainlm's settings of the refinement, as a study records them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct LmSettings {
+pub struct TrainlmSettings {
     /// Maximum number of accepted steps.
     pub epochs: usize,
     /// Initial damping μ₀.
@@ -34,10 +36,10 @@ pub struct LmSettings {
     pub min_gradient: f64,
 }
 
-impl Default for LmSettings {
+impl Default for TrainlmSettings {
     /// MATLAB trainlm's damping schedule with a 200-step budget.
     fn default() -> Self {
-        LmSettings {
+        TrainlmSettings {
             epochs: 200,
             mu_initial: 1e-3,
             mu_dec: 0.1,
@@ -48,16 +50,38 @@ impl Default for LmSettings {
     }
 }
 
-/// Why [`refine`] stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum LmStop {
-    /// The epoch budget was used up.
-    Epochs,
-    /// The gradient became negligible.
-    Gradient,
-    /// No step reduced the error even with the largest damping.
-    MuMax,
+impl TrainlmSettings {
+    /// The settings of the one Levenberg–Marquardt loop.
+    pub fn lm(&self) -> LmSettings {
+        LmSettings {
+            damping: Damping::Identity {
+                initial: self.mu_initial,
+                dec: self.mu_dec,
+                inc: self.mu_inc,
+                max: self.mu_max,
+            },
+            stopping: Stopping {
+                max_accepted: Some(self.epochs),
+                min_gradient: Some(self.min_gradient),
+                ..Stopping::default()
+            },
+        }
+    }
+}
+
+impl LeastSquares for Objective<'_> {
+    fn objective(&self, theta: &[f64]) -> f64 {
+        self.sum_of_squares(theta)
+    }
+
+    fn linearise(&self, theta: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+        let lin = Objective::linearise(self, theta);
+        (lin.residuals, lin.jacobian)
+    }
+
+    fn penalty(&self) -> f64 {
+        self.weight_decay
+    }
 }
 
 /// What [`refine`] did.
@@ -77,56 +101,14 @@ pub struct LmOutcome {
 
 /// Refines `theta` by Levenberg–Marquardt on `objective`. Never returns worse
 /// parameters than it was given.
-pub fn refine(objective: &Objective, theta: &[f64], settings: &LmSettings) -> LmOutcome {
-    let p = theta.len();
-    let lambda = objective.weight_decay;
-    let mut theta = DVector::from_column_slice(theta);
-    let mut error = objective.sum_of_squares(theta.as_slice());
-    let initial = error;
-    let mut mu = settings.mu_initial;
-    let mut epochs = 0;
-    let stop = loop {
-        if epochs >= settings.epochs {
-            break LmStop::Epochs;
-        }
-        let lin = objective.linearise(theta.as_slice());
-        let jt = lin.jacobian.transpose();
-        let gradient = &jt * &lin.residuals + &theta * lambda;
-        if gradient.amax() < settings.min_gradient {
-            break LmStop::Gradient;
-        }
-        let jtj = &jt * &lin.jacobian;
-        let accepted = loop {
-            if mu > settings.mu_max {
-                break None;
-            }
-            let normal = &jtj + DMatrix::identity(p, p) * (lambda + mu);
-            let step = normal.cholesky().map(|c| c.solve(&(-&gradient)));
-            if let Some(step) = step {
-                let candidate = &theta + step;
-                let e = objective.sum_of_squares(candidate.as_slice());
-                if e < error {
-                    mu *= settings.mu_dec;
-                    break Some((candidate, e));
-                }
-            }
-            mu *= settings.mu_inc;
-        };
-        match accepted {
-            Some((candidate, e)) => {
-                theta = candidate;
-                error = e;
-                epochs += 1;
-            }
-            None => break LmStop::MuMax,
-        }
-    };
+pub fn refine(objective: &Objective, theta: &[f64], settings: &TrainlmSettings) -> LmOutcome {
+    let out = minimise(objective, theta, &settings.lm());
     LmOutcome {
-        theta: theta.as_slice().to_vec(),
-        epochs,
-        stop,
-        initial_sum_of_squares: initial,
-        final_sum_of_squares: error,
+        theta: out.theta,
+        epochs: out.accepted,
+        stop: out.stop,
+        initial_sum_of_squares: out.initial_objective,
+        final_sum_of_squares: out.objective,
     }
 }
 
@@ -153,7 +135,7 @@ mod tests {
             weight_decay: 0.0,
         };
         let start: Vec<f64> = truth.iter().map(|w| w * 0.8 + 0.1).collect();
-        let out = refine(&objective, &start, &LmSettings::default());
+        let out = refine(&objective, &start, &TrainlmSettings::default());
         assert!(out.initial_sum_of_squares > 1e-2, "{out:?}");
         assert!(out.final_sum_of_squares < 1e-16, "{out:?}");
     }
@@ -173,7 +155,7 @@ mod tests {
             weight_decay: 0.1,
         };
         let start = [0.3, 0.1, 0.7, -0.2];
-        let out = refine(&objective, &start, &LmSettings::default());
+        let out = refine(&objective, &start, &TrainlmSettings::default());
         assert!(out.final_sum_of_squares <= out.initial_sum_of_squares);
         assert_eq!(
             out.final_sum_of_squares,

@@ -43,11 +43,12 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::stats::levenberg::LmStop;
 use crate::stats::metrics::{mse, r_squared};
 use crate::streams::{rng, Stream};
 use crate::surrogate::{Prediction, Surrogate, SurrogateError, Table};
 use genetic::{evolve, GaSettings};
-use levenberg::{refine, LmSettings, LmStop};
+use levenberg::{refine, TrainlmSettings};
 use network::Shape;
 use objective::Objective;
 
@@ -107,12 +108,12 @@ pub struct TrainSettings {
     /// Genetic algorithm.
     pub ga: GaSettings,
     /// Levenberg–Marquardt.
-    pub lm: LmSettings,
+    pub lm: TrainlmSettings,
 }
 
 impl TrainSettings {
     /// The defaults with a given seed: hidden sizes 3–12, no weight decay,
-    /// [`GaSettings::default`] and [`LmSettings::default`].
+    /// [`GaSettings::default`] and [`TrainlmSettings::default`].
     pub fn with_seed(seed: u64) -> TrainSettings {
         TrainSettings {
             hidden_min: 3,
@@ -120,7 +121,7 @@ impl TrainSettings {
             seed,
             weight_decay: 0.0,
             ga: GaSettings::default(),
-            lm: LmSettings::default(),
+            lm: TrainlmSettings::default(),
         }
     }
 
