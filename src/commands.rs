@@ -23,7 +23,7 @@ use crate::calibrate::search::{search as run_search, SearchSettings};
 use crate::calibrate::train::{train_study, train_table, TableSpec, TrainOptions, TrainOutcome};
 use crate::calibrate::verify::verify as run_verify;
 use crate::calibrate::verify_seeds::verify_seeds;
-use crate::calibrate::{CalibrateError, Stage, StudyDir};
+use crate::calibrate::Stage;
 use crate::doe::diagnostics::Diagnostics;
 use crate::exec::Executor;
 use crate::log::{inspect, InspectError};
@@ -38,6 +38,7 @@ use crate::scenes::run_logged;
 use crate::store::{
     write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, RunSummary, Store, StoreError,
 };
+use crate::study::dir::StudyDir;
 use crate::study::spec::{is_design_study, parse_design_study, read_design_study, DesignStudy};
 use crate::study::tradeoff as tradeoff_sweep;
 use crate::study::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
@@ -121,9 +122,6 @@ pub enum CommandError {
     /// invalid experiment: refused before anything runs).
     #[error("tradeoff: {0}")]
     TradeoffPlan(#[from] PlanError),
-    /// The tradeoff sweep failed to run or to write its outputs.
-    #[error("tradeoff: {0}")]
-    Tradeoff(#[from] tradeoff_sweep::SweepError),
     /// A command-line option is malformed (the message names it).
     #[error("{0}")]
     Usage(String),
@@ -138,10 +136,7 @@ pub enum CommandError {
         /// Re-runs that did not reproduce their stored outputs.
         differing: usize,
     },
-    /// A calibration stage failed or its options are invalid.
-    #[error(transparent)]
-    Calibrate(#[from] CalibrateError),
-    /// A design-study stage failed or its options are invalid.
+    /// A study stage failed or its options are invalid.
     #[error(transparent)]
     Study(#[from] StudyError),
     /// The executor refused the runs (inconsistent plans or over the limits).
@@ -171,9 +166,7 @@ impl CommandError {
     pub fn exit_code(&self) -> u8 {
         let exec = match self {
             CommandError::Exec(e) => Some(e),
-            CommandError::Calibrate(CalibrateError::Exec(e)) => Some(e),
             CommandError::Study(StudyError::Exec(e)) => Some(e),
-            CommandError::Tradeoff(tradeoff_sweep::SweepError::Exec(e)) => Some(e),
             _ => None,
         };
         if exec.is_some_and(crate::exec::ExecError::is_waiting) {
@@ -190,9 +183,7 @@ impl CommandError {
             | CommandError::OverLimit { .. } => true,
             CommandError::Audit(AuditError::Path { .. } | AuditError::NothingToAudit(_)) => true,
             CommandError::Audit(AuditError::Store(e)) => e.is_invalid_input(),
-            CommandError::Calibrate(e) => e.is_invalid_input(),
             CommandError::Exec(e) => e.is_invalid_input(),
-            CommandError::Tradeoff(e) => e.is_invalid_input(),
             CommandError::Study(e) => e.is_invalid_input(),
             CommandError::RunFailed { .. }
             | CommandError::Output(_)

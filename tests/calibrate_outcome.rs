@@ -21,8 +21,9 @@ use std::collections::BTreeMap;
 
 use repose::calibrate::noise::NOISE_INDEX;
 use repose::calibrate::sample::{sample, SampleSettings};
-use repose::calibrate::{parameter_names, to_physical, StudyDir};
+use repose::calibrate::{parameter_names, to_physical};
 use repose::manifest::{parse_study, PHYSICS_VERSION};
+use repose::study::dir::StudyDir;
 use serde_json::Value;
 
 const OUTCOME: &str = "experiments/he2019-quick/measured/outcome.json";

@@ -15,11 +15,13 @@ use repose::calibrate::sample::{design_path, experiment_path, sample, SampleSett
 use repose::calibrate::search::{search, SearchSettings};
 use repose::calibrate::train::{train_study, TrainOptions};
 use repose::calibrate::verify::verify;
-use repose::calibrate::{CalibrateError, Stage, StudyDir};
+use repose::calibrate::Stage;
 use repose::exec::Executor;
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::scenes::run_experiment;
 use repose::store::{Lineage, RunDir, RunResult, RunStatus, Store};
+use repose::study::dir::StudyDir;
+use repose::study::StudyError;
 use repose::surrogate::ga_bp::TrainSettings;
 use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use serde_json::{json, Value};
@@ -368,11 +370,8 @@ fn each_stage_names_the_stage_to_run_first() {
     let fake = Fake::new(&[]);
     let err = batch(&dir, &s, &store, &settings(1), |e, d| fake.run(e, d)).unwrap_err();
     assert!(matches!(
-        err,
-        CalibrateError::MissingStage {
-            stage: Stage::Sample,
-            ..
-        }
+        &err,
+        StudyError::MissingStage { stage, .. } if stage == Stage::Sample.name()
     ));
     assert!(err
         .to_string()
@@ -383,19 +382,13 @@ fn each_stage_names_the_stage_to_run_first() {
     };
     let err = train_study(&dir, &s, &options).unwrap_err();
     assert!(matches!(
-        err,
-        CalibrateError::MissingStage {
-            stage: Stage::Batch,
-            ..
-        }
+        &err,
+        StudyError::MissingStage { stage, .. } if stage == Stage::Batch.name()
     ));
     let err = search(&dir, &s, &SearchSettings::with_seed(0)).unwrap_err();
     assert!(matches!(
-        err,
-        CalibrateError::MissingStage {
-            stage: Stage::Train,
-            ..
-        }
+        &err,
+        StudyError::MissingStage { stage, .. } if stage == Stage::Train.name()
     ));
 }
 

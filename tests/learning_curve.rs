@@ -11,10 +11,12 @@ use std::time::Duration;
 use repose::calibrate::batch::{batch, read_design};
 use repose::calibrate::curve::{csv_header, learning_curve};
 use repose::calibrate::sample::{sample, SampleSettings};
-use repose::calibrate::{parameter_names, CalibrateError, Stage, StudyDir};
+use repose::calibrate::{parameter_names, Stage};
 use repose::exec::Executor;
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
+use repose::study::dir::StudyDir;
+use repose::study::StudyError;
 use serde_json::json;
 
 /// The smoke study with a 36-point design: 24 training rows, 12 validation.
@@ -153,7 +155,7 @@ fn sizes_beyond_the_training_rows_are_refused_naming_the_limit() {
     let tmp = tempfile::tempdir().unwrap();
     let (s, dir, store) = prepared(tmp.path());
     match learning_curve(&dir, &s, &store, Some(&[12, 30])) {
-        Err(CalibrateError::Settings(m)) => {
+        Err(StudyError::Settings(m)) => {
             assert!(m.contains("30 is not in [2, 24]"), "{m}")
         }
         other => panic!("expected a refusal, got {other:?}"),

@@ -12,12 +12,13 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use common::{edit, example, repose, stderr, stdout};
 use repose::calibrate::batch::batch;
 use repose::calibrate::sample::{sample, SampleSettings};
-use repose::calibrate::{CalibrateError, StudyDir};
 use repose::exec::{ExecError, Executor};
 use repose::manifest::{parse_experiment, parse_study, Experiment};
 use repose::scenes::plan::{plan, Limits, ENGINE_MAX_PARTICLES};
 use repose::scenes::run_experiment;
 use repose::store::{RunDir, RunResult, Store};
+use repose::study::dir::StudyDir;
+use repose::study::StudyError;
 use serde_json::{json, Value};
 
 /// `base` (an example under experiments/) with the edits applied.
@@ -374,7 +375,7 @@ fn batch_refuses_over_limit_runs_before_running_any() {
     };
     let err = batch(&dir, &s, &store, &settings, runner).unwrap_err();
     assert!(
-        matches!(err, CalibrateError::Exec(ExecError::Refused { .. })),
+        matches!(err, StudyError::Exec(ExecError::Refused { .. })),
         "{err}"
     );
     assert!(err.is_invalid_input());

@@ -31,14 +31,14 @@ use serde_json::json;
 
 use super::gp_train::{adaptive_path, fit_model};
 use super::replicates::{read_replicates_csv, replicates_csv, run_replicated, Replicated};
-use super::verify_seeds::MIN_MEASURED;
-use super::{parameter_names, to_physical, write_output, CalibrateError, Stage, StudyDir};
+use super::{parameter_names, to_physical, write_output, Stage, StudyDir, StudyError};
 use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::search::acquisition::probability_in_band;
 use crate::store::{RunDir, RunResult, Store};
 use crate::streams::{rng, Stream};
+use crate::study::acceptance::{passes, MIN_MEASURED};
 
 /// `sample_index` of the first adaptive point.
 pub const ADAPTIVE_INDEX: u64 = 2_000_000_000;
@@ -98,7 +98,7 @@ fn passing(points: &[Replicated], band: (f64, f64)) -> Option<Hit> {
         .find_map(|p| {
             let v = p.values();
             let mean = p.mean()?;
-            (v.len() >= MIN_MEASURED && mean >= band.0 && mean <= band.1).then(|| Hit {
+            passes(v.len(), Some(mean), band).then(|| Hit {
                 index: p.index,
                 point: p.point.clone(),
                 seeds: p.runs.len(),
@@ -112,7 +112,7 @@ fn passing(points: &[Replicated], band: (f64, f64)) -> Option<Hit> {
 /// one (`adaptive/replicates.csv`): verification re-simulates it in every
 /// scene beside the search's candidates, so the point that ended the stage
 /// is the one judged.
-pub fn passing_candidate(dir: &StudyDir, study: &Study) -> Result<Option<Hit>, CalibrateError> {
+pub fn passing_candidate(dir: &StudyDir, study: &Study) -> Result<Option<Hit>, StudyError> {
     let path = adaptive_path(dir);
     if !path.is_file() {
         return Ok(None);
@@ -130,7 +130,7 @@ pub fn adaptive<E, F>(
     seed: u64,
     runner: F,
     progress: &mut dyn FnMut(&str),
-) -> Result<AdaptiveOutcome, CalibrateError>
+) -> Result<AdaptiveOutcome, StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
@@ -237,7 +237,7 @@ where
             ran.extend(r);
         }
         points.extend(ran);
-        dir.prepare(study, Stage::Adaptive)?;
+        dir.prepare_stage(study, Stage::Adaptive)?;
         let mut lineage = dir.lineage(
             Stage::Adaptive,
             json!({ "batch": spec.adaptive.batch, "max_runs": budget, "pool": POOL,

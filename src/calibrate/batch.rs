@@ -13,7 +13,7 @@ use serde_json::json;
 
 use super::replicates::{replicates_csv, run_replicated};
 use super::sample::{design_path, experiment_path};
-use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
+use super::{parameter_names, write_output, Stage, StudyDir, StudyError};
 use crate::exec::{run_incomplete, Executor, Ran};
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
 use crate::report::table::{parse_number, Cell, CsvWriter, Table};
@@ -64,7 +64,7 @@ pub fn angles_path(dir: &StudyDir) -> PathBuf {
 }
 
 /// Reads `sample/design.csv`, checking its columns against the study.
-pub fn read_design(dir: &StudyDir, study: &Study) -> Result<Vec<DesignRow>, CalibrateError> {
+pub fn read_design(dir: &StudyDir, study: &Study) -> Result<Vec<DesignRow>, StudyError> {
     let path = dir.require(design_path(dir), Stage::Sample)?;
     let table = Table::read(&path)?;
     let names = parameter_names(study);
@@ -72,7 +72,7 @@ pub fn read_design(dir: &StudyDir, study: &Study) -> Result<Vec<DesignRow>, Cali
     expected.extend(names.iter().cloned());
     expected.push("experiment_id".to_string());
     if table.header != expected {
-        return Err(CalibrateError::Inconsistent {
+        return Err(StudyError::Inconsistent {
             path,
             message: format!(
                 "columns {} differ from the study's ({}): rerun `repose sample`",
@@ -89,15 +89,14 @@ pub fn read_design(dir: &StudyDir, study: &Study) -> Result<Vec<DesignRow>, Cali
     let id_column = table.require(&path, "experiment_id")?;
     let mut rows = Vec::with_capacity(table.rows.len());
     for (i, cells) in table.rows.iter().enumerate() {
-        let id =
-            ContentId::parse(&cells[id_column]).ok_or_else(|| CalibrateError::Inconsistent {
-                path: path.clone(),
-                message: format!(
-                    "line {}: `{}` is not an experiment id",
-                    i + 2,
-                    cells[id_column]
-                ),
-            })?;
+        let id = ContentId::parse(&cells[id_column]).ok_or_else(|| StudyError::Inconsistent {
+            path: path.clone(),
+            message: format!(
+                "line {}: `{}` is not an experiment id",
+                i + 2,
+                cells[id_column]
+            ),
+        })?;
         rows.push(DesignRow {
             index: index[i] as usize,
             point: columns.iter().map(|c| c[i]).collect(),
@@ -108,14 +107,14 @@ pub fn read_design(dir: &StudyDir, study: &Study) -> Result<Vec<DesignRow>, Cali
 }
 
 /// Loads the manifest of a design row and checks that it hashes to the row's id.
-fn load_experiment(dir: &StudyDir, row: &DesignRow) -> Result<Experiment, CalibrateError> {
+fn load_experiment(dir: &StudyDir, row: &DesignRow) -> Result<Experiment, StudyError> {
     let path = experiment_path(dir, row.index);
-    let experiment = read_experiment(&path).map_err(|e| CalibrateError::Inconsistent {
+    let experiment = read_experiment(&path).map_err(|e| StudyError::Inconsistent {
         path: path.clone(),
         message: format!("{e}: rerun `repose sample`"),
     })?;
     if experiment.id() != row.id {
-        return Err(CalibrateError::Inconsistent {
+        return Err(StudyError::Inconsistent {
             path,
             message: format!(
                 "hashes to {}, but design.csv lists {}: rerun `repose sample`",
@@ -134,7 +133,7 @@ pub fn batch<E, F>(
     store: &Store,
     settings: &Executor,
     runner: F,
-) -> Result<BatchOutcome, CalibrateError>
+) -> Result<BatchOutcome, StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
@@ -181,7 +180,7 @@ fn write_angles(
     store: &Store,
     design: &[DesignRow],
     failures: &[Failure],
-) -> Result<PathBuf, CalibrateError> {
+) -> Result<PathBuf, StudyError> {
     let names = parameter_names(study);
     let mut header = vec!["index".to_string()];
     header.extend(names.iter().cloned());
@@ -232,10 +231,7 @@ pub struct AngleRow {
 }
 
 /// Reads `batch/angles.csv` for `study`.
-pub fn read_angles(
-    dir: &StudyDir,
-    study: &Study,
-) -> Result<(PathBuf, Vec<AngleRow>), CalibrateError> {
+pub fn read_angles(dir: &StudyDir, study: &Study) -> Result<(PathBuf, Vec<AngleRow>), StudyError> {
     let path = dir.require(angles_path(dir), Stage::Batch)?;
     let table = Table::read(&path)?;
     let names = parameter_names(study);
@@ -271,7 +267,7 @@ fn batch_replicated<E, F>(
     runner: &F,
     design: &[DesignRow],
     replicates: u32,
-) -> Result<BatchOutcome, CalibrateError>
+) -> Result<BatchOutcome, StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
@@ -293,7 +289,7 @@ where
     )?;
     for (row, p) in design.iter().zip(&runs) {
         if p.runs[0].id != row.id {
-            return Err(CalibrateError::Inconsistent {
+            return Err(StudyError::Inconsistent {
                 path: super::sample::design_path(dir),
                 message: format!(
                     "sample {}: replicate 0 hashes to {}, the design lists {}: rerun `repose sample`",

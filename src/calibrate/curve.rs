@@ -40,7 +40,7 @@ use serde_json::json;
 use super::batch::{read_angles, read_design, AngleRow};
 use super::search::{find, SearchSettings};
 use super::train::input_scales;
-use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
+use super::{parameter_names, write_output, Stage, StudyDir, StudyError};
 use crate::manifest::{ContentId, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::{learning_curve_plot, CurvePoint};
@@ -110,8 +110,8 @@ pub fn default_sizes(capacity: usize) -> Vec<usize> {
 }
 
 /// Checks that `sizes` is strictly increasing within [2, capacity].
-fn check_sizes(sizes: &[usize], capacity: usize) -> Result<(), CalibrateError> {
-    let fail = |m: String| Err(CalibrateError::Settings(m));
+fn check_sizes(sizes: &[usize], capacity: usize) -> Result<(), StudyError> {
+    let fail = |m: String| Err(StudyError::Settings(m));
     if sizes.is_empty() {
         return fail("--sizes: give at least one size".to_string());
     }
@@ -139,11 +139,11 @@ pub fn learning_curve(
     study: &Study,
     store: &Store,
     sizes: Option<&[usize]>,
-) -> Result<CurveOutcome, CalibrateError> {
+) -> Result<CurveOutcome, StudyError> {
     let design = read_design(dir, study)?;
     let (angles_file, angles) = read_angles(dir, study)?;
     if angles.len() != design.len() || angles.iter().zip(&design).any(|(a, d)| a.index != d.index) {
-        return Err(CalibrateError::Inconsistent {
+        return Err(StudyError::Inconsistent {
             path: angles_file,
             message: "its rows differ from sample/design.csv: rerun `repose batch`".to_string(),
         });
@@ -171,7 +171,7 @@ pub fn learning_curve(
     }
 
     let out_dir = dir.stage(Stage::LearningCurve);
-    dir.prepare(study, Stage::LearningCurve)?;
+    dir.prepare_stage(study, Stage::LearningCurve)?;
     let lineage = dir
         .lineage(
             Stage::LearningCurve,
@@ -220,7 +220,7 @@ fn one_size(
     n: usize,
     capacity: usize,
     last_id: ContentId,
-) -> Result<CurveRow, CalibrateError> {
+) -> Result<CurveRow, StudyError> {
     let with_angle = |range: std::ops::Range<usize>| -> Vec<usize> {
         range.filter(|&i| angles[i].angle_deg.is_some()).collect()
     };
@@ -262,7 +262,7 @@ fn one_size(
         Ok(found) => found,
         // A network that keeps no point, or one point (bandwidth 0), has no
         // spread; that is a finding of the curve, not a failure.
-        Err(CalibrateError::NothingKept(_) | CalibrateError::Settings(_)) => return Ok(row),
+        Err(StudyError::NothingKept(_) | StudyError::Settings(_)) => return Ok(row),
         Err(other) => return Err(other),
     };
     row.kept = found.kept.len();

@@ -30,9 +30,7 @@ use super::gp_train::{gp_path, read_gp};
 use super::noise::noise_aware;
 use super::search::SearchSettings;
 use super::verify::clusters_path;
-use super::{
-    json_bytes, parameter_names, to_physical, write_output, CalibrateError, Stage, StudyDir,
-};
+use super::{json_bytes, parameter_names, to_physical, write_output, Stage, StudyDir, StudyError};
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::scatter_matrix;
@@ -78,7 +76,7 @@ pub fn gp_search(
     dir: &StudyDir,
     study: &Study,
     settings: &SearchSettings,
-) -> Result<GpSearchOutcome, CalibrateError> {
+) -> Result<GpSearchOutcome, StudyError> {
     let spec = noise_aware(study)?;
     let model = read_gp(dir)?;
     let gp = model.process()?;
@@ -106,7 +104,7 @@ pub fn gp_search(
         let best = (0..unit.len())
             .max_by(|&a, &b| probability[a].total_cmp(&probability[b]))
             .unwrap_or(0);
-        return Err(CalibrateError::NothingKept(format!(
+        return Err(StudyError::NothingKept(format!(
             "none of the {samples} resampled points has probability >= {} of an angle in \
              {lo:.2}–{hi:.2} deg under the GP; the best has {:.3} (mean {:.2} ± {:.2} deg): \
              more runs near the target (`--adaptive`) or a lower min_probability",
@@ -146,7 +144,7 @@ pub fn gp_search(
         label[i] = Some(l + 1);
     }
     let out = dir.stage(Stage::Search);
-    dir.prepare(study, Stage::Search)?;
+    dir.prepare_stage(study, Stage::Search)?;
     let lineage = dir
         .lineage(
             Stage::Search,

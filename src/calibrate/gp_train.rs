@@ -37,7 +37,7 @@ use serde_json::json;
 use super::batch::replicates_path;
 use super::noise::noise_runs_path;
 use super::replicates::{pooled_variance, read_replicates_csv, Replicated};
-use super::{json_bytes, to_unit, write_output, CalibrateError, Stage, StudyDir};
+use super::{json_bytes, to_unit, write_output, Stage, StudyDir, StudyError};
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
 use crate::stats::gp::{GaussianProcess, GpHyper, GpSettings};
@@ -97,7 +97,7 @@ pub struct GpModel {
 
 impl GpModel {
     /// The GP itself.
-    pub fn process(&self) -> Result<GaussianProcess, CalibrateError> {
+    pub fn process(&self) -> Result<GaussianProcess, StudyError> {
         let hyper = GpHyper {
             signal_var: self.signal_var,
             length_scales: self.length_scales.clone(),
@@ -110,7 +110,7 @@ impl GpModel {
             &self.data.noise_var,
             &hyper,
         )
-        .map_err(|e| CalibrateError::Settings(format!("gp: {e}")))
+        .map_err(|e| StudyError::Settings(format!("gp: {e}")))
     }
 }
 
@@ -149,7 +149,7 @@ type Sourced = Vec<(String, Replicated)>;
 pub type Predictor<'a> = &'a dyn Fn(&[f64]) -> f64;
 
 /// Reads every replicates table the study has, with the files read.
-fn gather(dir: &StudyDir, study: &Study) -> Result<(Sourced, Vec<PathBuf>), CalibrateError> {
+fn gather(dir: &StudyDir, study: &Study) -> Result<(Sourced, Vec<PathBuf>), StudyError> {
     let design_file = dir.require(replicates_path(dir), Stage::Batch)?;
     let mut rows: Vec<(String, Replicated)> = read_replicates_csv(&design_file, study)?
         .into_iter()
@@ -194,13 +194,13 @@ fn data_of(study: &Study, rows: &[&(String, Replicated)], sigma2: f64) -> GpData
     d
 }
 
-fn fit(data: &GpData, seed: u64) -> Result<GaussianProcess, CalibrateError> {
+fn fit(data: &GpData, seed: u64) -> Result<GaussianProcess, StudyError> {
     let settings = GpSettings {
         seed,
         ..GpSettings::default()
     };
     GaussianProcess::fit(&data.x_unit, &data.y, &data.noise_var, &settings)
-        .map_err(|e| CalibrateError::Settings(format!("gp: {e}")))
+        .map_err(|e| StudyError::Settings(format!("gp: {e}")))
 }
 
 fn metrics(
@@ -230,7 +230,7 @@ fn metrics(
 /// The GP fitted to every row the study has simulated so far (design,
 /// noise floor, adaptive points), without writing anything: the adaptive
 /// stage refits it after every batch.
-pub fn fit_model(dir: &StudyDir, study: &Study, seed: u64) -> Result<GpModel, CalibrateError> {
+pub fn fit_model(dir: &StudyDir, study: &Study, seed: u64) -> Result<GpModel, StudyError> {
     let (rows, _) = gather(dir, study)?;
     let all: Vec<&(String, Replicated)> = rows.iter().collect();
     let (sigma2, df) = pooled(&all)?;
@@ -239,9 +239,9 @@ pub fn fit_model(dir: &StudyDir, study: &Study, seed: u64) -> Result<GpModel, Ca
     Ok(model_of(&gp, sigma2, df, data))
 }
 
-fn pooled(all: &[&(String, Replicated)]) -> Result<(f64, usize), CalibrateError> {
+fn pooled(all: &[&(String, Replicated)]) -> Result<(f64, usize), StudyError> {
     pooled_variance(&all.iter().map(|r| &r.1).collect::<Vec<_>>()).ok_or_else(|| {
-        CalibrateError::Settings(
+        StudyError::Settings(
             "gp: no point has two measured replicates, so the seed-to-seed variance is \
              unknown: run the noise floor (`repose noise`) or use replicates >= 2"
                 .into(),
@@ -272,7 +272,7 @@ pub fn train_gp(
     train_fraction: f64,
     seed: u64,
     network: Option<Predictor>,
-) -> Result<GpOutcome, CalibrateError> {
+) -> Result<GpOutcome, StudyError> {
     let (rows, files) = gather(dir, study)?;
     let all: Vec<&(String, Replicated)> = rows.iter().collect();
     let (sigma2, df) = pooled(&all)?;
@@ -336,7 +336,7 @@ pub fn train_gp(
     let data = data_of(study, &all, sigma2);
     let full = fit(&data, seed)?;
     let model = model_of(&full, sigma2, df, data);
-    dir.prepare(study, Stage::Train)?;
+    dir.prepare_stage(study, Stage::Train)?;
     let mut lineage = dir.lineage(
         Stage::Train,
         json!({ "surrogate": "gp", "kernel": "matern_5_2_ard", "train_fraction": train_fraction,
@@ -358,9 +358,9 @@ pub fn train_gp(
 }
 
 /// Reads `train/gp.json`.
-pub fn read_gp(dir: &StudyDir) -> Result<GpModel, CalibrateError> {
+pub fn read_gp(dir: &StudyDir) -> Result<GpModel, StudyError> {
     let path = dir.require(gp_path(dir), Stage::Train)?;
-    Store::read_json(&path).map_err(|e| CalibrateError::Inconsistent {
+    Store::read_json(&path).map_err(|e| StudyError::Inconsistent {
         path,
         message: format!("{e}: rerun `repose train`"),
     })

@@ -98,9 +98,9 @@ pub mod verify_seeds;
 
 use std::path::{Path, PathBuf};
 
-use crate::manifest::{canonical_json, ContentId, Study, ValidationErrors};
-use crate::report::table::TableError;
-use crate::store::{write_atomic, InputRef, Lineage, StoreError};
+use crate::manifest::Study;
+use crate::store::{write_atomic, Lineage, StoreError};
+use crate::study::dir::StageName;
 
 /// The stages, in pipeline order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -139,161 +139,31 @@ impl Stage {
     }
 }
 
-/// Why a stage failed.
-#[derive(Debug, thiserror::Error)]
-pub enum CalibrateError {
-    /// The stage this one reads has not run.
-    #[error("{} does not exist: run `repose {} {}` first", missing.display(), stage.name(), study.display())]
-    MissingStage {
-        /// The file that should exist.
-        missing: PathBuf,
-        /// The stage that writes it.
-        stage: Stage,
-        /// The study manifest, as given.
-        study: PathBuf,
-    },
-    /// A stage option is invalid.
-    #[error("{0}")]
-    Settings(String),
-    /// The study asks for something these stages do not do.
-    #[error("{0}")]
-    Unsupported(String),
-    /// A design point does not make a valid experiment.
-    #[error("sample {index}: the design point makes an invalid experiment:\n{errors}")]
-    InvalidPoint {
-        /// The sample index.
-        index: usize,
-        /// What is wrong.
-        errors: ValidationErrors,
-    },
-    /// A stage file is inconsistent with the others (changed outside repose).
-    #[error("{}: {message}", path.display())]
-    Inconsistent {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong.
-        message: String,
-    },
-    /// A table could not be read.
-    #[error(transparent)]
-    Table(#[from] TableError),
-    /// The store failed.
-    #[error(transparent)]
-    Store(#[from] StoreError),
-    /// The executor refused the runs.
-    #[error(transparent)]
-    Exec(#[from] crate::exec::ExecError),
-    /// Training could not run.
-    #[error(transparent)]
-    Train(#[from] crate::surrogate::ga_bp::TrainError),
-    /// The search kept no point.
-    #[error("{0}")]
-    NothingKept(String),
-}
+pub(crate) use crate::study::dir::StudyDir;
+pub(crate) use crate::study::StudyError;
 
-impl CalibrateError {
-    /// True when the user's input (options, files, stage order) is at fault.
-    pub fn is_invalid_input(&self) -> bool {
-        match self {
-            CalibrateError::MissingStage { .. }
-            | CalibrateError::Settings(_)
-            | CalibrateError::Unsupported(_)
-            | CalibrateError::InvalidPoint { .. }
-            | CalibrateError::Train(_) => true,
-            CalibrateError::Table(e) => !matches!(e, TableError::Io { .. }),
-            CalibrateError::Store(e) => e.is_invalid_input(),
-            CalibrateError::Exec(e) => e.is_invalid_input(),
-            CalibrateError::Inconsistent { .. } | CalibrateError::NothingKept(_) => false,
-        }
+impl StageName for Stage {
+    fn stage_name(&self) -> &str {
+        self.name()
     }
-}
-
-/// A study's output directory in the store (see the module docs).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct StudyDir {
-    store_root: PathBuf,
-    path: PathBuf,
-    id: ContentId,
-    source: PathBuf,
 }
 
 impl StudyDir {
-    /// The directory of `study` in the store at `store_root`; `source` is the
-    /// study file as the user gave it (for messages).
-    pub fn new(store_root: &Path, study: &Study, source: &Path) -> StudyDir {
-        let id = study.id();
-        let path = crate::store::study_dir_path(store_root, &study.name, &id);
-        StudyDir {
-            store_root: store_root.to_path_buf(),
-            path,
-            id,
-            source: source.to_path_buf(),
-        }
-    }
-
-    /// The directory.
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-
-    /// The study id.
-    pub fn id(&self) -> &ContentId {
-        &self.id
-    }
-
-    /// The store root.
-    pub fn store_root(&self) -> &Path {
-        &self.store_root
-    }
-
-    /// A stage's directory.
-    pub fn stage(&self, stage: Stage) -> PathBuf {
-        self.path.join(stage.name())
-    }
-
-    /// `study.json` in the directory.
-    pub fn study_file(&self) -> PathBuf {
-        self.path.join("study.json")
-    }
-
-    /// Creates the directory and the stage's directory, and writes the
-    /// study's canonical JSON (unchanged bytes if already there).
-    fn prepare(&self, study: &Study, stage: Stage) -> Result<(), CalibrateError> {
-        create_dir(&self.stage(stage))?;
-        let bytes = canonical_json(study);
-        let current = std::fs::read(self.study_file()).ok();
-        if current.as_deref() != Some(bytes.as_bytes()) {
-            write_file(&self.study_file(), bytes.as_bytes())?;
-        }
-        Ok(())
-    }
-
     /// `path` if it exists, else the error telling which stage to run.
-    fn require(&self, path: PathBuf, stage: Stage) -> Result<PathBuf, CalibrateError> {
+    fn require(&self, path: PathBuf, stage: Stage) -> Result<PathBuf, StudyError> {
         if path.is_file() {
             Ok(path)
         } else {
-            Err(CalibrateError::MissingStage {
+            Err(StudyError::MissingStage {
                 missing: path,
-                stage,
-                study: self.source.clone(),
+                stage: stage.name().to_string(),
+                study: self.source().to_path_buf(),
             })
         }
     }
-
-    /// A lineage record of `stage` with the study as its first input.
-    fn lineage(&self, stage: Stage, parameters: serde_json::Value) -> Lineage {
-        Lineage::new(stage.name(), parameters).with_input(InputRef::id("study", &self.id))
-    }
-
-    /// An input reference to a file of the store, by its path relative to the
-    /// store root and the sha256 of its bytes.
-    fn input(&self, role: &str, path: &Path) -> Result<InputRef, CalibrateError> {
-        Ok(InputRef::file(role, path, Some(&self.store_root))?)
-    }
 }
 
-fn create_dir(path: &Path) -> Result<(), CalibrateError> {
+fn create_dir(path: &Path) -> Result<(), StudyError> {
     std::fs::create_dir_all(path).map_err(|source| {
         StoreError::Io {
             path: path.to_path_buf(),
@@ -303,7 +173,7 @@ fn create_dir(path: &Path) -> Result<(), CalibrateError> {
     })
 }
 
-fn write_file(path: &Path, bytes: &[u8]) -> Result<(), CalibrateError> {
+fn write_file(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
     write_atomic(path, bytes).map_err(|source| {
         StoreError::Io {
             path: path.to_path_buf(),
@@ -314,7 +184,7 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<(), CalibrateError> {
 }
 
 /// Writes an output atomically, then its lineage record beside it.
-fn write_output(path: &Path, bytes: &[u8], lineage: &Lineage) -> Result<(), CalibrateError> {
+fn write_output(path: &Path, bytes: &[u8], lineage: &Lineage) -> Result<(), StudyError> {
     write_file(path, bytes)?;
     lineage.write_beside(path)?;
     Ok(())

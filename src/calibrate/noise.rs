@@ -21,12 +21,13 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::replicates::{replicates_csv, run_replicated, wall_time_s, Replicated};
-use super::{json_bytes, to_physical, write_output, CalibrateError, Stage, StudyDir};
+use super::replicates::{replicates_csv, run_replicated, Replicated};
+use super::{json_bytes, to_physical, write_output, Stage, StudyDir, StudyError};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::store::{RunDir, RunResult, Store};
+use crate::study::seed_noise::{response_noise, run_cost};
 
 /// `sample_index` of the noise floor's runs (no design reaches it).
 pub const NOISE_INDEX: u64 = 1_000_000_000;
@@ -79,9 +80,9 @@ pub fn noise_path(dir: &StudyDir) -> PathBuf {
 }
 
 /// The noise-aware block of `study`, or the error saying the stage needs it.
-pub fn noise_aware(study: &Study) -> Result<crate::manifest::NoiseAware, CalibrateError> {
+pub fn noise_aware(study: &Study) -> Result<crate::manifest::NoiseAware, StudyError> {
     study.noise_aware.ok_or_else(|| {
-        CalibrateError::Settings(format!(
+        StudyError::Settings(format!(
             "study `{}` has no `noise_aware` block: the noise floor, replicates and the \
              noise-aware search need one (experiments/he2019-quick/study.json has an example)",
             study.name
@@ -96,7 +97,7 @@ pub fn noise<E, F>(
     store: &Store,
     pool: &Executor,
     runner: F,
-) -> Result<NoiseOutcome, CalibrateError>
+) -> Result<NoiseOutcome, StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
@@ -116,33 +117,25 @@ where
     )?
     .0
     .remove(0);
-    let summary = runs.summary();
-    let walls: Vec<f64> = runs
-        .runs
-        .iter()
-        .filter_map(|r| wall_time_s(store, &r.id))
-        .collect();
-    let wall = (!walls.is_empty()).then(|| walls.iter().sum::<f64>() / walls.len() as f64);
-    // The executor pins every run to a one-thread pool (crate::exec).
-    let threads = 1;
+    let name = target
+        .response
+        .clone()
+        .unwrap_or_else(|| "headline_angle_deg".into());
+    let cost = run_cost(store, pool, runs.runs.iter().map(|r| &r.id));
+    let n = response_noise(&name, "deg", &runs.values(), cost.cpu_s_per_run);
     let floor = NoiseFloor {
-        response: target
-            .response
-            .clone()
-            .unwrap_or_else(|| "headline_angle_deg".into()),
+        response: name,
         centre,
         seeds: runs.runs.len(),
-        measured: runs.values().len(),
-        mean_deg: runs.mean(),
-        sd_deg: summary.map(|s| s.std),
-        ci95_half_width_deg: summary.map(|s| s.half_width),
-        wall_s_per_run: wall,
-        threads_per_run: threads,
-        precision_per_cost_deg2_s: summary
-            .zip(wall)
-            .map(|(s, w)| s.std * s.std * w * threads as f64),
+        measured: n.measured,
+        mean_deg: n.mean,
+        sd_deg: n.sd,
+        ci95_half_width_deg: n.ci95_half_width,
+        wall_s_per_run: cost.wall_s_per_run,
+        threads_per_run: cost.threads_per_run,
+        precision_per_cost_deg2_s: n.precision_per_cost,
     };
-    dir.prepare(study, Stage::Noise)?;
+    dir.prepare_stage(study, Stage::Noise)?;
     let lineage = dir.lineage(
         Stage::Noise,
         json!({ "seeds": spec.noise_seeds, "point": "centre of the ranges",
@@ -151,7 +144,7 @@ where
     let lineage = runs.runs.iter().try_fold(lineage, |l, r| {
         let path = store.run_dir(&r.id).result_path();
         if path.is_file() {
-            Ok::<_, CalibrateError>(l.with_input(dir.input("result", &path)?))
+            Ok::<_, StudyError>(l.with_input(dir.input("result", &path)?))
         } else {
             Ok(l)
         }
@@ -173,9 +166,9 @@ where
 }
 
 /// Reads `noise/noise.json`.
-pub fn read_noise(dir: &StudyDir) -> Result<NoiseFloor, CalibrateError> {
+pub fn read_noise(dir: &StudyDir) -> Result<NoiseFloor, StudyError> {
     let path = dir.require(noise_path(dir), Stage::Noise)?;
-    Store::read_json(&path).map_err(|e| CalibrateError::Inconsistent {
+    Store::read_json(&path).map_err(|e| StudyError::Inconsistent {
         path,
         message: format!("{e}: rerun `repose noise`"),
     })

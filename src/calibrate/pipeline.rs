@@ -30,7 +30,7 @@ use super::sample::{sample, SampleSettings};
 use super::search::{load_model, SearchSettings};
 use super::train::{train_study, TrainOptions};
 use super::verify_seeds::{verify_seeds, Acceptance, SeedVerifyRow};
-use super::{json_bytes, write_output, CalibrateError, Stage, StudyDir};
+use super::{json_bytes, write_output, Stage, StudyDir, StudyError};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::search::band::Family;
@@ -104,7 +104,7 @@ pub fn calibrate_noise_aware<E, F>(
     options: &NoiseAwareOptions,
     runner: F,
     log: &mut dyn FnMut(&str),
-) -> Result<CalibrationOutcome, CalibrateError>
+) -> Result<CalibrationOutcome, StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,

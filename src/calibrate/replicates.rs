@@ -14,13 +14,13 @@
 //! response of the scene when the target names one, else the headline
 //! angle.
 
-use super::CalibrateError;
+use super::StudyError;
 use crate::exec::{run_incomplete, Executor, Ran};
 use crate::manifest::{ContentId, Experiment, Study, TargetScene};
 use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::scenes::responses::response;
 use crate::stats::summary::{mean_ci, MeanCi};
-use crate::store::{ErrorRecord, RunDir, RunResult, RunStatus, Store, TimingRecord};
+use crate::store::{ErrorRecord, RunDir, RunResult, RunStatus, Store};
 use crate::streams::SeedRule;
 
 /// One packing seed of a point.
@@ -77,7 +77,7 @@ pub fn response_of(result: &RunResult, target: &TargetScene) -> Result<f64, Stri
 }
 
 /// Checks that `target`'s response exists for its scene kind, before any run.
-pub fn check_response(target: &TargetScene) -> Result<(), CalibrateError> {
+pub fn check_response(target: &TargetScene) -> Result<(), StudyError> {
     let Some(name) = &target.response else {
         return Ok(());
     };
@@ -85,7 +85,7 @@ pub fn check_response(target: &TargetScene) -> Result<(), CalibrateError> {
     if table.iter().any(|s| s.name == name) {
         Ok(())
     } else {
-        Err(CalibrateError::Settings(format!(
+        Err(StudyError::Settings(format!(
             "target `{}`: response `{name}` is not a response of {} (allowed: {})",
             target.name,
             target.scene.kind(),
@@ -116,7 +116,7 @@ pub fn run_replicated<E, F>(
     pool: &Executor,
     runner: &F,
     retry_failed: bool,
-) -> Result<(Vec<Replicated>, Tally), CalibrateError>
+) -> Result<(Vec<Replicated>, Tally), StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
@@ -129,8 +129,9 @@ where
         for r in 0..replicates {
             let e = study
                 .replicate_experiment(&target.scene, &values, *index, r)
-                .map_err(|errors| CalibrateError::InvalidPoint {
-                    index: *index as usize,
+                .map_err(|errors| StudyError::InvalidPoint {
+                    point: *index,
+                    scene: target.name.clone(),
                     errors,
                 })?;
             experiments.push(e);
@@ -185,7 +186,7 @@ fn value_in_store(
     store: &Store,
     id: &ContentId,
     target: &TargetScene,
-) -> Result<Result<f64, String>, CalibrateError> {
+) -> Result<Result<f64, String>, StudyError> {
     if let Some(result) = store.load_result(id)? {
         return Ok(response_of(&result, target));
     }
@@ -193,14 +194,6 @@ fn value_in_store(
         .map(|e| e.error)
         .unwrap_or_else(|_| format!("run {} has no result", id.short(12)));
     Ok(Err(error))
-}
-
-/// Wall time of a run as its timing record gives it, s (none for failed or
-/// missing runs).
-pub fn wall_time_s(store: &Store, id: &ContentId) -> Option<f64> {
-    Store::read_json::<TimingRecord>(&store.run_dir(id).timing_path())
-        .ok()
-        .map(|t| t.wall_time_s)
 }
 
 /// Columns of a replicates table: `index`, the parameters, `replicate`,
@@ -248,7 +241,7 @@ pub fn replicates_csv(study: &Study, points: &[Replicated]) -> String {
 pub fn read_replicates_csv(
     path: &std::path::Path,
     study: &Study,
-) -> Result<Vec<Replicated>, CalibrateError> {
+) -> Result<Vec<Replicated>, StudyError> {
     let table = Table::read(path)?;
     let names = super::parameter_names(study);
     let index = table.numbers(path, "index")?;
@@ -262,7 +255,7 @@ pub fn read_replicates_csv(
     let failure_col = table.require(path, "failure")?;
     let mut out: Vec<Replicated> = Vec::new();
     for (i, cells) in table.rows.iter().enumerate() {
-        let id = ContentId::parse(&cells[id_col]).ok_or_else(|| CalibrateError::Inconsistent {
+        let id = ContentId::parse(&cells[id_col]).ok_or_else(|| StudyError::Inconsistent {
             path: path.to_path_buf(),
             message: format!(
                 "line {}: `{}` is not an experiment id",

@@ -18,7 +18,7 @@ use serde_json::json;
 
 use super::{
     create_dir, json_bytes, parameter_names, serde_name, to_physical, write_file, write_output,
-    CalibrateError, Stage, StudyDir,
+    Stage, StudyDir, StudyError,
 };
 use crate::doe::diagnostics::{diagnose, unit_scaled, Diagnostics};
 use crate::doe::lhs::{latin_hypercube, optimise, Optimisation, Placement};
@@ -50,9 +50,9 @@ impl Default for SampleSettings {
 }
 
 impl SampleSettings {
-    fn check(&self) -> Result<(), CalibrateError> {
+    fn check(&self) -> Result<(), StudyError> {
         if !(self.strong_correlation > 0.0 && self.strong_correlation <= 1.0) {
-            return Err(CalibrateError::Settings(format!(
+            return Err(StudyError::Settings(format!(
                 "--max-correlation = {}: must be in (0, 1]",
                 self.strong_correlation
             )));
@@ -103,14 +103,14 @@ pub fn sample(
     dir: &StudyDir,
     study: &Study,
     settings: &SampleSettings,
-) -> Result<SampleOutcome, CalibrateError> {
+) -> Result<SampleOutcome, StudyError> {
     settings.check()?;
     let kind = study.design.kind;
     let kind_name = match kind {
         DesignKind::Lhs => "lhs",
         DesignKind::LhsOptimised => "lhs_optimised",
         DesignKind::FullFactorial | DesignKind::BoxBehnken => {
-            return Err(CalibrateError::Unsupported(format!(
+            return Err(StudyError::Unsupported(format!(
                 "design.kind = \"{}\": `repose sample` makes Latin hypercubes (lhs, lhs_optimised) only",
                 serde_name(kind)
             )));
@@ -134,7 +134,7 @@ pub fn sample(
     let diagnostics = diagnose(&names, &unit, settings.strong_correlation);
     let points: Vec<Vec<f64>> = unit.iter().map(|u| to_physical(study, u)).collect();
 
-    dir.prepare(study, Stage::Sample)?;
+    dir.prepare_stage(study, Stage::Sample)?;
     let experiments_dir = dir.stage(Stage::Sample).join("experiments");
     create_dir(&experiments_dir)?;
     let mut header = vec!["index".to_string()];
@@ -146,7 +146,11 @@ pub fn sample(
         let map: BTreeMap<String, f64> = names.iter().cloned().zip(point.iter().copied()).collect();
         let experiment = study
             .experiment(&study.calibration.scene, &map, index as u64)
-            .map_err(|errors| CalibrateError::InvalidPoint { index, errors })?;
+            .map_err(|errors| StudyError::InvalidPoint {
+                point: index as u64,
+                scene: study.calibration.name.clone(),
+                errors,
+            })?;
         let path = experiment_path(dir, index);
         write_file(&path, canonical_json(&experiment).as_bytes())?;
         written.push(path);
@@ -185,7 +189,7 @@ pub fn sample(
 }
 
 /// Removes manifests of an earlier, larger design (`NNNN.json` not just written).
-fn remove_stale(dir: &Path, keep: &[PathBuf]) -> Result<(), CalibrateError> {
+fn remove_stale(dir: &Path, keep: &[PathBuf]) -> Result<(), StudyError> {
     let io = |source| crate::store::StoreError::Io {
         path: dir.to_path_buf(),
         source,
@@ -209,7 +213,7 @@ pub fn diagnose_table(
     path: &Path,
     columns: Option<&[String]>,
     strong_correlation: f64,
-) -> Result<Diagnostics, CalibrateError> {
+) -> Result<Diagnostics, StudyError> {
     SampleSettings {
         strong_correlation,
         ..SampleSettings::default()
@@ -221,7 +225,7 @@ pub fn diagnose_table(
         None => table.numeric_columns(),
     };
     if names.len() < 2 {
-        return Err(CalibrateError::Settings(format!(
+        return Err(StudyError::Settings(format!(
             "{}: {} numeric column(s) chosen ({}): the diagnostics need at least 2 (see --columns)",
             path.display(),
             names.len(),

@@ -18,9 +18,7 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::{
-    parameter_names, serde_name, to_physical, write_output, CalibrateError, Stage, StudyDir,
-};
+use super::{parameter_names, serde_name, to_physical, write_output, Stage, StudyDir, StudyError};
 use crate::doe::lhs::Placement;
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
@@ -63,8 +61,8 @@ impl SearchSettings {
         }
     }
 
-    fn check(&self) -> Result<(), CalibrateError> {
-        let fail = |m: String| Err(CalibrateError::Settings(m));
+    fn check(&self) -> Result<(), StudyError> {
+        let fail = |m: String| Err(StudyError::Settings(m));
         if self.samples < 1 {
             return fail("--samples = 0: must be >= 1".to_string());
         }
@@ -117,14 +115,14 @@ pub fn search(
     dir: &StudyDir,
     study: &Study,
     settings: &SearchSettings,
-) -> Result<SearchOutcome, CalibrateError> {
+) -> Result<SearchOutcome, StudyError> {
     settings.check()?;
     let model_file = dir.require(dir.stage(Stage::Train).join("model.json"), Stage::Train)?;
     let model = load_model(&model_file)?;
     let names = parameter_names(study);
     let model_inputs: Vec<String> = model.inputs.iter().map(|s| s.name.clone()).collect();
     if model_inputs != names {
-        return Err(CalibrateError::Inconsistent {
+        return Err(StudyError::Inconsistent {
             path: model_file,
             message: format!(
                 "the model's inputs ({}) are not the study's parameters ({}): rerun `repose train`",
@@ -149,7 +147,7 @@ pub fn search(
     }
 
     let out_dir = dir.stage(Stage::Search);
-    dir.prepare(study, Stage::Search)?;
+    dir.prepare_stage(study, Stage::Search)?;
     let lineage = dir
         .lineage(
             Stage::Search,
@@ -221,11 +219,7 @@ pub struct Found {
 
 /// Resamples the study's ranges, predicts with `model`, keeps the points
 /// within tolerance and clusters them (see the module docs).
-pub fn find(
-    study: &Study,
-    model: &Model,
-    settings: &SearchSettings,
-) -> Result<Found, CalibrateError> {
+pub fn find(study: &Study, model: &Model, settings: &SearchSettings) -> Result<Found, StudyError> {
     settings.check()?;
     let target = &study.calibration;
     let names = parameter_names(study);
@@ -250,7 +244,7 @@ pub fn find(
     if kept.is_empty() {
         let lo = predicted.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = predicted.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        return Err(CalibrateError::NothingKept(format!(
+        return Err(StudyError::NothingKept(format!(
             "none of the {} predicted angles ({lo:.2}–{hi:.2} deg) is within {}% of the target \
              {} deg of `{}`: the parameter ranges may not reach the target",
             predicted.len(),
@@ -262,7 +256,7 @@ pub fn find(
     let kept_unit: Vec<Vec<f64>> = kept.iter().map(|&i| unit[i].clone()).collect();
     let bandwidth = bandwidth(&kept_unit, settings.bandwidth, settings.quantile);
     if bandwidth <= 0.0 {
-        return Err(CalibrateError::Settings(format!(
+        return Err(StudyError::Settings(format!(
             "the estimated bandwidth is 0 ({} kept point(s), quantile {}): raise --quantile or give --bandwidth",
             kept.len(),
             settings.quantile
@@ -297,8 +291,8 @@ pub fn find(
 }
 
 /// Reads and checks a trained network (`train/model.json`).
-pub(crate) fn load_model(path: &std::path::Path) -> Result<Model, CalibrateError> {
-    let inconsistent = |message: String| CalibrateError::Inconsistent {
+pub(crate) fn load_model(path: &std::path::Path) -> Result<Model, StudyError> {
+    let inconsistent = |message: String| StudyError::Inconsistent {
         path: path.to_path_buf(),
         message,
     };

@@ -20,8 +20,7 @@ use serde_json::json;
 
 use super::batch::read_angles;
 use super::{
-    create_dir, json_bytes, parameter_names, serde_name, write_output, CalibrateError, Stage,
-    StudyDir,
+    create_dir, json_bytes, parameter_names, serde_name, write_output, Stage, StudyDir, StudyError,
 };
 use crate::manifest::Study;
 use crate::report::svg::{parity_plot, ParityPoint};
@@ -85,14 +84,14 @@ struct Summary {
 
 impl TrainOptions {
     /// What is wrong with these options, if anything.
-    fn check(&self) -> Result<(), CalibrateError> {
+    fn check(&self) -> Result<(), StudyError> {
         let f = self.train_fraction;
         if !(f > 0.0 && f < 1.0) {
-            return Err(CalibrateError::Settings(format!(
+            return Err(StudyError::Settings(format!(
                 "--train-fraction = {f}: must be in (0, 1)"
             )));
         }
-        self.settings.check().map_err(CalibrateError::Settings)
+        self.settings.check().map_err(StudyError::Settings)
     }
 
     /// The row index where validation starts for `n` rows.
@@ -120,7 +119,7 @@ pub fn train_study(
     dir: &StudyDir,
     study: &Study,
     options: &TrainOptions,
-) -> Result<TrainOutcome, CalibrateError> {
+) -> Result<TrainOutcome, StudyError> {
     options.check()?;
     let (angles_file, rows) = read_angles(dir, study)?;
     let cut = options.split_at(rows.len());
@@ -147,7 +146,7 @@ pub fn train_study(
             .collect::<Vec<_>>()
     );
     let out_dir = dir.stage(Stage::Train);
-    dir.prepare(study, Stage::Train)?;
+    dir.prepare_stage(study, Stage::Train)?;
     let lineage = dir
         .lineage(Stage::Train, json!(options))
         .with_input(dir.input("angles", &angles_file)?);
@@ -161,7 +160,7 @@ pub fn train_table(
     spec: &TableSpec,
     out_dir: &Path,
     options: &TrainOptions,
-) -> Result<TrainOutcome, CalibrateError> {
+) -> Result<TrainOutcome, StudyError> {
     options.check()?;
     let table = Table::read(spec.path)?;
     let n = table.rows.len();
@@ -178,7 +177,7 @@ pub fn train_table(
         let min = train.iter().copied().fold(f64::INFINITY, f64::min);
         let max = train.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         if min >= max {
-            return Err(CalibrateError::Settings(format!(
+            return Err(StudyError::Settings(format!(
                 "{}: input column `{name}` is constant over the training rows",
                 spec.path.display()
             )));
@@ -223,13 +222,13 @@ fn reference_r2(
     path: &Path,
     column: &str,
     data: &Dataset,
-) -> Result<f64, CalibrateError> {
+) -> Result<f64, StudyError> {
     let k = table.require(path, column)?;
     let mut predicted = Vec::new();
     for &i in &data.validation {
         let cell = &table.rows[i][k];
         predicted.push(parse_number(cell).ok_or_else(|| {
-            CalibrateError::Settings(format!(
+            StudyError::Settings(format!(
                 "{}:{}: reference column `{column}` = `{cell}`: every validation row needs a number",
                 path.display(),
                 i + 2
@@ -238,7 +237,7 @@ fn reference_r2(
     }
     let simulated: Vec<f64> = data.validation.iter().map(|&i| data.targets[i]).collect();
     r_squared(&simulated, &predicted).ok_or_else(|| {
-        CalibrateError::Settings("the validation angles are all equal: R² undefined".to_string())
+        StudyError::Settings("the validation angles are all equal: R² undefined".to_string())
     })
 }
 
@@ -250,7 +249,7 @@ fn run(
     lineage: &Lineage,
     skipped: usize,
     reference_r2: Option<f64>,
-) -> Result<TrainOutcome, CalibrateError> {
+) -> Result<TrainOutcome, StudyError> {
     let result = sweep(data, &options.settings)?;
     let best = &result.rows[result.best];
     write_output(

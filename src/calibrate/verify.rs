@@ -26,7 +26,7 @@ use std::path::PathBuf;
 
 use serde_json::json;
 
-use super::{parameter_names, write_output, CalibrateError, Stage, StudyDir};
+use super::{parameter_names, write_output, Stage, StudyDir, StudyError};
 use crate::exec::{run_incomplete, Executor, Ran};
 use crate::manifest::{ContentId, Experiment, Study};
 use crate::report::markdown::MarkdownTable;
@@ -141,9 +141,9 @@ pub(crate) fn read_candidates(
     dir: &StudyDir,
     study: &Study,
     candidates: usize,
-) -> Result<(PathBuf, Centres), CalibrateError> {
+) -> Result<(PathBuf, Centres), StudyError> {
     if candidates == 0 {
-        return Err(CalibrateError::Settings(
+        return Err(StudyError::Settings(
             "--candidates = 0: must be >= 1".into(),
         ));
     }
@@ -176,7 +176,7 @@ pub fn verify<E, F>(
     settings: &Executor,
     candidates: usize,
     runner: F,
-) -> Result<VerifyOutcome, CalibrateError>
+) -> Result<VerifyOutcome, StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
@@ -192,8 +192,9 @@ where
         for target in &scenes {
             let experiment = study
                 .experiment(&target.scene, &point, *group)
-                .map_err(|errors| CalibrateError::InvalidPoint {
-                    index: *group as usize,
+                .map_err(|errors| StudyError::InvalidPoint {
+                    point: *group,
+                    scene: target.name.clone(),
                     errors,
                 })?;
             planned.push((*group as usize, *target, experiment));

@@ -35,16 +35,13 @@ use super::gp_train::adaptive_path;
 use super::noise::noise_aware;
 use super::replicates::{replicates_csv, run_replicated, Replicated};
 use super::verify::read_candidates;
-use super::{json_bytes, write_output, CalibrateError, Stage, StudyDir};
+use super::{json_bytes, write_output, Stage, StudyDir, StudyError};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::table::{Cell, CsvWriter};
 use crate::store::{RunDir, RunResult, Store};
-
-/// Fewest measured seeds a candidate needs to pass a scene (a mean with an
-/// interval).
-pub const MIN_MEASURED: usize = 3;
+use crate::study::acceptance::{passes, MIN_MEASURED};
 
 /// One scene of the acceptance rule.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -115,7 +112,7 @@ pub struct SeedVerifyOutcome {
 }
 
 /// The study's acceptance rule (see the module docs).
-pub fn acceptance(study: &Study) -> Result<Acceptance, CalibrateError> {
+pub fn acceptance(study: &Study) -> Result<Acceptance, StudyError> {
     let spec = noise_aware(study)?;
     let scenes = std::iter::once(&study.calibration)
         .chain(&study.verification)
@@ -157,7 +154,7 @@ pub fn verify_seeds<E, F>(
     pool: &Executor,
     candidates: usize,
     runner: F,
-) -> Result<SeedVerifyOutcome, CalibrateError>
+) -> Result<SeedVerifyOutcome, StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
@@ -170,7 +167,7 @@ where
     }
 
     // The rule goes on record before any verification run.
-    dir.prepare(study, Stage::Verify)?;
+    dir.prepare_stage(study, Stage::Verify)?;
     let mut rule_lineage = dir
         .lineage(Stage::Verify, json!({ "record": "acceptance rule" }))
         .with_input(dir.input("clusters", &clusters_file)?);
@@ -210,7 +207,7 @@ where
                 target_deg: target.target_angle_deg,
                 relative_error: mean
                     .map(|m| (m - target.target_angle_deg).abs() / target.target_angle_deg),
-                pass: values.len() >= MIN_MEASURED && mean.is_some_and(|m| m >= lo && m <= hi),
+                pass: passes(values.len(), mean, (lo, hi)),
                 failures: r
                     .runs
                     .iter()

@@ -1,4 +1,6 @@
-//! A design study's output directory in the store and how stages write it.
+//! A study's output directory in the store and how stages write it: one
+//! type for every study document (he2019's calibration study and the design
+//! studies), whose stages are named by a [`StageName`].
 //!
 //! ```text
 //! <store>/studies/<name>-<id12>/
@@ -19,43 +21,84 @@
 
 use std::path::{Path, PathBuf};
 
+use serde::Serialize;
+
 use super::spec::DesignStudy;
 use super::StudyError;
-use crate::manifest::{canonical_json, ContentId};
+use crate::manifest::{canonical_json, ContentId, Study};
 use crate::store::{write_atomic, InputRef, Lineage, StoreError};
 
-/// A design study's directory (see the module docs).
-#[derive(Debug, Clone)]
+/// A study document: what names its directory and what `study.json` holds.
+pub trait StudyDocument: Serialize {
+    /// Its short name (the directory's prefix).
+    fn name(&self) -> &str;
+    /// Its id: sha256 of its canonical JSON.
+    fn id(&self) -> ContentId;
+}
+
+impl StudyDocument for Study {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn id(&self) -> ContentId {
+        Study::id(self)
+    }
+}
+
+impl StudyDocument for DesignStudy {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn id(&self) -> ContentId {
+        DesignStudy::id(self)
+    }
+}
+
+/// A stage's name: its directory under the study's.
+pub trait StageName {
+    /// The directory name (`sample`, `rsm`, …).
+    fn stage_name(&self) -> &str;
+}
+
+impl StageName for &str {
+    fn stage_name(&self) -> &str {
+        self
+    }
+}
+
+/// A study's directory (see the module docs).
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct StudyDir {
     store_root: PathBuf,
     path: PathBuf,
     id: ContentId,
+    source: PathBuf,
 }
 
 impl StudyDir {
-    /// The directory of `study` in the store at `store_root`; creates it and
-    /// writes `study.json` (unchanged bytes if already there).
-    pub fn prepare(store_root: &Path, study: &DesignStudy) -> Result<StudyDir, StudyError> {
-        let id = study.id();
-        let path = StudyDir::path_in(store_root, study);
-        let dir = StudyDir {
+    /// The directory of `study` in the store at `store_root`, created by
+    /// nothing yet; `source` is the study file as the user gave it (for
+    /// messages).
+    pub fn new<S: StudyDocument>(store_root: &Path, study: &S, source: &Path) -> StudyDir {
+        StudyDir {
             store_root: store_root.to_path_buf(),
-            path,
-            id,
-        };
-        create_dir(&dir.path)?;
-        let bytes = canonical_json(study);
-        let file = dir.path.join("study.json");
-        if std::fs::read(&file).ok().as_deref() != Some(bytes.as_bytes()) {
-            write_atomic(&file, bytes.as_bytes()).map_err(StoreError::io(&file))?;
+            path: StudyDir::path_in(store_root, study),
+            id: study.id(),
+            source: source.to_path_buf(),
         }
+    }
+
+    /// The directory of a design study, created, with its `study.json`.
+    pub fn prepare(store_root: &Path, study: &DesignStudy) -> Result<StudyDir, StudyError> {
+        let dir = StudyDir::new(store_root, study, Path::new(&study.name));
+        dir.write_study(study)?;
         Ok(dir)
     }
 
     /// Where `study`'s directory is in the store at `store_root`
     /// (`studies/<name>-<first 12 hex of its id>`), without creating it.
-    pub fn path_in(store_root: &Path, study: &DesignStudy) -> PathBuf {
-        crate::store::study_dir_path(store_root, &study.name, &study.id())
+    pub fn path_in<S: StudyDocument>(store_root: &Path, study: &S) -> PathBuf {
+        crate::store::study_dir_path(store_root, study.name(), &study.id())
     }
 
     /// The directory.
@@ -63,28 +106,74 @@ impl StudyDir {
         &self.path
     }
 
-    /// A stage's directory (created).
-    pub fn stage(&self, stage: &str) -> Result<PathBuf, StudyError> {
-        let p = self.path.join(stage);
+    /// The study id.
+    pub fn id(&self) -> &ContentId {
+        &self.id
+    }
+
+    /// The store root.
+    pub fn store_root(&self) -> &Path {
+        &self.store_root
+    }
+
+    /// The study file as the user gave it.
+    pub fn source(&self) -> &Path {
+        &self.source
+    }
+
+    /// `study.json` in the directory.
+    pub fn study_file(&self) -> PathBuf {
+        self.path.join("study.json")
+    }
+
+    /// A stage's directory (not created).
+    pub fn stage(&self, stage: impl StageName) -> PathBuf {
+        self.path.join(stage.stage_name())
+    }
+
+    /// A stage's directory, created.
+    pub fn create_stage(&self, stage: impl StageName) -> Result<PathBuf, StoreError> {
+        let p = self.stage(stage);
         create_dir(&p)?;
         Ok(p)
     }
 
+    /// Creates the directory and writes the study's canonical JSON (the same
+    /// bytes are not rewritten).
+    pub fn write_study<S: StudyDocument>(&self, study: &S) -> Result<(), StoreError> {
+        create_dir(&self.path)?;
+        let bytes = canonical_json(study);
+        let file = self.study_file();
+        if std::fs::read(&file).ok().as_deref() != Some(bytes.as_bytes()) {
+            write_atomic(&file, bytes.as_bytes()).map_err(StoreError::io(&file))?;
+        }
+        Ok(())
+    }
+
+    /// [`write_study`](Self::write_study) and the stage's directory.
+    pub fn prepare_stage<S: StudyDocument>(
+        &self,
+        study: &S,
+        stage: impl StageName,
+    ) -> Result<(), StoreError> {
+        self.create_stage(stage)?;
+        self.write_study(study)
+    }
+
     /// A lineage record of `stage` with the study as its first input.
-    pub fn lineage(&self, stage: &str, parameters: serde_json::Value) -> Lineage {
-        Lineage::new(stage, parameters).with_input(InputRef::id("study", &self.id))
+    pub fn lineage(&self, stage: impl StageName, parameters: serde_json::Value) -> Lineage {
+        Lineage::new(stage.stage_name(), parameters).with_input(InputRef::id("study", &self.id))
     }
 
     /// An input reference to a file of the store (path relative to the store
     /// root, sha256 of its bytes).
-    pub fn input(&self, role: &str, path: &Path) -> Result<InputRef, StudyError> {
-        Ok(InputRef::file(role, path, Some(&self.store_root))?)
+    pub fn input(&self, role: &str, path: &Path) -> Result<InputRef, StoreError> {
+        InputRef::file(role, path, Some(&self.store_root))
     }
 }
 
-pub(crate) fn create_dir(path: &Path) -> Result<(), StudyError> {
-    std::fs::create_dir_all(path).map_err(StoreError::io(path))?;
-    Ok(())
+pub(crate) fn create_dir(path: &Path) -> Result<(), StoreError> {
+    std::fs::create_dir_all(path).map_err(StoreError::io(path))
 }
 
 /// Writes an output atomically, then its lineage record beside it.

@@ -14,11 +14,13 @@
 //!   spread and its precision per cost (`repose noise MANIFEST`).
 //! - [`tradeoff`]: what accuracy costs in time: fidelity knobs swept around
 //!   one experiment with replicates (`repose tradeoff`).
+//! - [`acceptance`]: the one acceptance rule of a candidate in a scene.
 //! - [`dir`]: where a study's outputs live and how they are written.
 //!
 //! The runs stay in the store (`<store>/<id>/`), so a run shared by two
 //! stages or studies is simulated once, and a killed stage resumes.
 
+pub mod acceptance;
 pub mod dir;
 pub mod rsm;
 pub mod runs;
@@ -36,9 +38,37 @@ use crate::manifest::{Experiment, ValidationErrors};
 use crate::store::{RunDir, RunResult, Store, StoreError};
 use spec::DesignStudy;
 
-/// Why a study stage failed.
+/// Why a study stage failed: the one error of every study stage (he2019's
+/// calibration stages, the design studies, the tradeoff sweep).
 #[derive(Debug, thiserror::Error)]
 pub enum StudyError {
+    /// The stage this one reads has not run.
+    #[error("{} does not exist: run `repose {stage} {}` first", missing.display(), study.display())]
+    MissingStage {
+        /// The file that should exist.
+        missing: std::path::PathBuf,
+        /// The stage that writes it (its subcommand).
+        stage: String,
+        /// The study manifest, as given.
+        study: std::path::PathBuf,
+    },
+    /// The study asks for something these stages do not do.
+    #[error("{0}")]
+    Unsupported(String),
+    /// A stage file is inconsistent with the others (changed outside repose).
+    #[error("{}: {message}", path.display())]
+    Inconsistent {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A surrogate could not be trained (bad settings or too few rows).
+    #[error(transparent)]
+    Train(#[from] crate::surrogate::ga_bp::TrainError),
+    /// The search kept no point.
+    #[error("{0}")]
+    NothingKept(String),
     /// A stage option or the study's content does not allow the stage.
     #[error("{0}")]
     Settings(String),
@@ -83,9 +113,13 @@ impl StudyError {
     /// True when the user's input (options, study, tables) is at fault.
     pub fn is_invalid_input(&self) -> bool {
         match self {
-            StudyError::Settings(_) | StudyError::InvalidPoint { .. } | StudyError::Design(_) => {
-                true
-            }
+            StudyError::Settings(_)
+            | StudyError::InvalidPoint { .. }
+            | StudyError::Design(_)
+            | StudyError::MissingStage { .. }
+            | StudyError::Unsupported(_)
+            | StudyError::Train(_) => true,
+            StudyError::Inconsistent { .. } | StudyError::NothingKept(_) => false,
             StudyError::Exec(e) => e.is_invalid_input(),
             StudyError::Analysis { .. } | StudyError::Plot(_) => false,
             StudyError::Table(e) => !matches!(e, crate::report::table::TableError::Io { .. }),

@@ -189,7 +189,7 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let stage = dir.stage("rsm")?;
+    let stage = dir.create_stage("rsm")?;
     let coded = coded_design(study)?;
     let names = study.factor_names();
     let runs = run_points(

@@ -113,7 +113,7 @@ where
             }
         })
         .collect();
-    let stage = dir.stage("screen")?;
+    let stage = dir.create_stage("screen")?;
     let runs = run_points(
         study,
         store,

@@ -65,6 +65,61 @@ pub struct SceneNoise {
     pub responses: Vec<ResponseNoise>,
 }
 
+/// What a set of runs cost: the mean wall time of those with a timing
+/// record and the CPU time per run (wall × the threads each run had: one on
+/// this machine's pool, `cpus_per_task` on Slurm).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunCost {
+    /// Threads each run had.
+    pub threads_per_run: usize,
+    /// Mean wall time per run, s (non-deterministic).
+    pub wall_s_per_run: Option<f64>,
+    /// Mean CPU time per run, s (non-deterministic).
+    pub cpu_s_per_run: Option<f64>,
+}
+
+/// The cost of the runs `ids` in `store`, run by `exec`.
+pub fn run_cost<'a>(
+    store: &Store,
+    exec: &Executor,
+    ids: impl IntoIterator<Item = &'a ContentId>,
+) -> RunCost {
+    let walls: Vec<f64> = ids
+        .into_iter()
+        .filter_map(|id| Store::read_json::<TimingRecord>(&store.run_dir(id).timing_path()).ok())
+        .map(|t| t.wall_time_s)
+        .collect();
+    let threads = exec.slurm.as_ref().map_or(1, |s| s.cpus_per_task as usize);
+    let wall = (!walls.is_empty()).then(|| walls.iter().sum::<f64>() / walls.len() as f64);
+    RunCost {
+        threads_per_run: threads,
+        wall_s_per_run: wall,
+        cpu_s_per_run: wall.map(|w| w * threads as f64),
+    }
+}
+
+/// The noise of one response over the `values` its seeds measured: mean,
+/// σ, the 95 % interval and σ² × `cpu_s_per_run` (the one noise-floor
+/// computation: `repose noise MANIFEST --seeds N` and a study's noise
+/// stage).
+pub fn response_noise(
+    name: &str,
+    unit: &str,
+    values: &[f64],
+    cpu_s_per_run: Option<f64>,
+) -> ResponseNoise {
+    let summary = mean_ci(values);
+    ResponseNoise {
+        name: name.to_string(),
+        unit: unit.to_string(),
+        measured: values.len(),
+        mean: summary.map(|s| s.mean).or(values.first().copied()),
+        sd: summary.map(|s| s.std),
+        ci95_half_width: summary.map(|s| s.half_width),
+        precision_per_cost: summary.zip(cpu_s_per_run).map(|(s, c)| s.std * s.std * c),
+    }
+}
+
 /// The experiment `base` with packing seed `base + r`.
 pub fn with_packing_offset(base: &Experiment, r: u64) -> Experiment {
     let mut e = base.clone();
@@ -106,16 +161,8 @@ where
         .iter()
         .map(|e| store.load_result(&e.id()))
         .collect::<Result<_, _>>()?;
-    let walls: Vec<f64> = experiments
-        .iter()
-        .filter_map(|e| {
-            Store::read_json::<TimingRecord>(&store.run_dir(&e.id()).timing_path()).ok()
-        })
-        .map(|t| t.wall_time_s)
-        .collect();
-    let threads = exec.slurm.as_ref().map_or(1, |s| s.cpus_per_task as usize);
-    let wall = (!walls.is_empty()).then(|| walls.iter().sum::<f64>() / walls.len() as f64);
-    let cpu = wall.map(|w| w * threads as f64);
+    let ids: Vec<ContentId> = experiments.iter().map(Experiment::id).collect();
+    let cost = run_cost(store, exec, &ids);
     let kind = base.scene.kind();
     let responses = catalogue(kind)
         .unwrap_or_default()
@@ -126,16 +173,7 @@ where
                 .flatten()
                 .filter_map(|r| response(r, kind, spec.name).ok())
                 .collect();
-            let summary = mean_ci(&values);
-            ResponseNoise {
-                name: spec.name.to_string(),
-                unit: spec.unit.to_string(),
-                measured: values.len(),
-                mean: summary.map(|s| s.mean).or(values.first().copied()),
-                sd: summary.map(|s| s.std),
-                ci95_half_width: summary.map(|s| s.half_width),
-                precision_per_cost: summary.zip(cpu).map(|(s, c)| s.std * s.std * c),
-            }
+            response_noise(spec.name, spec.unit, &values, cost.cpu_s_per_run)
         })
         .collect();
     Ok(SceneNoise {
@@ -146,9 +184,9 @@ where
             .map(|e| (e.seeds.packing_seed, e.id()))
             .collect(),
         failures,
-        threads_per_run: threads,
-        wall_s_per_run: wall,
-        cpu_s_per_run: cpu,
+        threads_per_run: cost.threads_per_run,
+        wall_s_per_run: cost.wall_s_per_run,
+        cpu_s_per_run: cost.cpu_s_per_run,
         responses,
     })
 }

@@ -161,7 +161,7 @@ where
             shown: actual.clone(),
         })
         .collect();
-    let stage = dir.stage(stage_name)?;
+    let stage = dir.create_stage(stage_name)?;
     let runs = run_points(
         study,
         store,

@@ -146,7 +146,7 @@ where
             eprintln!("{}: {what}", study.name);
         }
     };
-    let root = dir.stage("sensitivity")?;
+    let root = dir.create_stage("sensitivity")?;
     let factors = study.factor_names();
     let labels: Vec<(String, String)> = study
         .factors
@@ -177,7 +177,7 @@ where
 
     let level3 = if levels.three {
         announce("level 3 (contact-law sensitivities, no runs)");
-        let stage = dir.stage("sensitivity/level3")?;
+        let stage = dir.create_stage("sensitivity/level3")?;
         let lineage = dir.lineage(
             "sensitivity/level3",
             serde_json::json!({ "states": "yan2015 a priori (81)", "parameters": ["e", "μs", "μr", "E"] }),
@@ -244,7 +244,7 @@ where
 
         if levels.one {
             announce("level 1 (power laws, flow-rate curves)");
-            let stage = dir.stage("sensitivity/level1")?;
+            let stage = dir.create_stage("sensitivity/level1")?;
             let mut lineage = dir
                 .lineage(
                     "sensitivity/level1",
@@ -278,7 +278,7 @@ where
 
         if levels.two {
             announce("level 2 (PCA)");
-            let stage = dir.stage("sensitivity/level2")?;
+            let stage = dir.create_stage("sensitivity/level2")?;
             let lineage = dir
                 .lineage(
                     "sensitivity/level2",

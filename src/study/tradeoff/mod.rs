@@ -15,6 +15,7 @@ pub mod report;
 
 use std::path::{Path, PathBuf};
 
+use super::StudyError;
 use crate::exec::{run_incomplete, ExecError, Executor, Ran};
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::run_logged;
@@ -24,27 +25,6 @@ use crate::store::{
 };
 use pareto::pareto_front;
 use plan::Point;
-
-/// Why a sweep failed.
-#[derive(Debug, thiserror::Error)]
-pub enum SweepError {
-    /// The executor refused the runs (a plan over the limits).
-    #[error(transparent)]
-    Exec(#[from] ExecError),
-    /// The store or an output failed.
-    #[error(transparent)]
-    Store(#[from] StoreError),
-}
-
-impl SweepError {
-    /// True when the user's input (limits, paths) is at fault.
-    pub fn is_invalid_input(&self) -> bool {
-        match self {
-            SweepError::Exec(e) => e.is_invalid_input(),
-            SweepError::Store(e) => e.is_invalid_input(),
-        }
-    }
-}
 
 /// What [`sweep`] did.
 #[derive(Debug, Clone)]
@@ -75,7 +55,7 @@ pub fn sweep(
     knobs: &[plan::Knob],
     pool: &Executor,
     out_dir: Option<PathBuf>,
-) -> Result<Sweep, SweepError> {
+) -> Result<Sweep, StudyError> {
     let total: usize = points.iter().map(|p| p.replicates.len()).sum();
     let done = points
         .iter()
