@@ -40,6 +40,7 @@ use crate::store::{
 };
 use crate::study::dir::StudyDir;
 use crate::study::spec::{is_design_study, parse_design_study, read_design_study, DesignStudy};
+use crate::study::stages::{Analysis, Method, StudyFile, StudySpec};
 use crate::study::tradeoff as tradeoff_sweep;
 use crate::study::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
 use crate::study::{self, StudyError};
@@ -1078,7 +1079,7 @@ pub fn train(
     options.settings.seed = seed.unwrap_or(study.design.seed);
     let outcome = train_study(&dir, &study, &options)?;
     write_sweep(&outcome, out)?;
-    if study.noise_aware.is_some() {
+    if method(&study) == Method::He2019NoiseAware {
         let model = load_model(&dir.stage(Stage::Train).join("model.json"))?;
         let net = |x: &[f64]| model.predict(x);
         let gp = train_gp(
@@ -1117,7 +1118,7 @@ pub fn search(
     let (study, dir) = open_study(store_root, study_path)?;
     let mut settings = *settings;
     settings.seed = seed.unwrap_or(study.design.seed);
-    if study.noise_aware.is_some() {
+    if method(&study) == Method::He2019NoiseAware {
         let found = gp_search(&dir, &study, &settings)?;
         write!(out, "{}", found.markdown)?;
         return Ok(());
@@ -1153,7 +1154,7 @@ pub fn verify(
     let store = open_store(store_root)?;
     let settings = exec.in_study(dir.path());
     set_quiet(true);
-    if study.noise_aware.is_some() {
+    if method(&study) == Method::He2019NoiseAware {
         let v = verify_seeds(&dir, &study, &store, &settings, candidates, run_logged)?;
         write!(out, "{}", v.markdown)?;
         return Ok(());
@@ -1184,6 +1185,29 @@ pub fn verify(
 /// files are not, and fail later with the study reader's error.
 fn is_design_study_file(path: &Path) -> bool {
     std::fs::read_to_string(path).is_ok_and(|t| is_design_study(&t))
+}
+
+/// `repose stages STUDY`: the study's method and stage list
+/// ([`crate::study::stages::StudySpec`]), as text or JSON.
+pub fn stages(
+    path: &Path,
+    analysis: Analysis,
+    adaptive: bool,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let document = StudyFile::read(path).map_err(manifest_error(path))?;
+    let spec = StudySpec::of(&document, analysis, adaptive);
+    if json {
+        return print_json(&spec, out);
+    }
+    write!(out, "{}", spec.describe())?;
+    Ok(())
+}
+
+/// The driver of a calibration study: the one place the method is picked.
+fn method(study: &Study) -> Method {
+    StudySpec::calibration(study, false).method
 }
 
 /// `repose status STUDY`: where every run the study handed to Slurm stands
@@ -1407,7 +1431,7 @@ pub fn calibrate(
         }
     };
     let study = read_study(&path)?;
-    if study.noise_aware.is_some() {
+    if method(&study) == Method::He2019NoiseAware {
         let candidates = candidates.unwrap_or(1);
         return calibrate_noise_aware(store_root, &path, exec, candidates, flags, out);
     }

@@ -19,6 +19,7 @@ use repose::exec::Executor;
 use repose::scenes::plan::Limits;
 use repose::search::meanshift::Kernel;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
+use repose::study::stages::Analysis;
 use repose::study::tradeoff::plan::{Knob, KNOB_NAMES};
 use repose::surrogate::ga_bp::genetic::GaSettings;
 use repose::surrogate::ga_bp::levenberg::TrainlmSettings;
@@ -255,6 +256,22 @@ enum Command {
         jobs: Option<usize>,
         #[command(flatten)]
         exec: ExecArgs,
+    },
+    /// A study's method and its stages, in the order they run, with what each
+    /// uses (design, scenes, seeds, surrogates, search), before anything runs.
+    Stages {
+        /// Study manifest (he2019 or design study).
+        study: PathBuf,
+        /// How a design study is analysed: rsm (response surfaces) or
+        /// sensitivity (yan2015).
+        #[arg(long, value_enum, default_value = "rsm")]
+        analysis: AnalysisArg,
+        /// Include the adaptive rounds of a noise-aware calibration.
+        #[arg(long)]
+        adaptive: bool,
+        /// Print the spec as JSON.
+        #[arg(long)]
+        json: bool,
     },
     /// Where every run a study handed to Slurm stands: pending, queued,
     /// running, done or failed, with its Slurm job and array task (from
@@ -707,6 +724,13 @@ struct BenchArgs {
     json: bool,
 }
 
+/// How a design study is analysed, on the command line.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum AnalysisArg {
+    Rsm,
+    Sensitivity,
+}
+
 /// Rolling-resistance model on the command line.
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum RollingArg {
@@ -915,6 +939,18 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             commands::audit(&cli.store, &path, rerun, seed, &mut out)
         }
         Command::Responses { scene, json } => commands::responses(scene.as_deref(), json, &mut out),
+        Command::Stages {
+            study,
+            analysis,
+            adaptive,
+            json,
+        } => {
+            let analysis = match analysis {
+                AnalysisArg::Rsm => Analysis::ResponseSurface,
+                AnalysisArg::Sensitivity => Analysis::Sensitivity,
+            };
+            commands::stages(&study, analysis, adaptive, json, &mut out)
+        }
         Command::Runs {
             command: RunsCommand::List,
         } => commands::runs_list(&cli.store, &mut out),

@@ -2,6 +2,8 @@
 //! executor → a response table → an analysis → reports, each stage cached in
 //! the store and recorded with lineage.
 //!
+//! - [`stages`]: the study model — a study file read once and lowered to
+//!   its method and stage list ([`stages::StudySpec`]).
 //! - [`spec`]: the design study manifest (factors by address, design,
 //!   replicates, scenes, named responses, targets, screening, verification)
 //!   and the experiments it generates.
@@ -28,6 +30,7 @@ pub mod screen;
 pub mod seed_noise;
 pub mod sensitivity;
 pub mod spec;
+pub mod stages;
 pub mod tradeoff;
 pub mod verify;
 

@@ -1,0 +1,411 @@
+//! The study model: every study is a list of stages, as data. A study file
+//! (he2019's calibration study, or a design study) is read once into a
+//! [`StudyFile`] and lowered to a [`StudySpec`]: its method and the stages it
+//! runs, in order, each with the kind it uses (which design, which
+//! surrogates, which search, how many seeds). The commands pick what to run
+//! from the spec's [`Method`] — the one place the method is decided — and
+//! `repose stages FILE` prints the list, so a user sees what a study will do
+//! before it spends an hour of CPU.
+//!
+//! | method | stages |
+//! | --- | --- |
+//! | he2019 | design (LHS) → simulate → fit (GA-BP) → search (tolerance) → verify |
+//! | he2019, noise-aware | noise → design (LHS) → simulate (replicates) → fit (GP, GA-BP) → [adaptive] → search (probability) → verify |
+//! | response surface (cai2024) | [screen] → design (Box–Behnken or full factorial) → simulate → fit (quadratic) → search (desirability) → [verify] |
+//! | sensitivity (yan2015) | design (full factorial) → simulate → fit (power law) → sensitivity → [verify] |
+//!
+//! A design study runs as a response surface (`repose rsm`) or a
+//! sensitivity analysis (`repose sensitivity`): the same document, two
+//! stage lists. The noise floor of one experiment (`repose noise MANIFEST`)
+//! and the tradeoff sweep (`repose tradeoff`) are one-stage studies of a
+//! manifest ([`StudySpec::noise_floor`], [`StudySpec::tradeoff`]).
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::spec::{is_design_study, parse_design_study, DesignSpec, DesignStudy};
+use crate::manifest::{parse_study, ContentId, DesignKind, ManifestError, Study};
+
+/// A study file, read and validated once.
+#[derive(Debug, Clone)]
+pub enum StudyFile {
+    /// he2019's calibration study (`parameters`, `calibration`, …).
+    Calibration(Study),
+    /// A design study (`factors`, `design`, `responses`, …).
+    Design(DesignStudy),
+}
+
+impl StudyFile {
+    /// Reads and validates the study file at `path` (a design study when it
+    /// has a `factors` object).
+    pub fn read(path: &Path) -> Result<StudyFile, ManifestError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ManifestError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        if is_design_study(&text) {
+            parse_design_study(&text).map(StudyFile::Design)
+        } else {
+            parse_study(&text).map(StudyFile::Calibration)
+        }
+    }
+}
+
+/// Which analysis a design study runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Analysis {
+    /// Quadratic response surfaces, desirability, verification (`repose rsm`).
+    ResponseSurface,
+    /// yan2015's power laws and sensitivity levels (`repose sensitivity`).
+    Sensitivity,
+}
+
+/// A study's method: which driver runs its stages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// he2019 as published: one packing per sample, the GA-BP network.
+    He2019,
+    /// he2019 with a noise floor, replicates, a GP and seeds in verification.
+    He2019NoiseAware,
+    /// A design study analysed by response surfaces (cai2024 and others).
+    ResponseSurface,
+    /// A design study analysed by yan2015's sensitivity levels.
+    Sensitivity,
+    /// One experiment over packing seeds (`repose noise MANIFEST`).
+    NoiseFloor,
+    /// Fidelity knobs around one experiment (`repose tradeoff`).
+    Tradeoff,
+}
+
+/// The design of experiments.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DesignOf {
+    /// Latin hypercube.
+    Lhs,
+    /// Latin hypercube optimised for space filling.
+    OptimisedLhs,
+    /// Every combination of levels.
+    FullFactorial,
+    /// Box–Behnken.
+    BoxBehnken,
+    /// One factor at a time (screening).
+    OneFactor,
+}
+
+/// A surrogate the fit stage trains ([`crate::surrogate`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FitKind {
+    /// he2019's GA-BP network.
+    GaBp,
+    /// Gaussian process.
+    Gp,
+    /// Quadratic response surface with ANOVA.
+    Quadratic,
+    /// yan2015's power law.
+    PowerLaw,
+}
+
+/// How the search stage picks parameter sets ([`crate::search`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SearchKind {
+    /// Predicted mean within the tolerance of the target.
+    Tolerance,
+    /// Probability of the target band under the GP.
+    Probability,
+    /// Derringer–Suich desirability of every response.
+    Desirability,
+}
+
+/// One stage of a study, with what it uses.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[serde(tag = "stage", rename_all = "snake_case")]
+pub enum Stage {
+    /// The noise floor: one point over packing seeds.
+    Noise {
+        /// Packing seeds.
+        seeds: u32,
+    },
+    /// One-factor screening with a one-way ANOVA.
+    Screen {
+        /// Screened factors.
+        factors: usize,
+        /// Seeds per level.
+        replicates: u32,
+    },
+    /// The design of experiments.
+    Design {
+        /// Which design.
+        design: DesignOf,
+        /// Factors (calibrated parameters).
+        factors: usize,
+    },
+    /// The design's runs through the executor.
+    Simulate {
+        /// Scenes each point runs in.
+        scenes: Vec<String>,
+        /// Packing seeds per point.
+        replicates: u32,
+    },
+    /// Surrogates fitted on the response table.
+    Fit {
+        /// The surrogates, in the order they are fitted.
+        models: Vec<FitKind>,
+    },
+    /// Rounds of points chosen by the GP until a candidate passes.
+    Adaptive {
+        /// Most runs the rounds may add.
+        max_runs: u32,
+    },
+    /// Parameter sets that reproduce the targets.
+    Search {
+        /// How they are picked.
+        search: SearchKind,
+    },
+    /// yan2015's sensitivity levels.
+    Sensitivity,
+    /// Candidates re-simulated in every scene.
+    Verify {
+        /// Packing seeds per candidate and scene.
+        seeds: u32,
+    },
+    /// Fidelity knobs swept with replicates.
+    Tradeoff {
+        /// Knobs swept.
+        knobs: Vec<String>,
+        /// Packing seeds per point.
+        replicates: u32,
+    },
+}
+
+impl Stage {
+    /// The stage's name (its directory and, where it has one, subcommand).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Stage::Noise { .. } => "noise",
+            Stage::Screen { .. } => "screen",
+            Stage::Design { .. } => "design",
+            Stage::Simulate { .. } => "simulate",
+            Stage::Fit { .. } => "fit",
+            Stage::Adaptive { .. } => "adaptive",
+            Stage::Search { .. } => "search",
+            Stage::Sensitivity => "sensitivity",
+            Stage::Verify { .. } => "verify",
+            Stage::Tradeoff { .. } => "tradeoff",
+        }
+    }
+}
+
+/// A study as its method and stage list (module docs).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct StudySpec {
+    /// The study's (or experiment's) name.
+    pub name: String,
+    /// Its id.
+    pub id: ContentId,
+    /// The driver.
+    pub method: Method,
+    /// The stages, in the order they run.
+    pub stages: Vec<Stage>,
+}
+
+impl StudySpec {
+    /// The stage list of a document; `analysis` says how a design study is
+    /// analysed (ignored for a calibration study); `adaptive` adds the
+    /// adaptive rounds of a noise-aware calibration.
+    pub fn of(document: &StudyFile, analysis: Analysis, adaptive: bool) -> StudySpec {
+        match document {
+            StudyFile::Calibration(study) => StudySpec::calibration(study, adaptive),
+            StudyFile::Design(study) => StudySpec::design(study, analysis),
+        }
+    }
+
+    /// he2019's stage list, classic or noise-aware.
+    pub fn calibration(study: &Study, adaptive: bool) -> StudySpec {
+        let design = match study.design.kind {
+            DesignKind::Lhs => DesignOf::Lhs,
+            DesignKind::LhsOptimised => DesignOf::OptimisedLhs,
+            DesignKind::FullFactorial => DesignOf::FullFactorial,
+            DesignKind::BoxBehnken => DesignOf::BoxBehnken,
+        };
+        let factors = study.parameters.len();
+        let scenes: Vec<String> = std::iter::once(&study.calibration)
+            .chain(&study.verification)
+            .map(|t| t.name.clone())
+            .collect();
+        let calibration_scene = vec![scenes[0].clone()];
+        let (method, stages) = match &study.noise_aware {
+            None => (
+                Method::He2019,
+                vec![
+                    Stage::Design { design, factors },
+                    Stage::Simulate {
+                        scenes: calibration_scene,
+                        replicates: 1,
+                    },
+                    Stage::Fit {
+                        models: vec![FitKind::GaBp],
+                    },
+                    Stage::Search {
+                        search: SearchKind::Tolerance,
+                    },
+                    Stage::Verify { seeds: 1 },
+                ],
+            ),
+            Some(n) => {
+                let mut stages = vec![
+                    Stage::Noise {
+                        seeds: n.noise_seeds,
+                    },
+                    Stage::Design { design, factors },
+                    Stage::Simulate {
+                        scenes: calibration_scene,
+                        replicates: n.replicates,
+                    },
+                    Stage::Fit {
+                        models: vec![FitKind::Gp, FitKind::GaBp],
+                    },
+                ];
+                if adaptive {
+                    stages.push(Stage::Adaptive {
+                        max_runs: n.adaptive.max_runs,
+                    });
+                }
+                stages.push(Stage::Search {
+                    search: SearchKind::Probability,
+                });
+                stages.push(Stage::Verify {
+                    seeds: n.verification_seeds,
+                });
+                (Method::He2019NoiseAware, stages)
+            }
+        };
+        StudySpec {
+            name: study.name.clone(),
+            id: study.id(),
+            method,
+            stages,
+        }
+    }
+
+    /// A design study's stage list for `analysis`.
+    pub fn design(study: &DesignStudy, analysis: Analysis) -> StudySpec {
+        let design = match study.design {
+            DesignSpec::BoxBehnken { .. } => DesignOf::BoxBehnken,
+            DesignSpec::FullFactorial { .. } => DesignOf::FullFactorial,
+        };
+        let mut stages = Vec::new();
+        if let (Analysis::ResponseSurface, Some(s)) = (analysis, &study.screening) {
+            stages.push(Stage::Screen {
+                factors: s.factors.len(),
+                replicates: s.replicates,
+            });
+        }
+        stages.push(Stage::Design {
+            design,
+            factors: study.factors.len(),
+        });
+        stages.push(Stage::Simulate {
+            scenes: study.scenes.keys().cloned().collect(),
+            replicates: study.replicates,
+        });
+        let method = match analysis {
+            Analysis::ResponseSurface => {
+                stages.push(Stage::Fit {
+                    models: vec![FitKind::Quadratic],
+                });
+                stages.push(Stage::Search {
+                    search: SearchKind::Desirability,
+                });
+                Method::ResponseSurface
+            }
+            Analysis::Sensitivity => {
+                stages.push(Stage::Fit {
+                    models: vec![FitKind::PowerLaw],
+                });
+                stages.push(Stage::Sensitivity);
+                Method::Sensitivity
+            }
+        };
+        if let Some(v) = &study.verification {
+            stages.push(Stage::Verify {
+                seeds: v.replicates,
+            });
+        }
+        StudySpec {
+            name: study.name.clone(),
+            id: study.id(),
+            method,
+            stages,
+        }
+    }
+
+    /// The noise floor of one experiment over `seeds` packing seeds.
+    pub fn noise_floor(name: &str, id: ContentId, seeds: u32) -> StudySpec {
+        StudySpec {
+            name: name.to_string(),
+            id,
+            method: Method::NoiseFloor,
+            stages: vec![Stage::Noise { seeds }],
+        }
+    }
+
+    /// The tradeoff sweep of `knobs` around one experiment.
+    pub fn tradeoff(name: &str, id: ContentId, knobs: Vec<String>, replicates: u32) -> StudySpec {
+        StudySpec {
+            name: name.to_string(),
+            id,
+            method: Method::Tradeoff,
+            stages: vec![Stage::Tradeoff { knobs, replicates }],
+        }
+    }
+
+    /// The stage list as text: one numbered line per stage with what it uses.
+    pub fn describe(&self) -> String {
+        let mut s = format!(
+            "{} ({}), method {}:\n",
+            self.name,
+            &self.id.to_string()[..12],
+            word(&self.method)
+        );
+        for (i, stage) in self.stages.iter().enumerate() {
+            let detail = match stage {
+                Stage::Noise { seeds } => format!("{seeds} packing seeds at one point"),
+                Stage::Screen {
+                    factors,
+                    replicates,
+                } => format!("{factors} factor(s) one at a time, {replicates} seed(s) per level"),
+                Stage::Design { design, factors } => {
+                    format!("{} over {factors} factor(s)", word(design))
+                }
+                Stage::Simulate { scenes, replicates } => format!(
+                    "scenes {} x {replicates} seed(s) per point",
+                    scenes.join(", ")
+                ),
+                Stage::Fit { models } => models.iter().map(word).collect::<Vec<_>>().join(", "),
+                Stage::Adaptive { max_runs } => format!("up to {max_runs} runs"),
+                Stage::Search { search } => word(search),
+                Stage::Sensitivity => "levels 1-3".to_string(),
+                Stage::Verify { seeds } => format!("{seeds} seed(s) per candidate and scene"),
+                Stage::Tradeoff { knobs, replicates } => {
+                    format!("knobs {} x {replicates} seed(s)", knobs.join(", "))
+                }
+            };
+            s.push_str(&format!("  {}. {}: {detail}\n", i + 1, stage.name()));
+        }
+        s
+    }
+}
+
+/// A unit enum variant as serde names it (`optimised_lhs`, `ga_bp`, …).
+fn word<T: Serialize>(value: &T) -> String {
+    match serde_json::to_value(value) {
+        Ok(serde_json::Value::String(s)) => s,
+        other => format!("{other:?}"),
+    }
+}
