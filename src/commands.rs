@@ -40,7 +40,7 @@ use crate::store::{
 };
 use crate::study::dir::StudyDir;
 use crate::study::spec::{is_design_study, parse_design_study, read_design_study, DesignStudy};
-use crate::study::stages::{Analysis, Method, StudyFile, StudySpec};
+use crate::study::stages::{Analysis, Method, Stage as ClassicStage, StudyFile, StudySpec};
 use crate::study::tradeoff as tradeoff_sweep;
 use crate::study::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
 use crate::study::{self, StudyError};
@@ -1435,32 +1435,68 @@ pub fn calibrate(
         let candidates = candidates.unwrap_or(1);
         return calibrate_noise_aware(store_root, &path, exec, candidates, flags, out);
     }
-    let candidates = candidates.unwrap_or(3);
     if flags.adaptive || flags.json {
         return Err(CommandError::Usage(format!(
             "--adaptive and --json need a noise-aware study (a `noise_aware` block); {} has none",
             path.display()
         )));
     }
-    let mut err = io::stderr();
-    writeln!(out, "\n== 1/5 sample")?;
-    sample(store_root, &path, &SampleSettings::default(), out, &mut err)?;
-    writeln!(out, "\n== 2/5 batch ({})", exec_label(exec))?;
-    batch_leaving_out_failures(store_root, &path, exec, out)?;
-    writeln!(out, "\n== 3/5 train")?;
-    let options = TrainOptions {
-        settings: TrainSettings::with_seed(study.design.seed),
-        train_fraction: DEFAULT_TRAIN_FRACTION,
-    };
-    train(store_root, &path, &options, None, out)?;
-    writeln!(out, "\n== 4/5 search")?;
-    search(
-        store_root,
-        &path,
-        &SearchSettings::with_seed(study.design.seed),
-        None,
-        out,
-    )?;
-    writeln!(out, "\n== 5/5 verify ({candidates} candidate(s))")?;
-    verify(store_root, &path, exec, candidates, out)
+    let spec = StudySpec::calibration(&study, false);
+    let total = spec.stages.len();
+    for (i, stage) in spec.stages.iter().enumerate() {
+        let how = match stage {
+            ClassicStage::Simulate { .. } => format!(" ({})", exec_label(exec)),
+            ClassicStage::Verify { .. } => {
+                format!(" ({} candidate(s))", candidates.unwrap_or(3))
+            }
+            _ => String::new(),
+        };
+        writeln!(out, "\n== {}/{total} {}{how}", i + 1, stage.name())?;
+        run_classic_stage(store_root, &path, &study, stage, exec, candidates, out)?;
+    }
+    Ok(())
+}
+
+/// One stage of he2019's classic stage list, run by its subcommand with the
+/// stage's defaults (the design is sampled, failed batch runs are left out of
+/// training, `candidates` clusters are verified, default 3).
+fn run_classic_stage(
+    store_root: &Path,
+    path: &Path,
+    study: &Study,
+    stage: &ClassicStage,
+    exec: &Executor,
+    candidates: Option<usize>,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let seed = study.design.seed;
+    match stage {
+        ClassicStage::Design { .. } => sample(
+            store_root,
+            path,
+            &SampleSettings::default(),
+            out,
+            &mut io::stderr(),
+        ),
+        ClassicStage::Simulate { .. } => batch_leaving_out_failures(store_root, path, exec, out),
+        ClassicStage::Fit { .. } => {
+            let options = TrainOptions {
+                settings: TrainSettings::with_seed(seed),
+                train_fraction: DEFAULT_TRAIN_FRACTION,
+            };
+            train(store_root, path, &options, None, out)
+        }
+        ClassicStage::Search { .. } => search(
+            store_root,
+            path,
+            &SearchSettings::with_seed(seed),
+            None,
+            out,
+        ),
+        ClassicStage::Verify { .. } => verify(store_root, path, exec, candidates.unwrap_or(3), out),
+        other => Err(CommandError::Usage(format!(
+            "stage `{}` is not part of he2019's classic method",
+            other.name()
+        ))),
+    }
 }
