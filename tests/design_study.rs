@@ -33,7 +33,13 @@ fn rejected(v: Value) -> String {
 
 #[test]
 fn the_committed_studies_are_valid() {
-    for name in ["cai2024-smoke", "cai2024-quick", "cai2024"] {
+    for name in [
+        "cai2024-smoke",
+        "cai2024-quick",
+        "cai2024",
+        "mixed-smoke",
+        "mixed-lhs-gp-smoke",
+    ] {
         let study = parse(common::example(&format!("{name}/study.json")));
         study.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
     }
@@ -323,4 +329,36 @@ fn the_box_behnken_study_has_29_points_with_centres_last() {
     let coded = repose::study::rsm::coded_design(&study).unwrap();
     assert_eq!(coded.len(), 29);
     assert!(coded[24..].iter().all(|r| r.iter().all(|x| *x == 0.0)));
+}
+
+#[test]
+fn an_lhs_needs_more_points_than_factors_and_the_fit_is_quadratic_or_gp() {
+    let lhs = common::edit(
+        smoke(),
+        "/design",
+        Some(json!({"kind": "lhs", "points": 5})),
+    );
+    let e = rejected(lhs.clone());
+    assert!(
+        e.contains("design.points = 5: must be >= 6 (the factors + 2) for 4 factor(s)"),
+        "{e}"
+    );
+    let ok = common::edit(lhs, "/design/points", Some(json!(6)));
+    parse(ok.clone()).validate().unwrap();
+    let gp = common::edit(ok.clone(), "/fit", Some(json!("gp")));
+    parse(gp).validate().unwrap();
+    let bad: Result<DesignStudy, _> =
+        serde_json::from_value(common::edit(ok, "/fit", Some(json!("spline"))));
+    let e = bad.unwrap_err().to_string();
+    assert!(e.contains("unknown variant `spline`"), "{e}");
+    assert!(e.contains("quadratic") && e.contains("gp"), "{e}");
+}
+
+#[test]
+fn the_default_fit_is_not_written_so_study_ids_keep_their_value() {
+    let study = parse(smoke());
+    let canonical = repose::manifest::canonical_json(&study);
+    assert!(!canonical.contains("\"fit\""), "{canonical}");
+    let explicit = parse(common::edit(smoke(), "/fit", Some(json!("quadratic"))));
+    assert_eq!(explicit.id(), study.id());
 }

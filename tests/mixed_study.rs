@@ -93,3 +93,53 @@ fn funnel_and_drum_in_a_box_behnken_run_end_to_end_through_the_shared_stages() {
     }
     assert!(printed.contains("verification"), "{printed}");
 }
+
+/// cai2024's scenes with he2019's design and surrogate: a Latin hypercube and
+/// a Gaussian process per response, then desirability and verification.
+#[test]
+fn cai2024_scenes_with_an_lhs_and_gps_run_end_to_end() {
+    const LHS_GP: &str = "experiments/mixed-lhs-gp-smoke/study.json";
+    let tmp = tempfile::tempdir().unwrap();
+    let (one, two) = (tmp.path().join("one"), tmp.path().join("two"));
+    for (store, jobs) in [(&two, "2"), (&one, "1")] {
+        let out = common::repose(store, &["rsm", LHS_GP, "--jobs", jobs]);
+        assert!(out.status.success(), "rsm: {}", common::stderr(&out));
+    }
+    common::assert_same_stores(&one, &two);
+    let dir = study_dir(&one);
+    // Design: 8 LHS points, one per stratum of each factor's range.
+    let responses = Table::read(&dir.join("rsm/responses.csv")).unwrap();
+    assert_eq!(responses.rows.len(), 8);
+    for (factor, (lo, hi)) in [("A", (0.2, 0.6)), ("B", (0.1, 0.5))] {
+        let mut strata: Vec<usize> = (0..8)
+            .map(|r| {
+                let v: f64 = cell(&responses, r, factor).parse().unwrap();
+                ((v - lo) / (hi - lo) * 8.0).floor() as usize
+            })
+            .collect();
+        strata.sort();
+        assert_eq!(strata, (0..8).collect::<Vec<_>>(), "{factor}");
+    }
+    // Fit: a GP per response, no ANOVA.
+    for response in ["static_angle_deg", "dynamic_angle_deg"] {
+        let text = std::fs::read_to_string(dir.join(format!("rsm/{response}/gp.json"))).unwrap();
+        let gp: Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(
+            gp["length_scales"].as_array().unwrap().len(),
+            2,
+            "{response}"
+        );
+        assert!(gp["nugget_var"].as_f64().unwrap() >= 0.0);
+        assert!(!dir.join(format!("rsm/{response}/anova.csv")).exists());
+    }
+    // Search and verification through the same stages as a quadratic study.
+    let optimum = Table::read(&dir.join("rsm/optimum.csv")).unwrap();
+    assert!(!optimum.rows.is_empty());
+    let v = Table::read(&dir.join("verify/verification.csv")).unwrap();
+    assert_eq!(v.rows.len(), 2);
+    for r in 0..v.rows.len() {
+        assert_eq!(cell(&v, r, "n"), "2");
+        let predicted: f64 = cell(&v, r, "predicted").parse().unwrap();
+        assert!(predicted.is_finite());
+    }
+}

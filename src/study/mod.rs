@@ -24,6 +24,7 @@
 
 pub mod acceptance;
 pub mod dir;
+pub mod gp_surface;
 pub mod rsm;
 pub mod runs;
 pub mod screen;

@@ -8,25 +8,34 @@
 //! shows the two factors with the largest summed term sums of squares, the
 //! other factors held at the optimum (or the centre without targets).
 //! [`analyse_table`] runs the same analysis on any CSV table.
+//!
+//! With `fit: "gp"` each response gets a Gaussian process instead
+//! ([`super::gp_surface`]): no ANOVA, coefficients or contour, but gp.json
+//! and a parity plot; the desirability optimum and the verification use the
+//! GP's mean. A Latin hypercube design (`design.kind: "lhs"`) is coded from
+//! the unit strata onto [−1, 1] and decoded through the factor ranges.
 
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
 use super::dir::{write_output, StudyDir};
+use super::gp_surface::{analyse_gp, GpAnalysis};
 use super::runs::{run_points, write_table, Point, Runs};
-use super::spec::{DesignSpec, DesignStudy, SeedStage};
+use super::spec::{DesignSpec, DesignStudy, FitChoice, SeedStage};
 use super::StudyError;
 use crate::doe::box_behnken::box_behnken;
 use crate::doe::factorial::full_factorial;
+use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::doe::Range;
 use crate::exec::Executor;
 use crate::manifest::Experiment;
 use crate::report::plots::{contour, predicted_vs_actual, ContourGrid};
 use crate::report::table::{Cell, CsvWriter, Table};
-use crate::search::desirability::{maximise, Goal, Search};
+use crate::search::desirability::{maximise, Goal, Model, Search};
 use crate::stats::rsm::{fit_quadratic, AnovaRow, RsmFit};
 use crate::store::{RunDir, RunResult, Store};
+use crate::streams::{rng, Stream};
 
 /// Starts of the desirability search.
 pub const OPTIMISER_STARTS: usize = 64;
@@ -50,6 +59,15 @@ pub fn coded_design(study: &DesignStudy) -> Result<Vec<Vec<f64>>, StudyError> {
                 })
                 .collect()
         }
+        DesignSpec::Lhs { points } => latin_hypercube(
+            *points as usize,
+            study.factors.len(),
+            Placement::Random,
+            &mut rng(study.seed, Stream::Design, 0),
+        )
+        .into_iter()
+        .map(|u| u.into_iter().map(|v| 2.0 * v - 1.0).collect())
+        .collect(),
     })
 }
 
@@ -123,8 +141,10 @@ pub struct RsmOutcome {
     pub cached: usize,
     /// Replicates lacking a response (failed or unmeasurable runs).
     pub incomplete: usize,
-    /// Per response.
+    /// Per response, when the study fits quadratics.
     pub analyses: Vec<ResponseAnalysis>,
+    /// Per response, when the study fits Gaussian processes.
+    pub gp: Vec<GpAnalysis>,
     /// The desirability optimum (when the study has targets).
     pub optimum: Option<Search>,
     /// The optimum's factors in actual units (best optimum).
@@ -204,12 +224,17 @@ where
     )?;
     write_table(dir, "rsm", study, &runs, &stage.join("responses.csv"))?;
     let ranges = study.ranges();
-    let mut analyses = Vec::new();
+    let (mut analyses, mut gp) = (Vec::new(), Vec::new());
     for response in study.responses.keys() {
         let (x, y, missing) = observations(&runs, &coded, response);
-        analyses.push(analyse(response, &x, &y, &names, &ranges, missing)?);
+        match study.fit {
+            FitChoice::Quadratic => {
+                analyses.push(analyse(response, &x, &y, &names, &ranges, missing)?)
+            }
+            FitChoice::Gp => gp.push(analyse_gp(response, &x, &y, &names, missing, study.seed)?),
+        }
     }
-    let optimum = joint_optimum(study, &analyses);
+    let optimum = joint_optimum(study, &analyses, &gp);
     let optimum_actual = optimum.as_ref().and_then(|s| {
         s.optima.first().map(|o| {
             o.coded
@@ -224,7 +249,7 @@ where
     let lineage_of = |what: &str| {
         dir.lineage(
             "rsm",
-            serde_json::json!({ "model": "full quadratic", "output": what, "optimiser_starts": OPTIMISER_STARTS }),
+            serde_json::json!({ "model": model_name(study.fit), "output": what, "optimiser_starts": OPTIMISER_STARTS }),
         )
         .with_input(table_input.clone())
     };
@@ -267,6 +292,19 @@ where
             &lineage,
         )?;
     }
+    for g in &gp {
+        let sub = stage.join(&g.response);
+        let lineage = lineage_of(&g.response);
+        write_output(&sub.join("gp.json"), &json_bytes(g), &lineage)?;
+        let pairs: Vec<(f64, f64)> = y_of(&runs, &g.response)
+            .into_iter()
+            .zip(g.fitted.iter().copied())
+            .collect();
+        let parity =
+            predicted_vs_actual(&pairs, &format!("{}: GP mean vs simulated", g.response), "")
+                .map_err(|e| StudyError::Plot(e.to_string()))?;
+        write_output(&sub.join("parity.svg"), parity.as_bytes(), &lineage)?;
+    }
     if let Some(search) = &optimum {
         let lineage = lineage_of("optimum");
         write_output(
@@ -287,6 +325,7 @@ where
         cached: runs.cached,
         incomplete: runs.incomplete(),
         analyses,
+        gp,
         optimum,
         optimum_actual,
         dir: stage.clone(),
@@ -319,16 +358,63 @@ fn y_of(runs: &Runs, response: &str) -> Vec<f64> {
         .collect()
 }
 
+/// The lineage's name of the fitted model.
+fn model_name(fit: FitChoice) -> &'static str {
+    match fit {
+        FitChoice::Quadratic => "full quadratic",
+        FitChoice::Gp => "gaussian process (Matern 5/2, fitted nugget)",
+    }
+}
+
+impl RsmOutcome {
+    /// The analysed responses, in name order.
+    pub fn responses(&self) -> Vec<String> {
+        let quadratic = self.analyses.iter().map(|a| a.response.clone());
+        quadratic
+            .chain(self.gp.iter().map(|g| g.response.clone()))
+            .collect()
+    }
+
+    /// The fitted model's prediction of `response` at a coded point.
+    pub fn predict(&self, response: &str, coded: &[f64]) -> Option<f64> {
+        let quadratic = self.analyses.iter().find(|a| a.response == response);
+        match quadratic {
+            Some(a) => Some(a.fit.predict(coded)),
+            None => self
+                .gp
+                .iter()
+                .find(|g| g.response == response)
+                .map(|g| g.predict(coded)),
+        }
+    }
+}
+
 /// The desirability optimum over the responses with targets.
-fn joint_optimum(study: &DesignStudy, analyses: &[ResponseAnalysis]) -> Option<Search> {
-    let goals: Vec<Goal> = analyses
-        .iter()
-        .filter_map(|a| {
-            let t = study.targets.get(&a.response)?;
-            let fit = &a.fit;
+fn joint_optimum(
+    study: &DesignStudy,
+    analyses: &[ResponseAnalysis],
+    gp: &[GpAnalysis],
+) -> Option<Search> {
+    let quadratic = analyses.iter().map(|a| {
+        let fit = &a.fit;
+        (
+            &a.response,
+            Box::new(move |x: &[f64]| fit.predict(x)) as Model,
+        )
+    });
+    let gaussian = gp.iter().map(|g| {
+        (
+            &g.response,
+            Box::new(move |x: &[f64]| g.predict(x)) as Model,
+        )
+    });
+    let goals: Vec<Goal> = quadratic
+        .chain(gaussian)
+        .filter_map(|(response, predict)| {
+            let t = study.targets.get(response)?;
             Some(Goal {
-                response: a.response.clone(),
-                predict: Box::new(move |x: &[f64]| fit.predict(x)),
+                response: response.clone(),
+                predict,
                 target: t.value,
                 low: t.low,
                 high: t.high,
@@ -557,6 +643,29 @@ fn anova_markdown_body(a: &ResponseAnalysis) -> String {
     md
 }
 
+/// The GPs' table: observations, length scale per factor (coded units),
+/// the noise sd √nugget and the log marginal likelihood.
+fn gp_markdown(o: &RsmOutcome) -> String {
+    let names: Vec<&str> = o.factors.iter().map(|f| f.0.as_str()).collect();
+    let mut md = format!(
+        "\n## Gaussian processes (length scales in coded units; the range is 2 wide)\n\n| Response | n | {} | noise sd | log ML |\n|---|---:|{}---:|---:|\n",
+        names.iter().map(|n| format!("ℓ {n}")).collect::<Vec<_>>().join(" | "),
+        "---:|".repeat(names.len())
+    );
+    for g in &o.gp {
+        let ls: Vec<String> = g.length_scales.iter().map(|l| f4(*l)).collect();
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} |\n",
+            g.response,
+            g.observations,
+            ls.join(" | "),
+            f4(g.nugget_var.sqrt()),
+            f4(g.log_marginal_likelihood)
+        ));
+    }
+    md
+}
+
 fn summary_markdown(o: &RsmOutcome) -> String {
     let mut md = format!(
         "# {} — response surface ({} runs, {} were in the store)\n\nStudy id {}.{}\n\n| Factor | Label | Address | Low (−1) | High (+1) |\n|---|---|---|---:|---:|\n",
@@ -579,6 +688,9 @@ fn summary_markdown(o: &RsmOutcome) -> String {
             p_text(f.anova.lack_of_fit.as_ref().and_then(|r| r.p)),
             f4(f.adequate_precision)
         ));
+    }
+    if !o.gp.is_empty() {
+        md.push_str(&gp_markdown(o));
     }
     if let Some(s) = &o.optimum {
         md.push_str(&format!(

@@ -69,6 +69,9 @@ pub struct DesignStudy {
     pub targets: BTreeMap<String, Target>,
     /// The design over the factors.
     pub design: DesignSpec,
+    /// The surrogate fitted to each response (default: quadratic).
+    #[serde(default, skip_serializing_if = "FitChoice::is_quadratic")]
+    pub fit: FitChoice,
     /// Packing seeds per design point (≥ 1; ≥ 2 gives a pure error).
     pub replicates: u32,
     /// Seed of every random stream of the study (packing seeds, optimiser
@@ -178,6 +181,33 @@ pub enum DesignSpec {
         /// range).
         levels: BTreeMap<String, Vec<f64>>,
     },
+    /// A Latin hypercube of `points` points over the factor ranges (he2019's
+    /// design), each point uniform within its stratum, from the design
+    /// stream of the study's seed.
+    Lhs {
+        /// Points (≥ factors + 2, so a surface has residual freedom).
+        points: u32,
+    },
+}
+
+/// The surrogate `repose rsm` fits to each response ([`crate::surrogate`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FitChoice {
+    /// The full quadratic with its ANOVA (cai2024; the default).
+    #[default]
+    Quadratic,
+    /// A Gaussian process on the coded cube (its noise a fitted nugget): for
+    /// designs without the structure a quadratic's ANOVA needs, e.g. an LHS.
+    Gp,
+}
+
+impl FitChoice {
+    /// True for the default, which a study file need not write (so existing
+    /// study ids stay as they were).
+    pub fn is_quadratic(&self) -> bool {
+        *self == FitChoice::Quadratic
+    }
 }
 
 /// One-factor-at-a-time screening around the base experiment.
@@ -458,6 +488,19 @@ impl DesignStudy {
                         format!("design.levels.{name}"),
                         "(present)".into(),
                         "is not a factor of the study".into(),
+                    );
+                }
+            }
+            DesignSpec::Lhs { points } => {
+                let least = self.factors.len() + 2;
+                if (*points as usize) < least {
+                    fail(
+                        "design.points".into(),
+                        points.to_string(),
+                        format!(
+                            "must be >= {least} (the factors + 2) for {} factor(s)",
+                            self.factors.len()
+                        ),
                     );
                 }
             }

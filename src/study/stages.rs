@@ -11,7 +11,7 @@
 //! | --- | --- |
 //! | he2019 | design (LHS) → simulate → fit (GA-BP) → search (tolerance) → verify |
 //! | he2019, noise-aware | noise → design (LHS) → simulate (replicates) → fit (GP, GA-BP) → [adaptive] → search (probability) → verify |
-//! | response surface (cai2024) | [screen] → design (Box–Behnken or full factorial) → simulate → fit (quadratic) → search (desirability) → [verify] |
+//! | response surface (cai2024) | [screen] → design (Box–Behnken, full factorial or LHS) → simulate → fit (quadratic, or a GP with `fit: "gp"`) → search (desirability) → [verify] |
 //! | sensitivity (yan2015) | design (full factorial) → simulate → fit (power law) → sensitivity → [verify] |
 //!
 //! A design study runs as a response surface (`repose rsm`) or a
@@ -24,7 +24,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::spec::{is_design_study, parse_design_study, DesignSpec, DesignStudy};
+use super::spec::{is_design_study, parse_design_study, DesignSpec, DesignStudy, FitChoice};
 use crate::manifest::{parse_study, ContentId, DesignKind, ManifestError, Study};
 
 /// A study file, read and validated once.
@@ -298,6 +298,7 @@ impl StudySpec {
         let design = match study.design {
             DesignSpec::BoxBehnken { .. } => DesignOf::BoxBehnken,
             DesignSpec::FullFactorial { .. } => DesignOf::FullFactorial,
+            DesignSpec::Lhs { .. } => DesignOf::Lhs,
         };
         let mut stages = Vec::new();
         if let (Analysis::ResponseSurface, Some(s)) = (analysis, &study.screening) {
@@ -317,7 +318,10 @@ impl StudySpec {
         let method = match analysis {
             Analysis::ResponseSurface => {
                 stages.push(Stage::Fit {
-                    models: vec![FitKind::Quadratic],
+                    models: vec![match study.fit {
+                        FitChoice::Quadratic => FitKind::Quadratic,
+                        FitChoice::Gp => FitKind::Gp,
+                    }],
                 });
                 stages.push(Stage::Search {
                     search: SearchKind::Desirability,

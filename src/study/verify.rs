@@ -81,12 +81,9 @@ where
             .zip(&ranges)
             .map(|(x, r)| r.to_coded(*x))
             .collect();
-        rsm.analyses
-            .iter()
-            .find(|a| a.response == response)
-            .map(|a| a.fit.predict(&coded))
+        rsm.predict(response, &coded)
     };
-    let responses: Vec<String> = rsm.analyses.iter().map(|a| a.response.clone()).collect();
+    let responses = rsm.responses();
     let optimum = rsm
         .optimum_actual
         .as_ref()
