@@ -36,7 +36,7 @@ use crate::report::markdown::MarkdownTable;
 use crate::report::svg::scatter_matrix;
 use crate::report::table::{Cell, CsvWriter};
 use crate::search::acquisition::probability_in_band;
-use crate::search::band::{bandwidth, family, kept, resample, Criterion, Family};
+use crate::search::band::{bandwidth, cluster_column, family, kept, resample, Criterion, Family};
 use crate::search::meanshift::mean_shift;
 use crate::surrogate::Prediction;
 
@@ -136,13 +136,10 @@ pub fn gp_search(
             }
         })
         .collect();
-    let ranges: Vec<(f64, f64)> = study.parameters.values().map(|r| (r.min, r.max)).collect();
+    let ranges = super::ranges(study);
     let family = family(&names, &ranges, &kept_unit, samples);
 
-    let mut label = vec![None; unit.len()];
-    for (&i, &l) in kept.iter().zip(&clustering.labels) {
-        label[i] = Some(l + 1);
-    }
+    let label = cluster_column(unit.len(), &kept, &clustering.labels);
     let out = dir.stage(Stage::Search);
     dir.prepare_stage(study, Stage::Search)?;
     let lineage = dir
@@ -186,7 +183,6 @@ pub fn gp_search(
         cells.push(Cell::Number(c.probability));
         clusters.row(&cells);
     }
-    let ranges: Vec<(f64, f64)> = study.parameters.values().map(|r| (r.min, r.max)).collect();
     let svg = scatter_matrix(
         &names,
         &ranges,

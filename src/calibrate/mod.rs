@@ -211,6 +211,11 @@ pub fn parameter_names(study: &Study) -> Vec<String> {
     study.parameters.keys().cloned().collect()
 }
 
+/// The calibrated parameters' ranges (min, max), in the study's order.
+pub fn ranges(study: &Study) -> Vec<(f64, f64)> {
+    study.parameters.values().map(|r| (r.min, r.max)).collect()
+}
+
 /// Maps unit-cube points onto the study's parameter ranges.
 pub fn to_physical(study: &Study, unit: &[f64]) -> Vec<f64> {
     study

@@ -24,7 +24,7 @@ use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::scatter_matrix;
 use crate::report::table::{Cell, CsvWriter};
-use crate::search::band::{bandwidth, kept, resample, Criterion};
+use crate::search::band::{bandwidth, cluster_column, kept, resample, Criterion};
 use crate::search::meanshift::{mean_shift, Kernel};
 use crate::surrogate::ga_bp::Model;
 use crate::surrogate::Prediction;
@@ -141,10 +141,7 @@ pub fn search(
         clustering,
         clusters,
     } = find(study, &model, settings)?;
-    let mut label = vec![None; predicted.len()];
-    for (&i, &l) in kept.iter().zip(&clustering.labels) {
-        label[i] = Some(l + 1);
-    }
+    let label = cluster_column(predicted.len(), &kept, &clustering.labels);
 
     let out_dir = dir.stage(Stage::Search);
     dir.prepare_stage(study, Stage::Search)?;
@@ -157,7 +154,7 @@ pub fn search(
         )
         .with_input(dir.input("model", &model_file)?);
     let markdown = markdown(study, settings, &names, &clusters, kept.len(), bandwidth);
-    let ranges: Vec<(f64, f64)> = study.parameters.values().map(|r| (r.min, r.max)).collect();
+    let ranges = super::ranges(study);
     let svg = scatter_matrix(
         &names,
         &ranges,

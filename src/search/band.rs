@@ -93,6 +93,17 @@ pub fn kept(criterion: &Criterion, scores: &[f64]) -> Vec<usize> {
         .collect()
 }
 
+/// The 1-based cluster of each of `points` resampled points: `Some(label +
+/// 1)` for the kept point `kept[j]` in cluster `labels[j]`, `None` for the
+/// points not kept (the `cluster` column of points.csv).
+pub fn cluster_column(points: usize, kept: &[usize], labels: &[usize]) -> Vec<Option<usize>> {
+    let mut column = vec![None; points];
+    for (&i, &l) in kept.iter().zip(labels) {
+        column[i] = Some(l + 1);
+    }
+    column
+}
+
 /// The mean-shift bandwidth: `given`, or estimated from the kept points at
 /// `quantile` of their pairwise distances (0 when they are all one point).
 pub fn bandwidth(kept_unit: &[Vec<f64>], given: Option<f64>, quantile: f64) -> f64 {

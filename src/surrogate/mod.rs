@@ -155,10 +155,8 @@ mod tests {
         30.0 * x[0].powf(0.3) * x[1].powf(-0.2)
     }
 
-    /// Names, ranges, inputs and responses of a 5 x 5 grid.
-    pub(super) type Grid = (Vec<String>, Vec<(f64, f64)>, Vec<Vec<f64>>, Vec<f64>);
-
-    pub(super) fn grid() -> Grid {
+    /// `f` called with the [`truth`] on a 5 x 5 grid of [0.5, 2]² as a table.
+    pub(super) fn with_grid<R>(f: impl FnOnce(&Table) -> R) -> R {
         let names = vec!["a".to_string(), "b".to_string()];
         let ranges = vec![(0.5, 2.0), (0.5, 2.0)];
         let levels = [0.5, 0.875, 1.25, 1.625, 2.0];
@@ -166,8 +164,14 @@ mod tests {
             .iter()
             .flat_map(|&a| levels.iter().map(move |&b| vec![a, b]))
             .collect();
-        let y = x.iter().map(|r| truth(r)).collect();
-        (names, ranges, x, y)
+        let y: Vec<f64> = x.iter().map(|r| truth(r)).collect();
+        f(&Table {
+            names: &names,
+            ranges: &ranges,
+            x: &x,
+            y: &y,
+            noise_var: None,
+        })
     }
 
     /// Every surrogate, through the trait alone: fits the grid, predicts
@@ -175,14 +179,11 @@ mod tests {
     /// a finite non-negative sd where it has one, and refuses a malformed
     /// table.
     fn exercise<S: Surrogate>(settings: &S::Settings, tolerance: f64) {
-        let (names, ranges, x, y) = grid();
-        let table = Table {
-            names: &names,
-            ranges: &ranges,
-            x: &x,
-            y: &y,
-            noise_var: None,
-        };
+        with_grid(|table| check::<S>(table, settings, tolerance));
+    }
+
+    fn check<S: Surrogate>(table: &Table, settings: &S::Settings, tolerance: f64) {
+        let table = *table;
         let model = S::fit(&table, settings).unwrap_or_else(|e| panic!("{}: {e}", S::KIND));
         let again = S::fit(&table, settings).unwrap();
         for probe in [[0.7, 1.1], [1.4, 0.6], [1.9, 1.8], [1.0, 1.0]] {
@@ -200,7 +201,7 @@ mod tests {
             }
         }
         assert!(model.parameter_count() >= 2, "{}", S::KIND);
-        let short = &y[..y.len() - 1];
+        let short = &table.y[..table.y.len() - 1];
         let bad = Table { y: short, ..table };
         assert!(matches!(
             S::fit(&bad, settings),

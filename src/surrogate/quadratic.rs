@@ -60,7 +60,7 @@ impl Surrogate for Quadratic {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::surrogate::tests::grid;
+    use crate::surrogate::tests::with_grid;
 
     #[test]
     fn predicts_the_least_squares_quadratic_in_physical_units() {
@@ -74,15 +74,7 @@ mod tests {
             ([1.9, 1.8], 32.159648986130655),
             ([1.0, 1.0], 29.994216336993336),
         ];
-        let (names, ranges, x, y) = grid();
-        let table = Table {
-            names: &names,
-            ranges: &ranges,
-            x: &x,
-            y: &y,
-            noise_var: None,
-        };
-        let q = Quadratic::fit(&table, &()).unwrap();
+        let q = with_grid(|table| Quadratic::fit(table, &())).unwrap();
         for (probe, want) in expected {
             let got = q.predict(&probe).mean;
             assert!(
