@@ -350,6 +350,38 @@ pub fn plan(
     Ok(())
 }
 
+/// The command's error for a run that could not complete.
+fn run_error<E: std::error::Error + 'static>(
+    error: RunError<E>,
+    manifest: &Path,
+    id: &ContentId,
+    error_path: &Path,
+) -> CommandError {
+    let failed = |message: String| CommandError::RunFailed {
+        id: id.clone(),
+        message,
+        error_path: error_path.to_path_buf(),
+    };
+    match error {
+        RunError::Invalid(errors) => CommandError::Manifest {
+            path: manifest.to_path_buf(),
+            error: ManifestError::Invalid(errors),
+        },
+        RunError::Store(e) => e.into(),
+        RunError::Runner {
+            error,
+            record_failure,
+        } => {
+            let mut message = crate::errors::chain(&error);
+            if let Some(f) = record_failure {
+                message.push_str(&format!(" (and error.json could not be written: {f})"));
+            }
+            failed(message)
+        }
+        RunError::BadResult(message) => failed(message),
+    }
+}
+
 /// `repose run MANIFEST`: validates the experiment, refuses it when it is not
 /// complete in the store and its plan exceeds `limits`, and runs it through
 /// the store cache (a complete run with the same id is reused). The summary
@@ -374,37 +406,9 @@ pub fn run(
             })?;
     }
     let dir = store.run_dir(&id);
-    let (result, outcome) = match store.run_cached(&experiment, run_logged) {
-        Ok(done) => done,
-        Err(RunError::Invalid(errors)) => {
-            return Err(CommandError::Manifest {
-                path: manifest.to_path_buf(),
-                error: ManifestError::Invalid(errors),
-            })
-        }
-        Err(RunError::Store(e)) => return Err(e.into()),
-        Err(RunError::Runner {
-            error,
-            record_failure,
-        }) => {
-            let mut message = crate::errors::chain(&error);
-            if let Some(f) = record_failure {
-                message.push_str(&format!(" (and error.json could not be written: {f})"));
-            }
-            return Err(CommandError::RunFailed {
-                id,
-                message,
-                error_path: dir.error_path(),
-            });
-        }
-        Err(RunError::BadResult(message)) => {
-            return Err(CommandError::RunFailed {
-                id,
-                message,
-                error_path: dir.error_path(),
-            })
-        }
-    };
+    let (result, outcome) = store
+        .run_cached(&experiment, run_logged)
+        .map_err(|e| run_error(e, manifest, &id, &dir.error_path()))?;
     let how = match outcome {
         CacheOutcome::Hit => "cache hit",
         CacheOutcome::Computed => "computed",
@@ -835,16 +839,7 @@ fn calibrate_noise_aware(
     let store = open_store(store_root)?;
     let pool = exec.in_study(dir.path());
     set_quiet(true);
-    let options = NoiseAwareOptions {
-        candidates,
-        adaptive: flags.adaptive,
-        sample: SampleSettings::default(),
-        train: TrainOptions {
-            settings: TrainSettings::with_seed(study.design.seed),
-            train_fraction: DEFAULT_TRAIN_FRACTION,
-        },
-        search: SearchSettings::with_seed(study.design.seed),
-    };
+    let options = NoiseAwareOptions::defaults(&study, candidates, flags.adaptive);
     let mut lines: Vec<String> = Vec::new();
     let mut err = io::stderr();
     let outcome = {
@@ -864,25 +859,20 @@ fn calibrate_noise_aware(
         writeln!(out, "{l}")?;
     }
     if flags.json {
-        writeln!(
-            out,
-            "{}",
-            serde_json::to_string_pretty(&outcome).expect("outcome serialises")
-        )?;
-    } else {
-        writeln!(
-            out,
-            "\n{}: {} noise + {} design + {} adaptive + {} verification runs; calibrated: {}, verified in every scene: {}\n  outcome: {}",
-            outcome.study,
-            outcome.runs.noise,
-            outcome.runs.design,
-            outcome.runs.adaptive,
-            outcome.runs.verification,
-            if outcome.calibrated { "yes" } else { "no" },
-            if outcome.verified { "yes" } else { "no" },
-            dir.path().join("outcome.json").display()
-        )?;
+        return print_json(&outcome, out);
     }
+    writeln!(
+        out,
+        "\n{}: {} noise + {} design + {} adaptive + {} verification runs; calibrated: {}, verified in every scene: {}\n  outcome: {}",
+        outcome.study,
+        outcome.runs.noise,
+        outcome.runs.design,
+        outcome.runs.adaptive,
+        outcome.runs.verification,
+        if outcome.calibrated { "yes" } else { "no" },
+        if outcome.verified { "yes" } else { "no" },
+        dir.path().join("outcome.json").display()
+    )?;
     Ok(())
 }
 

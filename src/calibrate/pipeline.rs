@@ -52,6 +52,24 @@ pub struct NoiseAwareOptions {
     pub search: SearchSettings,
 }
 
+impl NoiseAwareOptions {
+    /// Every stage's defaults, seeded by the study's design seed: the sample
+    /// stage's settings, the network's sweep with he2019's two-thirds split,
+    /// the search's resampling and clustering.
+    pub fn defaults(study: &Study, candidates: usize, adaptive: bool) -> NoiseAwareOptions {
+        NoiseAwareOptions {
+            candidates,
+            adaptive,
+            sample: SampleSettings::default(),
+            train: TrainOptions {
+                settings: crate::surrogate::ga_bp::TrainSettings::with_seed(study.design.seed),
+                train_fraction: crate::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION,
+            },
+            search: SearchSettings::with_seed(study.design.seed),
+        }
+    }
+}
+
 /// DEM runs per stage.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct RunCounts {
