@@ -1069,7 +1069,7 @@ pub fn train(
     options.settings.seed = seed.unwrap_or(study.design.seed);
     let outcome = train_study(&dir, &study, &options)?;
     write_sweep(&outcome, out)?;
-    if method(&study) == Method::He2019NoiseAware {
+    if Method::of_calibration(&study) == Method::He2019NoiseAware {
         let model = load_model(&dir.stage(Stage::Train).join("model.json"))?;
         let net = |x: &[f64]| model.predict(x);
         let gp = train_gp(
@@ -1108,7 +1108,7 @@ pub fn search(
     let (study, dir) = open_study(store_root, study_path)?;
     let mut settings = *settings;
     settings.seed = seed.unwrap_or(study.design.seed);
-    if method(&study) == Method::He2019NoiseAware {
+    if Method::of_calibration(&study) == Method::He2019NoiseAware {
         let found = gp_search(&dir, &study, &settings)?;
         write!(out, "{}", found.markdown)?;
         return Ok(());
@@ -1144,7 +1144,7 @@ pub fn verify(
     let store = open_store(store_root)?;
     let settings = exec.in_study(dir.path());
     set_quiet(true);
-    if method(&study) == Method::He2019NoiseAware {
+    if Method::of_calibration(&study) == Method::He2019NoiseAware {
         let v = verify_seeds(&dir, &study, &store, &settings, candidates, run_logged)?;
         write!(out, "{}", v.markdown)?;
         return Ok(());
@@ -1193,11 +1193,6 @@ pub fn stages(
     }
     write!(out, "{}", spec.describe())?;
     Ok(())
-}
-
-/// The driver of a calibration study: the one place the method is picked.
-fn method(study: &Study) -> Method {
-    StudySpec::calibration(study, false).method
 }
 
 /// `repose status STUDY`: where every run the study handed to Slurm stands
@@ -1421,7 +1416,7 @@ pub fn calibrate(
         }
     };
     let study = read_study(&path)?;
-    if method(&study) == Method::He2019NoiseAware {
+    if Method::of_calibration(&study) == Method::He2019NoiseAware {
         let candidates = candidates.unwrap_or(1);
         return calibrate_noise_aware(store_root, &path, exec, candidates, flags, out);
     }
@@ -1431,14 +1426,13 @@ pub fn calibrate(
             path.display()
         )));
     }
+    let candidates = candidates.unwrap_or(3);
     let spec = StudySpec::calibration(&study, false);
     let total = spec.stages.len();
     for (i, stage) in spec.stages.iter().enumerate() {
         let how = match stage {
             ClassicStage::Simulate { .. } => format!(" ({})", exec_label(exec)),
-            ClassicStage::Verify { .. } => {
-                format!(" ({} candidate(s))", candidates.unwrap_or(3))
-            }
+            ClassicStage::Verify { .. } => format!(" ({candidates} candidate(s))"),
             _ => String::new(),
         };
         writeln!(out, "\n== {}/{total} {}{how}", i + 1, stage.name())?;
@@ -1449,14 +1443,14 @@ pub fn calibrate(
 
 /// One stage of he2019's classic stage list, run by its subcommand with the
 /// stage's defaults (the design is sampled, failed batch runs are left out of
-/// training, `candidates` clusters are verified, default 3).
+/// training, the `candidates` largest clusters are verified).
 fn run_classic_stage(
     store_root: &Path,
     path: &Path,
     study: &Study,
     stage: &ClassicStage,
     exec: &Executor,
-    candidates: Option<usize>,
+    candidates: usize,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let seed = study.design.seed;
@@ -1483,7 +1477,7 @@ fn run_classic_stage(
             None,
             out,
         ),
-        ClassicStage::Verify { .. } => verify(store_root, path, exec, candidates.unwrap_or(3), out),
+        ClassicStage::Verify { .. } => verify(store_root, path, exec, candidates, out),
         other => Err(CommandError::Usage(format!(
             "stage `{}` is not part of he2019's classic method",
             other.name()

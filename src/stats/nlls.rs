@@ -5,9 +5,10 @@
 //! # Iteration
 //!
 //! The one Levenberg–Marquardt loop of [`super::levenberg`] with
-//! Marquardt damping and these rules ([`NllsSettings::lm`]). At the current p, with J the n × p Jacobian ∂f(p; xᵢ)/∂p_j and r = y − f,
-//! the trial step δ solves (JᵀJ + λ·diag(JᵀJ)) δ = Jᵀr (Marquardt's scaling,
-//! so the damping is invariant to the units of each parameter) by Cholesky
+//! Marquardt damping and these rules ([`NllsSettings::lm`]). At the current
+//! p, with J the n × p Jacobian ∂f(p; xᵢ)/∂p_j and r = y − f, the trial
+//! step δ solves (JᵀJ + λ·diag(JᵀJ)) δ = Jᵀr (Marquardt's scaling, so the
+//! damping is invariant to the units of each parameter) by Cholesky
 //! factorisation. A trial point with a smaller SSE is accepted and λ divided
 //! by 10 (towards Gauss–Newton); otherwise (or when the damped matrix is not
 //! positive definite, or the model is not finite at the trial point) it is

@@ -157,11 +157,11 @@ where
         .iter()
         .map(|(i, m)| (experiments[*i].seeds.packing_seed, m.clone()))
         .collect();
-    let results: Vec<Option<RunResult>> = experiments
-        .iter()
-        .map(|e| store.load_result(&e.id()))
-        .collect::<Result<_, _>>()?;
     let ids: Vec<ContentId> = experiments.iter().map(Experiment::id).collect();
+    let results: Vec<Option<RunResult>> = ids
+        .iter()
+        .map(|id| store.load_result(id))
+        .collect::<Result<_, _>>()?;
     let cost = run_cost(store, exec, &ids);
     let kind = base.scene.kind();
     let responses = catalogue(kind)
@@ -181,7 +181,8 @@ where
         scene: kind.to_string(),
         runs: experiments
             .iter()
-            .map(|e| (e.seeds.packing_seed, e.id()))
+            .zip(ids)
+            .map(|(e, id)| (e.seeds.packing_seed, id))
             .collect(),
         failures,
         threads_per_run: cost.threads_per_run,

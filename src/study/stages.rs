@@ -80,6 +80,18 @@ pub enum Method {
     Tradeoff,
 }
 
+impl Method {
+    /// The driver of a calibration study: noise-aware when it has a
+    /// `noise_aware` block.
+    pub fn of_calibration(study: &Study) -> Method {
+        if study.noise_aware.is_some() {
+            Method::He2019NoiseAware
+        } else {
+            Method::He2019
+        }
+    }
+}
+
 /// The design of experiments.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -234,29 +246,23 @@ impl StudySpec {
             DesignKind::BoxBehnken => DesignOf::BoxBehnken,
         };
         let factors = study.parameters.len();
-        let scenes: Vec<String> = std::iter::once(&study.calibration)
-            .chain(&study.verification)
-            .map(|t| t.name.clone())
-            .collect();
-        let calibration_scene = vec![scenes[0].clone()];
-        let (method, stages) = match &study.noise_aware {
-            None => (
-                Method::He2019,
-                vec![
-                    Stage::Design { design, factors },
-                    Stage::Simulate {
-                        scenes: calibration_scene,
-                        replicates: 1,
-                    },
-                    Stage::Fit {
-                        models: vec![FitKind::GaBp],
-                    },
-                    Stage::Search {
-                        search: SearchKind::Tolerance,
-                    },
-                    Stage::Verify { seeds: 1 },
-                ],
-            ),
+        let calibration_scene = vec![study.calibration.name.clone()];
+        let method = Method::of_calibration(study);
+        let stages = match &study.noise_aware {
+            None => vec![
+                Stage::Design { design, factors },
+                Stage::Simulate {
+                    scenes: calibration_scene,
+                    replicates: 1,
+                },
+                Stage::Fit {
+                    models: vec![FitKind::GaBp],
+                },
+                Stage::Search {
+                    search: SearchKind::Tolerance,
+                },
+                Stage::Verify { seeds: 1 },
+            ],
             Some(n) => {
                 let mut stages = vec![
                     Stage::Noise {
@@ -282,7 +288,7 @@ impl StudySpec {
                 stages.push(Stage::Verify {
                     seeds: n.verification_seeds,
                 });
-                (Method::He2019NoiseAware, stages)
+                stages
             }
         };
         StudySpec {

@@ -17,16 +17,6 @@ pub struct Gp {
     pub ranges: Vec<(f64, f64)>,
 }
 
-impl Gp {
-    /// `x` (physical units) on the unit cube of the ranges.
-    pub fn unit(&self, x: &[f64]) -> Vec<f64> {
-        x.iter()
-            .zip(&self.ranges)
-            .map(|(v, r)| to_unit(*v, *r))
-            .collect()
-    }
-}
-
 impl Surrogate for Gp {
     type Settings = GpSettings;
     const KIND: &'static str = "gaussian_process";
@@ -34,16 +24,7 @@ impl Surrogate for Gp {
     fn fit(table: &Table, settings: &GpSettings) -> Result<Self, SurrogateError> {
         table.check()?;
         let ranges = table.ranges.to_vec();
-        let unit: Vec<Vec<f64>> = table
-            .x
-            .iter()
-            .map(|r| {
-                r.iter()
-                    .zip(&ranges)
-                    .map(|(v, g)| to_unit(*v, *g))
-                    .collect()
-            })
-            .collect();
+        let unit: Vec<Vec<f64>> = table.x.iter().map(|r| to_unit(r, &ranges)).collect();
         let zeros = vec![0.0; table.y.len()];
         let noise = table.noise_var.unwrap_or(&zeros);
         let process = GaussianProcess::fit(&unit, table.y, noise, settings).map_err(|e| {
@@ -56,7 +37,7 @@ impl Surrogate for Gp {
     }
 
     fn predict(&self, x: &[f64]) -> Prediction {
-        let p = self.process.predict(&self.unit(x));
+        let p = self.process.predict(&to_unit(x, &self.ranges));
         Prediction {
             mean: p.mean,
             sd: Some(p.sd),

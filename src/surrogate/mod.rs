@@ -139,9 +139,12 @@ pub trait Surrogate: Sized {
     fn parameter_count(&self) -> usize;
 }
 
-/// Maps `x` from `range` onto [0, 1].
-pub(crate) fn to_unit(x: f64, (lo, hi): (f64, f64)) -> f64 {
-    (x - lo) / (hi - lo)
+/// Maps the row `x` from its `ranges` onto the unit cube.
+pub(crate) fn to_unit(x: &[f64], ranges: &[(f64, f64)]) -> Vec<f64> {
+    x.iter()
+        .zip(ranges)
+        .map(|(v, (lo, hi))| (v - lo) / (hi - lo))
+        .collect()
 }
 
 #[cfg(test)]

@@ -5,6 +5,7 @@
 //! optimum, so none is given here.
 
 use super::{Prediction, Surrogate, SurrogateError, Table};
+use crate::doe::Range;
 use crate::stats::rsm::{fit_quadratic, RsmFit};
 
 /// A fitted quadratic response surface with the ranges that code its inputs.
@@ -12,13 +13,13 @@ use crate::stats::rsm::{fit_quadratic, RsmFit};
 pub struct Quadratic {
     /// The fit (coded units) with its ANOVA.
     pub fit: RsmFit,
-    /// The input ranges, physical units.
-    pub ranges: Vec<(f64, f64)>,
+    /// The input ranges, physical units (coded −1 and +1).
+    pub ranges: Vec<Range>,
 }
 
-/// `x` in coded units of `(lo, hi)`.
-pub fn coded(x: f64, (lo, hi): (f64, f64)) -> f64 {
-    2.0 * (x - lo) / (hi - lo) - 1.0
+/// `x` (physical units) in the coded units of `ranges`.
+fn coded(ranges: &[Range], x: &[f64]) -> Vec<f64> {
+    x.iter().zip(ranges).map(|(v, r)| r.to_coded(*v)).collect()
 }
 
 impl Surrogate for Quadratic {
@@ -27,12 +28,13 @@ impl Surrogate for Quadratic {
 
     fn fit(table: &Table, _: &()) -> Result<Self, SurrogateError> {
         table.check()?;
-        let ranges = table.ranges.to_vec();
-        let x: Vec<Vec<f64>> = table
-            .x
+        // Table::check has refused every range that Range::new would.
+        let ranges: Vec<Range> = table
+            .ranges
             .iter()
-            .map(|r| r.iter().zip(&ranges).map(|(v, g)| coded(*v, *g)).collect())
+            .map(|&(low, high)| Range { low, high })
             .collect();
+        let x: Vec<Vec<f64>> = table.x.iter().map(|r| coded(&ranges, r)).collect();
         let fit = fit_quadratic(&x, table.y, table.names).map_err(|e| SurrogateError::Fit {
             kind: Self::KIND,
             message: e.to_string(),
@@ -41,13 +43,8 @@ impl Surrogate for Quadratic {
     }
 
     fn predict(&self, x: &[f64]) -> Prediction {
-        let c: Vec<f64> = x
-            .iter()
-            .zip(&self.ranges)
-            .map(|(v, r)| coded(*v, *r))
-            .collect();
         Prediction {
-            mean: self.fit.predict(&c),
+            mean: self.fit.predict(&coded(&self.ranges, x)),
             sd: None,
         }
     }

@@ -5,7 +5,7 @@
 //! `mu_inc` and retry; stop after `epochs` accepted steps, when the largest
 //! gradient component falls below `min_gradient`, or when μ exceeds `mu_max`.
 //! trainlm's defaults are μ₀ = 0.001, μ_dec = 0.1, μ_inc = 10, μ_max = 1e10,
-//! min_grad = 1e-7 ([`LmSettings::default`]); the 200-step budget is ours and
+//! min_grad = 1e-7 ([`TrainlmSettings::default`]); the 200-step budget is ours and
 //! doubles as early stopping (see [`super`] for what it does on
 //! he2019's Table A1).
 //!
@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::objective::Objective;
-use crate::stats::levenberg::{minimise, Damping, LeastSquares, LmSettings, LmStop, Stopping};
+use crate::stats::levenberg::{minimise, Damping, LeastSquares, LmOutcome, LmSettings, Stopping};
 
 /// trainlm's settings of the refinement, as a study records them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -84,32 +84,12 @@ impl LeastSquares for Objective<'_> {
     }
 }
 
-/// What [`refine`] did.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LmOutcome {
-    /// The refined parameters.
-    pub theta: Vec<f64>,
-    /// Accepted steps.
-    pub epochs: usize,
-    /// Why it stopped.
-    pub stop: LmStop,
-    /// Sum of squares (with penalty) before and after.
-    pub initial_sum_of_squares: f64,
-    /// See `initial_sum_of_squares`.
-    pub final_sum_of_squares: f64,
-}
-
 /// Refines `theta` by Levenberg–Marquardt on `objective`. Never returns worse
 /// parameters than it was given.
+/// The outcome's objective is the sum of squares with the penalty, and its
+/// accepted steps are trainlm's epochs.
 pub fn refine(objective: &Objective, theta: &[f64], settings: &TrainlmSettings) -> LmOutcome {
-    let out = minimise(objective, theta, &settings.lm());
-    LmOutcome {
-        theta: out.theta,
-        epochs: out.accepted,
-        stop: out.stop,
-        initial_sum_of_squares: out.initial_objective,
-        final_sum_of_squares: out.objective,
-    }
+    minimise(objective, theta, &settings.lm())
 }
 
 #[cfg(test)]
@@ -136,8 +116,8 @@ mod tests {
         };
         let start: Vec<f64> = truth.iter().map(|w| w * 0.8 + 0.1).collect();
         let out = refine(&objective, &start, &TrainlmSettings::default());
-        assert!(out.initial_sum_of_squares > 1e-2, "{out:?}");
-        assert!(out.final_sum_of_squares < 1e-16, "{out:?}");
+        assert!(out.initial_objective > 1e-2, "{out:?}");
+        assert!(out.objective < 1e-16, "{out:?}");
     }
 
     #[test]
@@ -156,10 +136,7 @@ mod tests {
         };
         let start = [0.3, 0.1, 0.7, -0.2];
         let out = refine(&objective, &start, &TrainlmSettings::default());
-        assert!(out.final_sum_of_squares <= out.initial_sum_of_squares);
-        assert_eq!(
-            out.final_sum_of_squares,
-            objective.sum_of_squares(&out.theta)
-        );
+        assert!(out.objective <= out.initial_objective);
+        assert_eq!(out.objective, objective.sum_of_squares(&out.theta));
     }
 }

@@ -451,8 +451,8 @@ impl<'a> Prepared<'a> {
             train_rmse_deg,
             validation_rmse_deg,
             ga_objective: ga.best_fitness,
-            lm_objective: lm.final_sum_of_squares / objective.len() as f64,
-            lm_epochs: lm.epochs,
+            lm_objective: lm.objective / objective.len() as f64,
+            lm_epochs: lm.accepted,
             lm_stop: lm.stop,
         };
         (row, model.parameters)
