@@ -5,6 +5,8 @@
 //! - [`summary`]: mean and its Student-t 95 % confidence interval, the Welch
 //!   interval of a difference of means, t quantiles and the p-values of t and
 //!   F statistics (exact, from `statrs`, not a table).
+//! - [`equivalence`]: the two one-sided t-tests of a mean against a band,
+//!   the exact power of that test and the replicates that would decide it.
 //! - [`metrics`]: fit metrics of paired values (R², mean squared error).
 //! - [`regression`]: ordinary least squares by Householder QR, with standard
 //!   errors, t statistics, two-sided p-values and leverages; a column that is
@@ -35,6 +37,7 @@
 //! observations for the parameters and an aliased design are each a
 //! [`StatsError`] rather than a NaN in the output.
 
+pub mod equivalence;
 pub mod gp;
 pub mod levenberg;
 pub mod metrics;
