@@ -1296,6 +1296,23 @@ pub fn rsm(
     Ok(())
 }
 
+/// `repose verdict --table FILE`: the acceptance rule on any CSV table of
+/// replicates.
+pub fn verdict_table(
+    path: &Path,
+    spec: &study::verdict_table::VerdictSpec,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let verdicts = study::verdict_table::judge_table(path, spec)?;
+    if json {
+        print_json(&verdicts, out)
+    } else {
+        write!(out, "{}", study::verdict_table::markdown(&verdicts))?;
+        Ok(())
+    }
+}
+
 /// `repose rsm --table FILE`: the response-surface analysis of any CSV table.
 pub fn rsm_table(
     path: &Path,

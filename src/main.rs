@@ -122,6 +122,10 @@ enum Command {
     /// optimum and its verification. With --table, the same analysis of any
     /// CSV table.
     Rsm(RsmArgs),
+    /// The acceptance rule on a CSV table of replicates: per group n, mean,
+    /// sd, 95 % interval, both one-sided t-tests, the TOST p-value, the
+    /// verdict (pass, fail, inconclusive) and the seeds that would decide.
+    Verdict(VerdictArgs),
     /// yan2015's three levels of parameter sensitivity on a design study: the
     /// design's runs, power laws by nonlinear least squares with confidence
     /// intervals (level 1), PCA of the contact-law sensitivity matrices with
@@ -520,6 +524,30 @@ struct SearchArgs {
     quantile: f64,
 }
 
+/// Options of `repose verdict`.
+#[derive(clap::Args)]
+struct VerdictArgs {
+    /// The CSV table of replicates.
+    #[arg(long)]
+    table: PathBuf,
+    /// The column of replicate values (an empty cell is a missing replicate).
+    #[arg(long)]
+    value: String,
+    /// A column whose values name a group (repeatable; none: one group).
+    #[arg(long)]
+    group: Vec<String>,
+    /// The measured target, units of the values.
+    #[arg(long, allow_hyphen_values = true)]
+    target: f64,
+    /// Accepted relative deviation of the mean, in (0, 1): the band is
+    /// target x (1 -/+ tolerance).
+    #[arg(long)]
+    tolerance: f64,
+    /// Print the verdicts as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
 /// Options of `repose rsm`.
 #[derive(clap::Args)]
 struct RsmArgs {
@@ -829,6 +857,17 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             &study,
             &exec.executor(default_jobs(jobs), limits)?,
             json,
+            &mut out,
+        ),
+        Command::Verdict(args) => commands::verdict_table(
+            &args.table,
+            &repose::study::verdict_table::VerdictSpec {
+                value: args.value,
+                group: args.group,
+                target: args.target,
+                tolerance: args.tolerance,
+            },
+            args.json,
             &mut out,
         ),
         Command::Rsm(args) => match (&args.table, &args.study) {

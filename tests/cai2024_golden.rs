@@ -34,7 +34,9 @@ const TOL: f64 = 1e-9;
 
 /// Columns compared exactly: ids, seeds, indices, counts, term names,
 /// statuses and verdicts.
-const EXACT: [&str; 14] = [
+const EXACT: [&str; 15] = [
+    "verdict",
+    "seeds_to_decide",
     "point",
     "replicate",
     "packing_seed",
@@ -46,7 +48,6 @@ const EXACT: [&str; 14] = [
     "rank",
     "response",
     "n",
-    "pass",
     "factor",
     "significant",
 ];

@@ -77,7 +77,9 @@ fn chain(store: &Path, jobs: usize) -> StudyDir {
 
 /// Columns compared exactly: ids, indices, counts, hidden sizes, cluster
 /// groups and sizes, scene names, statuses and verdicts.
-const EXACT: [&str; 12] = [
+const EXACT: [&str; 13] = [
+    "verdict",
+    "seeds_to_decide",
     "index",
     "experiment_id",
     "status",
@@ -88,7 +90,6 @@ const EXACT: [&str; 12] = [
     "group",
     "size",
     "scene",
-    "pass",
     "failure",
 ];
 

@@ -89,7 +89,25 @@ fn funnel_and_drum_in_a_box_behnken_run_end_to_end_through_the_shared_stages() {
     assert_eq!(scenes, ["drum_angle_deg", "funnel_angle_deg"]);
     for r in 0..v.rows.len() {
         assert_eq!(cell(&v, r, "n"), "2");
-        assert!(matches!(cell(&v, r, "pass"), "true" | "false"));
+        assert!(matches!(
+            cell(&v, r, "verdict"),
+            "pass" | "fail" | "inconclusive"
+        ));
+    }
+    // The verdicts are the one rule's: `repose verdict --table` on the
+    // verification's own replicates gives the same verdict and TOST p.
+    let replicates = dir.join("verify/responses.csv");
+    for (response, target) in [("drum_angle_deg", 47.1), ("funnel_angle_deg", 47.801)] {
+        let from_table = common::table_verdicts(&replicates, response, &["point"], target, 0.05);
+        let rows: Vec<usize> = (0..v.rows.len())
+            .filter(|&r| cell(&v, r, "response") == response)
+            .collect();
+        assert_eq!(from_table.len(), rows.len(), "{response}");
+        for ((_, verdict, p), r) in from_table.iter().zip(rows) {
+            assert_eq!(verdict, cell(&v, r, "verdict"), "{response}");
+            let stage_p: Option<f64> = cell(&v, r, "tost_p").parse().ok();
+            assert_eq!(*p, stage_p, "{response}");
+        }
     }
     assert!(printed.contains("verification"), "{printed}");
 }

@@ -36,7 +36,9 @@ const GOLDEN_DIR: &str = "golden/yan2015_smoke";
 const TOL: f64 = 1e-9;
 
 /// Columns compared exactly: ids, seeds, indices, counts, names, statuses.
-const EXACT: [&str; 12] = [
+const EXACT: [&str; 14] = [
+    "verdict",
+    "seeds_to_decide",
     "point",
     "replicate",
     "packing_seed",

@@ -11,9 +11,9 @@
 //! verification would; the next best at least [`MIN_SEPARATION`] (unit cube)
 //! from every point taken, up to `batch` points in all, explore with
 //! `replicates` seeds each, so one round does not spend its runs on one
-//! spot. The stage stops when a candidate has at least
-//! [`MIN_MEASURED`] measured seeds whose mean lies in the band (the
-//! verification's rule), or when the next round would pass `max_runs`.
+//! spot. The stage stops when the acceptance rule
+//! ([`crate::study::acceptance`], verification's rule) passes a candidate
+//! in the calibration scene, or when the next round would pass `max_runs`.
 //!
 //! A design point or the noise floor's centre whose mean happens to fall in
 //! the band does not end the stage: a 2-seed mean is one draw of a noisy
@@ -38,7 +38,7 @@ use crate::manifest::{Experiment, Study};
 use crate::search::acquisition::probability_in_band;
 use crate::store::{RunDir, RunResult, Store};
 use crate::streams::{rng, Stream};
-use crate::study::acceptance::{passes, MIN_MEASURED};
+use crate::study::acceptance::{judge, Verdict, RULE};
 
 /// `sample_index` of the first adaptive point.
 pub const ADAPTIVE_INDEX: u64 = 2_000_000_000;
@@ -88,9 +88,9 @@ pub struct Hit {
     pub mean_deg: f64,
 }
 
-/// The first round candidate among `points` with at least [`MIN_MEASURED`]
-/// measured seeds whose mean lies in `band` (degrees): the acceptance rule
-/// of verification, applied to the calibration scene.
+/// The first round candidate among `points` that the acceptance rule passes
+/// against `band` (degrees): the rule of verification, applied to the
+/// calibration scene.
 fn passing(points: &[Replicated], band: (f64, f64)) -> Option<Hit> {
     points
         .iter()
@@ -98,7 +98,7 @@ fn passing(points: &[Replicated], band: (f64, f64)) -> Option<Hit> {
         .find_map(|p| {
             let v = p.values();
             let mean = p.mean()?;
-            passes(v.len(), Some(mean), band).then(|| Hit {
+            (judge(&v, band).verdict == Verdict::Pass).then(|| Hit {
                 index: p.index,
                 point: p.point.clone(),
                 seeds: p.runs.len(),
@@ -243,7 +243,7 @@ where
             json!({ "batch": spec.adaptive.batch, "max_runs": budget, "pool": POOL,
                     "min_separation": MIN_SEPARATION, "seed": seed,
                     "candidate_seeds": seeds, "explore_seeds": explore,
-                    "min_measured": MIN_MEASURED,
+                    "rule": RULE,
                     "score": "probability of the target band under the GP" }),
         );
         for r in points.iter().flat_map(|p| &p.runs) {
@@ -252,6 +252,10 @@ where
                 lineage = lineage.with_input(dir.input("result", &file)?);
             }
         }
-        write_output(&path, replicates_csv(study, &points).as_bytes(), &lineage)?;
+        write_output(
+            &path,
+            replicates_csv(study, &[(&study.calibration.name, &points)]).as_bytes(),
+            &lineage,
+        )?;
     }
 }

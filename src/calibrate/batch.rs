@@ -361,7 +361,7 @@ where
     super::create_dir(&dir.stage(Stage::Batch))?;
     write_output(
         &replicates_path(dir),
-        replicates_csv(study, &runs).as_bytes(),
+        replicates_csv(study, &[(&study.calibration.name, &runs)]).as_bytes(),
         &lineage,
     )?;
     let table = angles_path(dir);

@@ -100,7 +100,7 @@ use std::path::{Path, PathBuf};
 
 use crate::manifest::Study;
 use crate::store::{write_atomic, Lineage, StoreError};
-use crate::study::dir::StageName;
+use crate::study::dir::{json_bytes, StageName};
 
 /// The stages, in pipeline order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -197,13 +197,6 @@ fn serde_name<T: serde::Serialize>(value: T) -> String {
         Ok(serde_json::Value::String(s)) => s,
         other => format!("{other:?}"),
     }
-}
-
-/// Pretty JSON with a final newline.
-fn json_bytes<T: serde::Serialize>(value: &T) -> Vec<u8> {
-    let mut bytes = serde_json::to_vec_pretty(value).expect("stage records serialise");
-    bytes.push(b'\n');
-    bytes
 }
 
 /// The calibrated parameters' addresses, in the study's (sorted) order.

@@ -154,7 +154,11 @@ where
     write_output(&out.join("noise.md"), markdown.as_bytes(), &lineage)?;
     write_output(
         &noise_runs_path(dir),
-        replicates_csv(study, std::slice::from_ref(&runs)).as_bytes(),
+        replicates_csv(
+            study,
+            &[(&study.calibration.name, std::slice::from_ref(&runs))],
+        )
+        .as_bytes(),
         &lineage,
     )?;
     write_output(&noise_path(dir), &json_bytes(&floor), &lineage)?;

@@ -29,12 +29,14 @@ use super::noise::{noise, NoiseFloor};
 use super::sample::{sample, SampleSettings};
 use super::search::{load_model, SearchSettings};
 use super::train::{train_study, TrainOptions};
-use super::verify_seeds::{verify_seeds, Acceptance, SeedVerifyRow};
+use super::verify_seeds::{verify_seeds, SeedVerifyRow};
 use super::{json_bytes, write_output, Stage, StudyDir, StudyError};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::search::band::Family;
 use crate::store::{RunDir, RunResult, Store};
+use crate::study::acceptance::Record;
+use crate::study::acceptance::Verdict;
 
 /// Options of a noise-aware calibration.
 #[derive(Debug, Clone, Copy)]
@@ -104,7 +106,7 @@ pub struct CalibrationOutcome {
     /// The parameter sets consistent with the target.
     pub family: Family,
     /// The acceptance rule, recorded before verification.
-    pub acceptance: Acceptance,
+    pub acceptance: Record,
     /// Every candidate in every scene.
     pub verification: Vec<SeedVerifyRow>,
     /// Some candidate passes the calibration scene.
@@ -191,12 +193,14 @@ where
     let calibrated = v
         .rows
         .iter()
-        .any(|r| r.scene == study.calibration.name && r.pass);
+        .any(|r| r.scene == study.calibration.name && r.judgement.verdict == Verdict::Pass);
     // Every verified candidate: the search's and the adaptive one.
-    let verified = v
-        .rows
-        .iter()
-        .any(|c| v.rows.iter().filter(|r| r.group == c.group).all(|r| r.pass));
+    let verified = v.rows.iter().any(|c| {
+        v.rows
+            .iter()
+            .filter(|r| r.group == c.group)
+            .all(|r| r.judgement.verdict == Verdict::Pass)
+    });
     let outcome = CalibrationOutcome {
         study: study.name.clone(),
         study_id: dir.id().to_string(),

@@ -196,11 +196,14 @@ fn value_in_store(
     Ok(Err(error))
 }
 
-/// Columns of a replicates table: `index`, the parameters, `replicate`,
-/// `packing_seed`, `experiment_id`, `value_deg`, `failure`.
-pub fn replicates_csv(study: &Study, points: &[Replicated]) -> String {
+/// Columns of a replicates table: `scene`, `index`, the parameters,
+/// `replicate`, `packing_seed`, `experiment_id`, `value_deg`, `failure`;
+/// one block of rows per (scene name, points) of `scenes`. A failed or
+/// unmeasurable seed has an empty value and its reason, so
+/// `repose verdict --table` reads it as a missing replicate.
+pub fn replicates_csv(study: &Study, scenes: &[(&str, &[Replicated])]) -> String {
     let names = super::parameter_names(study);
-    let mut header = vec!["index".to_string()];
+    let mut header = vec!["scene".to_string(), "index".to_string()];
     header.extend(names.iter().cloned());
     header.extend(
         [
@@ -213,9 +216,12 @@ pub fn replicates_csv(study: &Study, points: &[Replicated]) -> String {
         .map(String::from),
     );
     let mut csv = CsvWriter::new(&header);
-    for p in points {
+    for (scene, p) in scenes
+        .iter()
+        .flat_map(|(scene, points)| points.iter().map(move |p| (scene, p)))
+    {
         for r in &p.runs {
-            let mut cells = vec![Cell::Integer(p.index)];
+            let mut cells = vec![Cell::Text(scene.to_string()), Cell::Integer(p.index)];
             cells.extend(p.point.iter().map(|v| Cell::Number(*v)));
             cells.push(Cell::Integer(u64::from(r.replicate)));
             let rule = SeedRule::Offset {

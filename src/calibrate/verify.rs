@@ -3,8 +3,11 @@
 //! (so the surrogate's prediction meets the DEM it stands for) and in each of
 //! the study's verification scenes (he2019: baffle lift and rotating drum);
 //! the simulated angles are compared with the measured ones: the equivalent of
-//! he2019's Table 3 (simulated, measured, relative error, pass/fail against
-//! the scene's tolerance).
+//! he2019's Table 3 (simulated, measured, relative error), with the verdict
+//! of the project's one acceptance rule ([`crate::study::acceptance`]) —
+//! which a single run cannot satisfy: it has no interval, so every row is
+//! inconclusive, and the table says so rather than passing a candidate on one
+//! draw of a noisy test. The noise-aware method verifies with seeds.
 //!
 //! Verification experiments are ordinary experiments of the study
 //! ([`Study::experiment`]) with `sample_index` = the cluster's group number,
@@ -32,6 +35,7 @@ use crate::manifest::{ContentId, Experiment, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::table::{Cell, CsvWriter, Table};
 use crate::store::{RunDir, RunResult, Store};
+use crate::study::acceptance::{judge, Judgement};
 
 /// One row of the Table 3 equivalent.
 #[derive(Debug, Clone, PartialEq)]
@@ -50,14 +54,21 @@ pub struct VerifyRow {
     pub relative_error: Option<f64>,
     /// The scene's accepted relative error.
     pub tolerance: f64,
+    /// The band, target × (1 ∓ tolerance), degrees.
+    pub band_deg: (f64, f64),
     /// How the run ended.
     pub status: VerifyStatus,
 }
 
 impl VerifyRow {
-    /// Whether the simulated angle is within tolerance.
-    pub fn passes(&self) -> bool {
-        self.relative_error.is_some_and(|e| e <= self.tolerance)
+    /// The acceptance rule ([`crate::study::acceptance`]) on this row's one
+    /// run: one value has no interval, so it is never decided — he2019's
+    /// Table 3 judges a single run, which the rule does not sign. The
+    /// noise-aware method's verification (`verify_seeds`) runs the seeds
+    /// that decide.
+    pub fn judgement(&self) -> Judgement {
+        let values: Vec<f64> = self.simulated_deg.into_iter().collect();
+        judge(&values, self.band_deg)
     }
 }
 
@@ -228,6 +239,7 @@ where
             relative_error: simulated
                 .map(|s| (s - target.target_angle_deg).abs() / target.target_angle_deg),
             tolerance: target.tolerance_fraction,
+            band_deg: target.band_deg(),
             status,
         });
     }
@@ -239,7 +251,7 @@ where
         "measured_deg",
         "relative_error",
         "tolerance",
-        "pass",
+        "verdict",
         "failure",
     ]);
     for r in &rows {
@@ -251,7 +263,7 @@ where
             Cell::Number(r.measured_deg),
             r.relative_error.map_or(Cell::Empty, Cell::Number),
             Cell::Number(r.tolerance),
-            Cell::Text(if r.passes() { "yes" } else { "no" }.into()),
+            Cell::Text(r.judgement().verdict.to_string()),
             Cell::Text(csv_word(r.status.reason().unwrap_or_default())),
         ]);
     }
@@ -290,7 +302,7 @@ fn markdown(rows: &[VerifyRow]) -> String {
         "simulated (°)",
         "measured (°)",
         "relative error",
-        "pass",
+        "verdict",
     ]);
     for r in rows {
         let simulated = match (&r.status, r.simulated_deg) {
@@ -305,11 +317,7 @@ fn markdown(rows: &[VerifyRow]) -> String {
             format!("{:.2}", r.measured_deg),
             r.relative_error
                 .map_or_else(|| "—".to_string(), |e| format!("{:.1} %", 100.0 * e)),
-            if r.passes() {
-                "yes".to_string()
-            } else {
-                format!("no (tolerance {:.0} %)", 100.0 * r.tolerance)
-            },
+            r.judgement().verdict_text(),
         ]);
     }
     let mut out = table.render();

@@ -1,19 +1,25 @@
 //! `repose verify` for a noise-aware study: every candidate re-simulated
 //! with `verification_seeds` packing seeds in the calibration scene and in
-//! each verification scene, judged by a rule fixed before any run.
+//! each verification scene, judged by the project's one acceptance rule
+//! ([`crate::study::acceptance`]: TOST against the scene's band; pass, fail
+//! or inconclusive with the seeds that would decide).
 //!
-//! # The acceptance rule
+//! # The acceptance record
 //!
-//! A candidate passes a scene when at least [`MIN_MEASURED`] of its seeds
-//! measured an angle and the mean of the measured ones lies inside the
-//! scene's band, target × (1 ∓ tolerance). The mean carries its Student-t
-//! 95 % interval, reported beside it, but the rule judges the mean (he2019
-//! judges one run the same way, Eq. 8–10), so a candidate is not failed for
-//! the noise of the test, nor passed for it. The rule, the seeds and every
-//! scene's target and band are written to `verify/acceptance.json` — with
-//! its lineage record, before the first verification run — from the study
-//! (whose id fixes them), so they cannot be chosen after the result is
-//! seen; the verification table's lineage names that file.
+//! The rule, the seeds and every scene's target and band are written to
+//! `verify/acceptance.json` — with its lineage record, before the first
+//! verification run — from the study (whose id fixes them), so they cannot be
+//! chosen after the result is seen; the verification table's lineage names
+//! that file. Where the study's noise floor has measured the calibration
+//! scene's σ, the record also holds the power calculation: the seeds that
+//! give TOST power ≥ 0.8 at the band's centre, capped by
+//! `verification_seeds`, and the power the seeds run actually have. Every
+//! scene runs `verification_seeds` (the cap), so a scene never has less power
+//! than the calculation asks for unless the cap is below it — which the
+//! record then says.
+//!
+//! A seed whose run could not measure the angle is a missing replicate
+//! (its reason is listed under the table), never a value.
 //!
 //! # Candidates
 //!
@@ -32,7 +38,7 @@ use serde_json::json;
 
 use super::adaptive::passing_candidate;
 use super::gp_train::adaptive_path;
-use super::noise::noise_aware;
+use super::noise::{noise_aware, read_noise};
 use super::replicates::{replicates_csv, run_replicated, Replicated};
 use super::verify::read_candidates;
 use super::{json_bytes, write_output, Stage, StudyDir, StudyError};
@@ -41,37 +47,7 @@ use crate::manifest::{Experiment, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::table::{Cell, CsvWriter};
 use crate::store::{RunDir, RunResult, Store};
-use crate::study::acceptance::{passes, MIN_MEASURED};
-
-/// One scene of the acceptance rule.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct AcceptedScene {
-    /// Scene name.
-    pub name: String,
-    /// Scene kind.
-    pub kind: String,
-    /// The response judged.
-    pub response: String,
-    /// Measured angle, degrees.
-    pub target_deg: f64,
-    /// Accepted relative deviation of the mean.
-    pub tolerance_fraction: f64,
-    /// [lo, hi], degrees.
-    pub band_deg: (f64, f64),
-}
-
-/// The acceptance rule, as written before the verification runs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Acceptance {
-    /// The rule in words.
-    pub rule: String,
-    /// Packing seeds per candidate and scene.
-    pub seeds: u32,
-    /// Fewest measured seeds to pass.
-    pub min_measured: usize,
-    /// Every scene judged.
-    pub scenes: Vec<AcceptedScene>,
-}
+use crate::study::acceptance::{judge, AcceptedTarget, Judgement, Record};
 
 /// One candidate in one scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -94,8 +70,8 @@ pub struct SeedVerifyRow {
     pub target_deg: f64,
     /// |mean − target| / target.
     pub relative_error: Option<f64>,
-    /// Whether the rule passes it.
-    pub pass: bool,
+    /// The acceptance rule's judgement of the measured seeds.
+    pub judgement: Judgement,
     /// Why seeds have no angle (one line per failed seed).
     pub failures: Vec<String>,
 }
@@ -104,40 +80,32 @@ pub struct SeedVerifyRow {
 #[derive(Debug, Clone)]
 pub struct SeedVerifyOutcome {
     /// The rule.
-    pub acceptance: Acceptance,
+    pub acceptance: Record,
     /// One row per candidate and scene.
     pub rows: Vec<SeedVerifyRow>,
     /// The Markdown table (also verification.md).
     pub markdown: String,
 }
 
-/// The study's acceptance rule (see the module docs).
-pub fn acceptance(study: &Study) -> Result<Acceptance, StudyError> {
-    let spec = noise_aware(study)?;
-    let scenes = std::iter::once(&study.calibration)
+/// The study's acceptance record (see the module docs); `noise_sd_deg` is
+/// the calibration scene's σ from the noise floor, when measured.
+pub fn acceptance(study: &Study, noise_sd_deg: Option<f64>) -> Result<Record, StudyError> {
+    let seeds = noise_aware(study)?.verification_seeds as usize;
+    let targets = std::iter::once(&study.calibration)
         .chain(&study.verification)
-        .map(|t| AcceptedScene {
-            name: t.name.clone(),
-            kind: t.scene.kind().to_string(),
-            response: t
-                .response
-                .clone()
-                .unwrap_or_else(|| "headline_angle_deg".into()),
-            target_deg: t.target_angle_deg,
-            tolerance_fraction: t.tolerance_fraction,
-            band_deg: t.band_deg(),
+        .enumerate()
+        .map(|(k, t)| {
+            AcceptedTarget::new(
+                &t.name,
+                t.response.as_deref().unwrap_or("headline_angle_deg"),
+                t.target_angle_deg,
+                t.tolerance_fraction,
+                seeds,
+                if k == 0 { noise_sd_deg } else { None },
+            )
         })
         .collect();
-    Ok(Acceptance {
-        rule: format!(
-            "a candidate passes a scene when at least {MIN_MEASURED} of its {} packing seeds \
-             measure an angle and their mean lies inside the band target x (1 -/+ tolerance)",
-            spec.verification_seeds
-        ),
-        seeds: spec.verification_seeds,
-        min_measured: MIN_MEASURED,
-        scenes,
-    })
+    Ok(Record::new(seeds, targets))
 }
 
 /// `verify/acceptance.json`.
@@ -159,7 +127,8 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let rule = acceptance(study)?;
+    let noise_sd = read_noise(dir).ok().and_then(|f| f.sd_deg);
+    let rule = acceptance(study, noise_sd)?;
     let (clusters_file, mut points) = read_candidates(dir, study, candidates)?;
     let adaptive = passing_candidate(dir, study)?;
     if let Some(hit) = &adaptive {
@@ -183,7 +152,14 @@ where
     for target in &targets {
         per_scene.push(
             run_replicated(
-                study, target, &points, rule.seeds, store, pool, &runner, false,
+                study,
+                target,
+                &points,
+                rule.seeds as u32,
+                store,
+                pool,
+                &runner,
+                false,
             )?
             .0,
         );
@@ -193,21 +169,20 @@ where
         for (target, runs) in targets.iter().zip(&per_scene) {
             let r = &runs[k];
             let values = r.values();
-            let summary = r.summary();
-            let mean = r.mean();
-            let (lo, hi) = target.band_deg();
+            let judgement = judge(&values, target.band_deg());
+            let mean = judgement.mean;
             rows.push(SeedVerifyRow {
                 group: *group as usize,
                 scene: target.name.clone(),
                 seeds: r.runs.len(),
                 measured: values.len(),
                 mean_deg: mean,
-                sd_deg: summary.map(|s| s.std),
-                ci95_half_width_deg: summary.map(|s| s.half_width),
+                sd_deg: judgement.tost.map(|t| t.sd),
+                ci95_half_width_deg: judgement.ci95_half_width(),
                 target_deg: target.target_angle_deg,
                 relative_error: mean
                     .map(|m| (m - target.target_angle_deg).abs() / target.target_angle_deg),
-                pass: passes(values.len(), mean, (lo, hi)),
+                judgement,
                 failures: r
                     .runs
                     .iter()
@@ -234,10 +209,14 @@ where
         }
     }
     let out = dir.stage(Stage::Verify);
-    let all: Vec<Replicated> = per_scene.concat();
+    let blocks: Vec<(&str, &[Replicated])> = targets
+        .iter()
+        .zip(&per_scene)
+        .map(|(t, runs)| (t.name.as_str(), runs.as_slice()))
+        .collect();
     write_output(
         &out.join("runs.csv"),
-        replicates_csv(study, &all).as_bytes(),
+        replicates_csv(study, &blocks).as_bytes(),
         &lineage,
     )?;
     let markdown = markdown(&rule, &rows);
@@ -265,7 +244,9 @@ fn csv(rows: &[SeedVerifyRow]) -> String {
         "ci95_half_width_deg",
         "target_deg",
         "relative_error",
-        "pass",
+        "tost_p",
+        "verdict",
+        "seeds_to_decide",
     ]);
     for r in rows {
         csv.row(&[
@@ -278,13 +259,17 @@ fn csv(rows: &[SeedVerifyRow]) -> String {
             r.ci95_half_width_deg.map_or(Cell::Empty, Cell::Number),
             Cell::Number(r.target_deg),
             r.relative_error.map_or(Cell::Empty, Cell::Number),
-            Cell::Text(if r.pass { "yes" } else { "no" }.into()),
+            r.judgement.p().map_or(Cell::Empty, Cell::Number),
+            Cell::Text(r.judgement.verdict.to_string()),
+            r.judgement
+                .seeds_to_decide
+                .map_or(Cell::Empty, |n| Cell::Integer(n as u64)),
         ]);
     }
     csv.finish()
 }
 
-fn markdown(rule: &Acceptance, rows: &[SeedVerifyRow]) -> String {
+fn markdown(rule: &Record, rows: &[SeedVerifyRow]) -> String {
     let mut t = MarkdownTable::new(&[
         "candidate",
         "scene",
@@ -293,7 +278,8 @@ fn markdown(rule: &Acceptance, rows: &[SeedVerifyRow]) -> String {
         "σ (°)",
         "measured (°)",
         "relative error",
-        "pass",
+        "TOST p",
+        "verdict",
     ]);
     for r in rows {
         t.row(&[
@@ -309,13 +295,12 @@ fn markdown(rule: &Acceptance, rows: &[SeedVerifyRow]) -> String {
             format!("{:.2}", r.target_deg),
             r.relative_error
                 .map_or("—".into(), |e| format!("{:.1} %", 100.0 * e)),
-            if r.pass { "yes" } else { "no" }.into(),
+            r.judgement.p().map_or("—".into(), |p| format!("{p:.3}")),
+            r.judgement.verdict_text(),
         ]);
     }
-    let mut out = format!(
-        "Acceptance rule (recorded before the runs): {}.\n\n",
-        rule.rule
-    );
+    let mut out = rule.describe();
+    out.push('\n');
     out.push_str(&t.render());
     let failures: Vec<_> = rows
         .iter()

@@ -37,7 +37,7 @@ use super::summary::{t_quantile, t_two_sided_p};
 
 /// The two one-sided t-tests of a mean against a band, with the intervals a
 /// report prints beside them. Units are those of the values.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Tost {
     /// Number of values.
     pub n: usize,
@@ -296,14 +296,15 @@ mod tests {
         assert_eq!(tost(&[45.41, 45.41], BAND).unwrap().p, 1.0);
     }
 
-    /// Exact power against scipy: `exact(n, sigma, band, mu)` =
-    /// `integrate.quad(lambda w: max(0, norm.cdf((hi - c*s(w)/sqrt(n) - mu)/se)
-    /// - norm.cdf((lo + c*s(w)/sqrt(n) - mu)/se)) * chi.pdf(w, n-1), 0, w_close,
-    /// epsabs=1e-13, epsrel=1e-12)` with `c = t.ppf(0.95, n-1)`,
-    /// `s(w) = sigma*w/sqrt(n-1)`; confirmed by 2·10⁶-draw Monte Carlo for
-    /// (5, 2.0, 47.8): 0.4758, 0.4768, 0.4762. The noncentral-t
-    /// approximation `nct.sf(c, n-1, (mu-lo)/se) + nct.cdf(-c, n-1,
-    /// (mu-hi)/se) - 1` is a lower bound (second column).
+    /// Exact power against scipy. With `c = t.ppf(0.95, n-1)`,
+    /// `se = sigma/sqrt(n)` and `s(w) = sigma*w/sqrt(n-1)`, the reference is
+    /// `integrate.quad(f, 0, w_close, epsabs=1e-13, epsrel=1e-12)` of
+    /// `f(w) = max(0, norm.cdf((hi - c*s(w)/sqrt(n) - mu)/se) -
+    /// norm.cdf((lo + c*s(w)/sqrt(n) - mu)/se)) * chi.pdf(w, n-1)`,
+    /// confirmed by 2·10⁶-draw Monte Carlo for (5, 2.0, 47.8): 0.4758,
+    /// 0.4768, 0.4762. The second column, the noncentral-t approximation
+    /// `nct.sf(c, n-1, (mu-lo)/se) + nct.cdf(-c, n-1, (mu-hi)/se) - 1`,
+    /// is a lower bound.
     #[test]
     fn power_matches_scipy() {
         let cases = [

@@ -185,3 +185,11 @@ pub fn write_output(path: &Path, bytes: &[u8], lineage: &Lineage) -> Result<(), 
     lineage.write_beside(path)?;
     Ok(())
 }
+
+/// `value` as pretty JSON with a final newline: the bytes of every JSON stage
+/// output.
+pub fn json_bytes<T: Serialize>(value: &T) -> Vec<u8> {
+    let mut bytes = serde_json::to_vec_pretty(value).expect("stage outputs serialise");
+    bytes.push(b'\n');
+    bytes
+}

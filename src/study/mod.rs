@@ -33,6 +33,7 @@ pub mod sensitivity;
 pub mod spec;
 pub mod stages;
 pub mod tradeoff;
+pub mod verdict_table;
 pub mod verify;
 
 use std::path::Path;

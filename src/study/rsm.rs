@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::dir::{write_output, StudyDir};
+use super::dir::{json_bytes, write_output, StudyDir};
 use super::gp_surface::{analyse_gp, GpAnalysis};
 use super::runs::{run_points, write_table, Point, Runs};
 use super::spec::{DesignSpec, DesignStudy, FitChoice, SeedStage};
@@ -480,12 +480,6 @@ fn contour_grid(study: &DesignStudy, a: &ResponseAnalysis, hold: &[f64]) -> Cont
             "optimum".to_string(),
         )],
     }
-}
-
-fn json_bytes<T: Serialize>(value: &T) -> Vec<u8> {
-    let mut bytes = serde_json::to_vec_pretty(value).expect("analyses serialise");
-    bytes.push(b'\n');
-    bytes
 }
 
 fn opt(v: Option<f64>) -> Cell {

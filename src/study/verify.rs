@@ -4,14 +4,18 @@
 //!
 //! Per point and response: the simulated mean ± 95 % CI (Student t, n − 1
 //! df), the model's prediction there, the measured target, the relative
-//! error of the mean, and pass/fail against the target's tolerance
-//! (|mean − target| / target ≤ tolerance). A point passes when every
-//! response with a target passes. The verification runs draw their own
-//! packing seeds (stage `verify`), never those of the design.
+//! error of the mean, and the verdict of the project's one acceptance rule
+//! ([`crate::study::acceptance`]: TOST against target × (1 ∓ tolerance);
+//! pass, fail, or inconclusive with the seeds that would decide). The
+//! acceptance record (`<stage>/acceptance.json`: the rule, the replicates,
+//! every target's band) is written with its lineage before the first run.
+//! The verification runs draw their own packing seeds (stage `verify`), never
+//! those of the design; a replicate that could not measure a response is
+//! missing from that response's n, not a value.
 
 use serde::Serialize;
 
-use super::dir::{write_output, StudyDir};
+use super::dir::{json_bytes, write_output, StudyDir};
 use super::rsm::RsmOutcome;
 use super::runs::{run_points, write_table, Point};
 use super::spec::{DesignStudy, SeedStage};
@@ -21,6 +25,7 @@ use crate::manifest::Experiment;
 use crate::report::table::{Cell, CsvWriter};
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store};
+use crate::study::acceptance::{judge, AcceptedTarget, Judgement, Record};
 
 /// One response at one verified point.
 #[derive(Debug, Clone, Serialize)]
@@ -41,8 +46,8 @@ pub struct Check {
     pub target: Option<f64>,
     /// (mean − target) / target.
     pub relative_error: Option<f64>,
-    /// Within the target's tolerance (None without a target or a mean).
-    pub pass: Option<bool>,
+    /// The acceptance rule's judgement (None without a target).
+    pub judgement: Option<Judgement>,
 }
 
 /// What verification found.
@@ -159,6 +164,32 @@ where
         })
         .collect();
     let stage = dir.create_stage(stage_name)?;
+    let record = Record::new(
+        plan.replicates as usize,
+        responses
+            .iter()
+            .filter_map(|r| {
+                study.targets.get(r).map(|t| {
+                    AcceptedTarget::new(
+                        r,
+                        r,
+                        t.value,
+                        t.tolerance_fraction,
+                        plan.replicates as usize,
+                        None,
+                    )
+                })
+            })
+            .collect(),
+    );
+    write_output(
+        &stage.join("acceptance.json"),
+        &json_bytes(&record),
+        &dir.lineage(
+            stage_name,
+            serde_json::json!({ "record": "acceptance rule" }),
+        ),
+    )?;
     let runs = run_points(
         study,
         store,
@@ -189,9 +220,11 @@ where
                 predicted: predict(response, actual),
                 target: target.map(|t| t.value),
                 relative_error,
-                pass: relative_error
-                    .zip(target)
-                    .map(|(e, t)| e.abs() <= t.tolerance_fraction),
+                judgement: record
+                    .targets
+                    .iter()
+                    .find(|t| t.response == *response)
+                    .map(|t| judge(&values[k], t.band)),
             });
         }
     }
@@ -232,7 +265,9 @@ fn csv(v: &Verification) -> String {
             "predicted",
             "target",
             "relative_error",
-            "pass",
+            "tost_p",
+            "verdict",
+            "seeds_to_decide",
         ]
         .map(String::from),
     );
@@ -247,7 +282,11 @@ fn csv(v: &Verification) -> String {
             num(c.predicted),
             num(c.target),
             num(c.relative_error),
-            Cell::Text(c.pass.map_or(String::new(), |p| p.to_string())),
+            num(c.judgement.and_then(|j| j.p())),
+            Cell::Text(c.judgement.map_or(String::new(), |j| j.verdict.to_string())),
+            c.judgement
+                .and_then(|j| j.seeds_to_decide)
+                .map_or(Cell::Empty, |n| Cell::Integer(n as u64)),
         ]);
     }
     csv.finish()
@@ -269,7 +308,7 @@ pub fn markdown(study: &DesignStudy, v: &Verification) -> String {
         let cells: Vec<String> = values.iter().map(|x| format!("{x:.4}")).collect();
         md.push_str(&format!("| {name} | {} |\n", cells.join(" | ")));
     }
-    md.push_str("\n| Point | Response | n | Simulated mean ± 95 % CI | Model | Measured | Error | Pass |\n|---|---|---:|---|---:|---:|---:|---|\n");
+    md.push_str("\n| Point | Response | n | Simulated mean ± 95 % CI | Model | Measured | Error | TOST p | Verdict |\n|---|---|---:|---|---:|---:|---:|---:|---|\n");
     for c in &v.checks {
         let sim = match (c.mean, c.ci95_half_width) {
             (Some(m), Some(h)) => format!("{m:.2} ± {h:.2}"),
@@ -277,7 +316,7 @@ pub fn markdown(study: &DesignStudy, v: &Verification) -> String {
             _ => "not measured".into(),
         };
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             c.point,
             c.response,
             c.n,
@@ -286,7 +325,10 @@ pub fn markdown(study: &DesignStudy, v: &Verification) -> String {
             c.target.map_or(String::new(), |t| format!("{t}")),
             c.relative_error
                 .map_or(String::new(), |e| format!("{:+.2} %", 100.0 * e)),
-            c.pass.map_or("", |p| if p { "pass" } else { "fail" })
+            c.judgement
+                .and_then(|j| j.p())
+                .map_or(String::new(), |p| format!("{p:.3}")),
+            c.judgement.map_or(String::new(), |j| j.verdict_text())
         ));
     }
     md

@@ -206,3 +206,58 @@ pub fn compare_golden(golden_dir: &str, name: &str, now: &str, exact: &[&str], t
 pub fn blessing() -> bool {
     std::env::var_os("REPOSE_BLESS").is_some_and(|v| v == "1")
 }
+
+/// One group's verdict as `repose verdict --table --json` gives it: the
+/// group's key cells, the verdict and the TOST p-value (none below two
+/// measured values).
+#[allow(dead_code)]
+pub type TableVerdict = (Vec<String>, String, Option<f64>);
+
+/// `repose verdict --table TABLE --value VALUE --group G... --target T
+/// --tolerance F --json`, parsed: how a stage's verdicts are checked to come
+/// from the one acceptance rule (the same replicates give the same verdict).
+#[allow(dead_code)]
+pub fn table_verdicts(
+    table: &Path,
+    value: &str,
+    group: &[&str],
+    target: f64,
+    tolerance: f64,
+) -> Vec<TableVerdict> {
+    let mut args = vec![
+        "verdict".to_string(),
+        "--table".into(),
+        table.display().to_string(),
+        "--value".into(),
+        value.into(),
+        "--target".into(),
+        target.to_string(),
+        "--tolerance".into(),
+        tolerance.to_string(),
+        "--json".into(),
+    ];
+    for g in group {
+        args.extend(["--group".to_string(), g.to_string()]);
+    }
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = repose(table.parent().unwrap(), &args);
+    assert!(out.status.success(), "verdict: {}", stderr(&out));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    v["groups"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| {
+            (
+                g["group"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|c| c.as_str().unwrap().to_string())
+                    .collect(),
+                g["judgement"]["verdict"].as_str().unwrap().to_string(),
+                g["judgement"]["tost"]["p"].as_f64(),
+            )
+        })
+        .collect()
+}

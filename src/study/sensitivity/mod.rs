@@ -42,7 +42,7 @@ use std::path::{Path, PathBuf};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use super::dir::{write_output, StudyDir};
+use super::dir::{json_bytes, write_output, StudyDir};
 use super::rsm::{actual_design, design_points};
 use super::runs::{needed_scenes, run_points, write_table, Runs};
 use super::spec::{DesignStudy, SeedStage};
@@ -119,13 +119,6 @@ fn cached<T: DeserializeOwned>(json: &Path, lineage: &Lineage) -> Option<T> {
         return None;
     }
     serde_json::from_slice(&std::fs::read(json).ok()?).ok()
-}
-
-/// `value` as pretty JSON with a final newline.
-fn json_bytes<T: Serialize>(value: &T) -> Vec<u8> {
-    let mut bytes = serde_json::to_vec_pretty(value).expect("outcomes serialise");
-    bytes.push(b'\n');
-    bytes
 }
 
 /// Runs the levels asked for (see the module docs) and writes the reports.
