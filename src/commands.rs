@@ -431,6 +431,9 @@ pub fn run(
     for (name, value) in &result.measurements {
         writeln!(out, "  {name} = {value}")?;
     }
+    for (name, why) in &result.unmeasured {
+        writeln!(out, "  {name}: {why}")?;
+    }
     for warning in &result.warnings {
         writeln!(err, "warning: run {id}: {warning}")?;
     }

@@ -362,3 +362,45 @@ fn the_default_fit_is_not_written_so_study_ids_keep_their_value() {
     let explicit = parse(common::edit(smoke(), "/fit", Some(json!("quadratic"))));
     assert_eq!(explicit.id(), study.id());
 }
+
+/// Issue 40, item 3: two factors on one field alias (the later overwrites
+/// the earlier, and the ANOVA credits effects to a factor never applied).
+/// Validation refuses it naming both, a wildcard included.
+#[test]
+fn factors_on_one_field_are_rejected_naming_both() {
+    let same = "contact.particle_particle.static_friction";
+    let mut v = common::edit(smoke(), "/factors/B/address", Some(json!(same)));
+    v = common::edit(v, "/factors/B/max", Some(json!(0.6)));
+    let e = rejected(v);
+    assert!(e.contains("factors.B.address"), "{e}");
+    assert!(e.contains("factors.A.address"), "{e}");
+    // A named wall under C's `particle_wall.*` is the same field as C's.
+    let wall = "contact.particle_wall.stainless_steel.static_friction";
+    let e = rejected(common::edit(
+        smoke(),
+        "/factors/D/address",
+        Some(json!(wall)),
+    ));
+    assert!(e.contains("factors.D.address"), "{e}");
+    assert!(e.contains("factors.C.address"), "{e}");
+    // G sets E: a factor on each aliases too.
+    let mut v = common::edit(
+        smoke(),
+        "/factors/A/address",
+        Some(json!("material.particle.shear_modulus_pa")),
+    );
+    v = common::edit(v, "/factors/A/min", Some(json!(1e7)));
+    v = common::edit(v, "/factors/A/max", Some(json!(9e7)));
+    v = common::edit(
+        v,
+        "/factors/B/address",
+        Some(json!("material.particle.youngs_modulus_pa")),
+    );
+    v = common::edit(v, "/factors/B/min", Some(json!(1e7)));
+    v = common::edit(v, "/factors/B/max", Some(json!(9e7)));
+    let e = rejected(v);
+    assert!(
+        e.contains("sets the same field as factors.A.address"),
+        "{e}"
+    );
+}

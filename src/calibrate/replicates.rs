@@ -70,9 +70,12 @@ impl Replicated {
 pub fn response_of(result: &RunResult, target: &TargetScene) -> Result<f64, String> {
     match &target.response {
         Some(name) => response(result, target.scene.kind(), name).map_err(|e| e.to_string()),
-        None => result
-            .headline_angle_deg
-            .ok_or_else(|| "the run has no headline angle".to_string()),
+        None => result.headline_angle_deg.ok_or_else(|| {
+            result
+                .headline_reason()
+                .unwrap_or("the run has no headline angle")
+                .to_string()
+        }),
     }
 }
 

@@ -224,11 +224,13 @@ where
         if result.is_some() {
             lineage = lineage.with_input(dir.input("result", &store.run_dir(&id).result_path())?);
         }
-        let simulated = result.and_then(|r| r.headline_angle_deg);
-        let status = match (failures.iter().find(|f| f.0 == i), simulated) {
-            (Some((_, message)), _) => VerifyStatus::of_failure(message),
-            (None, Some(_)) => VerifyStatus::Measured,
-            (None, None) => VerifyStatus::Failed("no angle".to_string()),
+        let simulated = result.as_ref().and_then(|r| r.headline_angle_deg);
+        let reason = result.as_ref().and_then(RunResult::headline_reason);
+        let status = match (failures.iter().find(|f| f.0 == i), simulated, reason) {
+            (Some((_, message)), _, _) => VerifyStatus::of_failure(message),
+            (None, Some(_), _) => VerifyStatus::Measured,
+            (None, None, Some(why)) => VerifyStatus::NotMeasurable(why.to_string()),
+            (None, None, None) => VerifyStatus::Failed("no angle".to_string()),
         };
         rows.push(VerifyRow {
             group: *group,

@@ -90,8 +90,12 @@
 //! three surface points, as when the tilted tube left the apex near the
 //! platform's rim on that side) is left out, and the angle is the mean over
 //! the flanks of the other views (`angle_views` says how many); a pile with
-//! fewer than [`MIN_VIEWS`] fitted views, too low or too narrow, fails the run
-//! with a "not measurable" error; [`simulate`] still gives such a run's counts.
+//! fewer than [`MIN_VIEWS`] fitted views, too low or too narrow, has no
+//! side-view angle (and no headline): the run still succeeds with every other
+//! measurement (the height angle, the cone, the counts) and records the
+//! reason under `unmeasured` (`angle_deg`), as it does for a cone that cannot
+//! be fitted (`angle_cone_deg`) or a platform without a pile
+//! (`angle_2h_d_deg`). One fit that fails never discards the others.
 //!
 //! The same pile is also fitted as one cone over its whole surface
 //! ([`crate::measure::cone`]: the top particle of every column one mean
@@ -131,7 +135,7 @@ use crate::measure::cone::{cone_angle, ConeAngle, ConeSpec};
 pub use crate::measure::pile::VIEW_AZIMUTHS_DEG;
 use crate::measure::pile::{side_views, PileSpec, SideViews};
 use crate::measure::MeasureError;
-use crate::store::RunResult;
+use crate::store::{RunResult, HEADLINE_KEY};
 use std::path::Path;
 
 /// Particles faster than this (m/s) are not part of the pile's silhouette.
@@ -296,15 +300,35 @@ pub fn run(
         world,
         geometry,
     } = simulate(exp, scene, log_file.as_mut())?;
-    let angles = pile_angles(&world.particles, &geometry).map_err(FunnelError::from)?;
-    put_angles(&mut result, &angles);
-    if let Ok(cone) = pile_cone(&world.particles, &geometry) {
-        put_cone(&mut result, &cone);
-    }
+    measure_pile(&mut result, &world.particles, &geometry);
     if let Some(log) = log_file {
         log.finish()?;
     }
     Ok(result)
+}
+
+/// The side views and the cone fit of the pile in `p`, into `result`. Each
+/// fit stands alone: one that cannot measure the pile is recorded in
+/// [`RunResult::unmeasured`] with its reason and never discards the others.
+pub fn measure_pile(result: &mut RunResult, p: &Particles, geom: &FunnelGeometry) {
+    match pile_angles(p, geom) {
+        Ok(angles) => put_angles(result, &angles),
+        Err(e) => {
+            // The side views are the headline.
+            let why = FunnelError::from(e);
+            unmeasured(result, "angle_deg", &why);
+            unmeasured(result, HEADLINE_KEY, &why);
+        }
+    }
+    match pile_cone(p, geom) {
+        Ok(cone) => put_cone(result, &cone),
+        Err(e) => unmeasured(result, "angle_cone_deg", e),
+    }
+}
+
+/// Records that measurement `key` could not be taken, and why.
+fn unmeasured(result: &mut RunResult, key: &str, why: impl std::fmt::Display) {
+    result.unmeasured.insert(key.to_string(), why.to_string());
 }
 
 /// The colour scale of the log: the speed bound of the geometry, m/s.
@@ -512,6 +536,12 @@ pub fn simulate(
             "angle_2h_d_deg",
             height_angle_deg(height, geom.platform_radius_m),
         );
+    } else {
+        unmeasured(
+            &mut result,
+            "angle_2h_d_deg",
+            "funnel_pile: height angle: not measurable: no particle at rest on the platform",
+        );
     }
     Ok(FunnelOutcome {
         result,
@@ -586,5 +616,34 @@ mod tests {
         let geom = geometry();
         let p = pile(&geom, |_, _| 4.0 * R);
         assert!(pile_angles(&p, &geom).is_err());
+    }
+
+    /// A pile the side views cannot fit still reports every other
+    /// measurement; the missing one carries its reason, which a study reads
+    /// as the reason for a missing replicate.
+    #[test]
+    fn an_unmeasurable_view_discards_nothing_else() {
+        let geom = geometry();
+        let exp =
+            parse_experiment(include_str!("../../experiments/funnel_pile/smoke.json")).unwrap();
+        let mut result = RunResult::new(&exp, "test");
+        result.measurements.insert("pile_height_m".into(), 4.0 * R);
+        measure_pile(&mut result, &pile(&geom, |_, _| 4.0 * R), &geom);
+        assert_eq!(result.headline_angle_deg, None);
+        assert!(!result.measurements.contains_key("angle_deg"));
+        assert_eq!(result.measurements["pile_height_m"], 4.0 * R);
+        let why = result.unmeasured["angle_deg"].clone();
+        assert!(why.contains("not measurable"), "{why}");
+        assert_eq!(result.headline_reason(), Some(why.as_str()));
+        let err = crate::scenes::responses::response(&result, "funnel_pile", "angle_deg")
+            .unwrap_err()
+            .to_string();
+        assert!(err.ends_with(&why), "{err}");
+        // A tall cone on the same platform is measured by both fits.
+        let mut tall = RunResult::new(&exp, "test");
+        let top = 12.0 * R;
+        measure_pile(&mut tall, &pile(&geom, |x, y| top - x.hypot(y)), &geom);
+        assert!(tall.unmeasured.is_empty(), "{:?}", tall.unmeasured);
+        assert!(tall.headline_angle_deg.is_some());
     }
 }

@@ -61,7 +61,7 @@ pub enum ResponseError {
     },
     /// The run did not measure the response (e.g. a drum without a dynamic
     /// window, a hopper whose discharge ended before the flow-rate time).
-    #[error("run {run} ({kind}) did not measure response '{name}' (no '{key}' in its measurements): {description}")]
+    #[error("run {run} ({kind}) did not measure response '{name}' (no '{key}' in its measurements): {why}")]
     NotMeasured {
         /// The run's id (12 hex digits).
         run: String,
@@ -71,9 +71,18 @@ pub enum ResponseError {
         name: String,
         /// The measurement key that is absent.
         key: &'static str,
-        /// The response's description, which says when it is measured.
-        description: &'static str,
+        /// Why: the reason the run recorded ([`RunResult::unmeasured`]), or
+        /// else the response's description, which says when it is measured.
+        why: String,
     },
+}
+
+/// The reason `result` recorded for not measuring `key`, or `description`.
+fn why_unmeasured(result: &RunResult, key: &str, description: &str) -> String {
+    result
+        .unmeasured
+        .get(key)
+        .map_or_else(|| description.to_string(), Clone::clone)
 }
 
 /// Every scene kind, in the order `repose responses` lists them.
@@ -351,7 +360,7 @@ pub fn response(result: &RunResult, kind: &str, name: &str) -> Result<f64, Respo
                 kind: kind.to_string(),
                 name: name.to_string(),
                 key,
-                description: spec.description,
+                why: why_unmeasured(result, key, spec.description),
             })
     };
     match read {
@@ -402,7 +411,7 @@ pub fn observations(result: &RunResult, kind: &str, name: &str) -> Result<Vec<f6
                     kind: kind.to_string(),
                     name: name.to_string(),
                     key,
-                    description: "one of the four ortho-slice fits",
+                    why: why_unmeasured(result, key, "one of the four ortho-slice fits"),
                 })
         })
         .collect()
@@ -428,8 +437,11 @@ pub fn flow_rate_curve(result: &RunResult) -> Result<Vec<(f64, f64)>, ResponseEr
         kind: "hopper".into(),
         name: "flow-rate curve".into(),
         key,
-        description: "the discharged count against time, from the opening to the last \
-                      particle out",
+        why: why_unmeasured(
+            result,
+            key,
+            "the discharged count against time, from the opening to the last particle out",
+        ),
     };
     let opened = *result
         .measurements

@@ -6,6 +6,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::manifest::{ContentId, Experiment, Profile};
 
+/// The key of [`RunResult::unmeasured`] that says why a run has no headline
+/// angle (beside the key of the measurement the headline is).
+pub const HEADLINE_KEY: &str = "headline_angle_deg";
+
 /// What a run produced. Deterministic: identical manifests give byte-identical
 /// result.json (wall-clock times live in timing.json instead).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -37,6 +41,14 @@ pub struct RunResult {
     /// warning writes the same bytes as before warnings existed.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// Measurements the scene could not take in this run, by measurement key
+    /// (e.g. a funnel's side-view `angle_deg`), each with the reason (a
+    /// "not measurable" sentence). A run reports every measurement it can
+    /// take: one it cannot never discards the others, and a study counts it
+    /// as a missing replicate of that response with this reason. Absent from
+    /// result.json when empty.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub unmeasured: BTreeMap<String, String>,
 }
 
 /// What coarse graining did to the particle (he2019 Eq. 1–3, cai2024 §1.2):
@@ -96,6 +108,16 @@ impl RunResult {
             headline_angle_deg: None,
             coarse_graining: None,
             warnings: Vec::new(),
+            unmeasured: BTreeMap::new(),
+        }
+    }
+
+    /// Why the run has no headline angle, when it has none and the scene
+    /// said why ([`HEADLINE_KEY`] of [`RunResult::unmeasured`]).
+    pub fn headline_reason(&self) -> Option<&str> {
+        match self.headline_angle_deg {
+            Some(_) => None,
+            None => self.unmeasured.get(HEADLINE_KEY).map(String::as_str),
         }
     }
 

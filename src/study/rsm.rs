@@ -30,7 +30,7 @@ use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::doe::Range;
 use crate::exec::Executor;
 use crate::manifest::Experiment;
-use crate::report::plots::{contour, predicted_vs_actual, ContourGrid};
+use crate::report::plots::{contour, curves, predicted_vs_actual, ContourGrid, Curve};
 use crate::report::table::{Cell, CsvWriter, Table};
 use crate::search::desirability::{maximise, Goal, Model, Search};
 use crate::stats::rsm::{fit_quadratic, AnovaRow, RsmFit};
@@ -279,13 +279,23 @@ where
             predicted_vs_actual(&pairs, &format!("{}: predicted vs actual", a.response), "")
                 .map_err(|e| StudyError::Plot(e.to_string()))?;
         write_output(&sub.join("parity.svg"), parity.as_bytes(), &lineage)?;
-        let grid = contour_grid(study, a, &hold);
-        let svg = contour(
-            &grid,
-            &format!("{} (other factors at the optimum)", a.response),
-        )
-        .map_err(|e| StudyError::Plot(e.to_string()))?;
-        write_output(&sub.join("contour.svg"), svg.as_bytes(), &lineage)?;
+        // Two or more factors: a contour of the two that matter most; one
+        // factor: the fitted curve through the runs.
+        let (file, svg) = match contour_grid(study, a, &hold) {
+            Some(grid) => (
+                "contour.svg",
+                contour(
+                    &grid,
+                    &format!("{} (other factors at the optimum)", a.response),
+                ),
+            ),
+            None => {
+                let (x, y, _) = observations(&runs, &coded, &a.response);
+                ("curve.svg", response_curve(study, a, &x, &y))
+            }
+        };
+        let svg = svg.map_err(|e| StudyError::Plot(e.to_string()))?;
+        write_output(&sub.join(file), svg.as_bytes(), &lineage)?;
         write_output(
             &sub.join("anova.md"),
             anova_markdown(study, a).as_bytes(),
@@ -424,10 +434,49 @@ fn joint_optimum(
     (!goals.is_empty()).then(|| maximise(&goals, study.factors.len(), OPTIMISER_STARTS, study.seed))
 }
 
-/// The two factors with the largest summed sums of squares of the terms
-/// they appear in, on a 41 × 41 grid, others at `hold`.
-fn contour_grid(study: &DesignStudy, a: &ResponseAnalysis, hold: &[f64]) -> ContourGrid {
+/// The one-factor study's plot: the runs' responses against the factor
+/// (actual units) and the fitted quadratic through them on 41 points.
+fn response_curve(
+    study: &DesignStudy,
+    a: &ResponseAnalysis,
+    coded: &[Vec<f64>],
+    y: &[f64],
+) -> Result<String, crate::report::plots::PlotError> {
     let names = study.factor_names();
+    let range = &study.ranges()[0];
+    let n = 41;
+    let fit = (0..n)
+        .map(|k| {
+            let c = -1.0 + 2.0 * k as f64 / (n - 1) as f64;
+            (range.to_actual(c), a.fit.predict(&[c]))
+        })
+        .collect();
+    let curve = Curve {
+        label: a.response.clone(),
+        points: coded
+            .iter()
+            .zip(y)
+            .map(|(x, y)| (range.to_actual(x[0]), *y))
+            .collect(),
+        fit,
+    };
+    let f = &study.factors[&names[0]];
+    curves(
+        &[curve],
+        &format!("{}: quadratic fit", a.response),
+        &format!("{} = {}", names[0], f.display_name()),
+        &a.response,
+    )
+}
+
+/// The two factors with the largest summed sums of squares of the terms
+/// they appear in, on a 41 × 41 grid, others at `hold`; `None` for a
+/// one-factor study (no second axis).
+fn contour_grid(study: &DesignStudy, a: &ResponseAnalysis, hold: &[f64]) -> Option<ContourGrid> {
+    let names = study.factor_names();
+    if names.len() < 2 {
+        return None;
+    }
     let mut weight: Vec<(f64, usize)> = names
         .iter()
         .enumerate()
@@ -467,7 +516,7 @@ fn contour_grid(study: &DesignStudy, a: &ResponseAnalysis, hold: &[f64]) -> Cont
         let f = &study.factors[&names[k]];
         format!("{} = {}", names[k], f.display_name())
     };
-    ContourGrid {
+    Some(ContourGrid {
         x_label: factor(i),
         y_label: factor(j),
         x: axis(&ranges[i]),
@@ -479,7 +528,7 @@ fn contour_grid(study: &DesignStudy, a: &ResponseAnalysis, hold: &[f64]) -> Cont
             ranges[j].to_actual(hold[j]),
             "optimum".to_string(),
         )],
-    }
+    })
 }
 
 fn opt(v: Option<f64>) -> Cell {

@@ -391,6 +391,22 @@ impl DesignStudy {
                 fail(format!("{path}.address"), format!("{:?}", f.address), rule);
             }
         }
+        for (i, (a, fa)) in self.factors.iter().enumerate() {
+            for (b, fb) in self.factors.iter().skip(i + 1) {
+                if addresses_overlap(&fa.address, &fb.address) {
+                    fail(
+                        format!("factors.{b}.address"),
+                        format!("{:?}", fb.address),
+                        format!(
+                            "sets the same field as factors.{a}.address ({:?}): two factors \
+                             on one field alias (the later value overwrites the earlier, and \
+                             the analysis would credit effects to a factor never applied)",
+                            fa.address
+                        ),
+                    );
+                }
+            }
+        }
         if self.responses.is_empty() {
             fail(
                 "responses".into(),
@@ -624,6 +640,25 @@ impl DesignStudy {
         }
         Ok(())
     }
+}
+
+/// Whether two factor addresses can set the same number: the same path, a
+/// `*` matching any map key, and the derived shear modulus counting as the
+/// Young's modulus it sets.
+fn addresses_overlap(a: &str, b: &str) -> bool {
+    let canonical = |s: &str| {
+        s.replace(
+            "material.particle.shear_modulus_pa",
+            "material.particle.youngs_modulus_pa",
+        )
+    };
+    let (a, b) = (canonical(a), canonical(b));
+    let (sa, sb): (Vec<&str>, Vec<&str>) = (a.split('.').collect(), b.split('.').collect());
+    sa.len() == sb.len()
+        && sa
+            .iter()
+            .zip(&sb)
+            .all(|(x, y)| x == y || *x == "*" || *y == "*")
 }
 
 /// Levels must be ≥ 2, finite, distinct and (if `range`) within it.
