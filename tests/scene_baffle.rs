@@ -269,8 +269,8 @@ fn a_cohesive_cliff_is_not_measurable() {
     // Bond number 100 (Γ = 0.235 J/m² on these 1.5 mm spheres of 60 kg/m³):
     // cohesion a hundred times the weight makes the bed a solid block that
     // keeps its full height when the baffle lifts, so its top is flat and no
-    // slope lies in the 10–90 % band. That must be an error saying "not
-    // measurable", not an angle. (he2019's own Γ of 3–8 J/m² on coarse spheres
+    // slope lies in the 10–90 % band. The run must say "not measurable"
+    // instead of giving an angle, and keep its counts. (he2019's own Γ of 3–8 J/m² on coarse spheres
     // of this density is a Bond number of 10³–10⁴; on spheres softened to
     // 0.25 MPa its JKR overlaps exceed the health bound, so it is not used.)
     let gamma = 100.0 / bond_number(1.0);
@@ -286,6 +286,11 @@ fn a_cohesive_cliff_is_not_measurable() {
         unreachable!()
     };
     s.settle_time_s = 0.2;
-    let err = run_experiment(&exp, None).unwrap_err().to_string();
-    assert!(err.contains("static angle not measurable"), "{err}");
+    let r = run_experiment(&exp, None).unwrap();
+    assert_eq!(r.headline_angle_deg, None);
+    assert!(!r.measurements.contains_key("static_angle_deg"));
+    assert!(r.measurements.contains_key("in_box_particles"));
+    let why = r.headline_reason().unwrap();
+    assert!(why.contains("static angle not measurable"), "{why}");
+    assert_eq!(r.unmeasured["static_angle_deg"], why);
 }

@@ -283,7 +283,9 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
     // and submitted again only when asked.
     let mut failing: Value = common::example("calibrate-smoke/study.json");
     failing["name"] = "calibrate-smoke-failing".into();
-    failing["calibration"]["scene"]["fill_fraction"] = 0.01.into();
+    // A drum filled to 99 %: more spheres than its cross-section holds, so
+    // the run fails when it places them (validation allows any fill < 1).
+    failing["calibration"]["scene"]["fill_fraction"] = 0.99.into();
     failing["design"]["size"] = 2.into();
     let failing_path = tmp.path().join("failing.json");
     std::fs::write(&failing_path, failing.to_string()).unwrap();
@@ -301,14 +303,19 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
     let out = repose(&slurm, &store, &batch);
     expect_code(&out, 1);
     let report = text(&out.stdout);
-    let failed_lines = report.lines().filter(|l| l.contains("not measurable"));
+    let failed_lines = report
+        .lines()
+        .filter(|l| l.contains("the region holds only"));
     assert_eq!(failed_lines.count(), 2, "{report}");
     assert!(report.contains("error.json"), "{report}");
     let s = status(&slurm, &store, failing_study);
     assert_eq!(count(&s, "failed"), 2, "{s}");
     for r in s["runs"].as_array().unwrap() {
         assert!(
-            r["note"].as_str().unwrap().contains("not measurable"),
+            r["note"]
+                .as_str()
+                .unwrap()
+                .contains("the region holds only"),
             "{r}"
         );
     }

@@ -14,15 +14,14 @@
 //! cached by id in the store like every run; a killed verify resumes, and a
 //! failed run is reported in its row without stopping the others.
 //!
-//! A run whose scene could not measure an angle (its error says "not
-//! measurable", as every [`crate::measure::MeasureError`] and every scene's
-//! angle error does: a baffle slope or a drum surface with too few surface
-//! points, a pile too flat) is an outcome of the candidate, not a fault: the
-//! parameter set does not give that test a measurable slope, so it fails that
-//! scene, and the table says why ([`VerifyStatus::NotMeasurable`]). Any other
-//! failure (the engine's health check, I/O) is an error
-//! ([`VerifyStatus::Failed`], [`VerifyOutcome::errors`]) that `repose verify`
-//! and `repose calibrate` exit with after writing the table.
+//! A run whose scene could not measure an angle (a baffle slope or a drum
+//! surface with too few surface points, a pile too flat) completes without
+//! one and records why ([`RunResult::unmeasured`]): that is an outcome of
+//! the candidate, not a fault, and the row says why
+//! ([`VerifyStatus::NotMeasurable`], read from the result, never from an
+//! error's text). A run that failed (the engine's health check, I/O) is an
+//! error ([`VerifyStatus::Failed`], [`VerifyOutcome::errors`]) that
+//! `repose verify` and `repose calibrate` exit with after writing the table.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -77,25 +76,14 @@ impl VerifyRow {
 pub enum VerifyStatus {
     /// The scene measured an angle.
     Measured,
-    /// The run ended, but its scene could not measure an angle; the run's
-    /// error message (which says "not measurable") tells why. The candidate
-    /// fails the scene.
+    /// The run ended, but its scene could not measure an angle; the reason
+    /// it recorded ([`RunResult::headline_reason`]) tells why.
     NotMeasurable(String),
     /// The run failed for another reason (the message), or gave no angle.
     Failed(String),
 }
 
 impl VerifyStatus {
-    /// The status of a run that failed with `message`: not measurable when the
-    /// message says so (see the module docs), failed otherwise.
-    pub fn of_failure(message: &str) -> VerifyStatus {
-        if message.contains(NOT_MEASURABLE) {
-            VerifyStatus::NotMeasurable(message.to_string())
-        } else {
-            VerifyStatus::Failed(message.to_string())
-        }
-    }
-
     /// The reason a run has no angle (none when it was measured).
     pub fn reason(&self) -> Option<&str> {
         match self {
@@ -104,9 +92,6 @@ impl VerifyStatus {
         }
     }
 }
-
-/// What every "cannot measure" error of the measurements and scenes says.
-const NOT_MEASURABLE: &str = "not measurable";
 
 /// What verify did.
 #[derive(Debug, Clone, PartialEq)]
@@ -227,7 +212,7 @@ where
         let simulated = result.as_ref().and_then(|r| r.headline_angle_deg);
         let reason = result.as_ref().and_then(RunResult::headline_reason);
         let status = match (failures.iter().find(|f| f.0 == i), simulated, reason) {
-            (Some((_, message)), _, _) => VerifyStatus::of_failure(message),
+            (Some((_, message)), _, _) => VerifyStatus::Failed(message.clone()),
             (None, Some(_), _) => VerifyStatus::Measured,
             (None, None, Some(why)) => VerifyStatus::NotMeasurable(why.to_string()),
             (None, None, None) => VerifyStatus::Failed("no angle".to_string()),

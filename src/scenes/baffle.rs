@@ -84,7 +84,9 @@
 //! (60 kg/m³) are a granular Bond number (JKR pull-off 1.5 π Γ R* over the
 //! weight) of 10³ at 2.5 mm and 10⁴ at 0.625 mm: such a bed is a solid block
 //! that keeps its height when the baffle lifts, and its slope is not measurable
-//! (tests/scene_baffle.rs shows it at Bond number 100). The example manifests
+//! (tests/scene_baffle.rs shows it at Bond number 100): the run then has no
+//! angle and records why in `unmeasured` (`static_angle_deg`), keeping its
+//! counts. The example manifests
 //! in `experiments/baffle_lift/` say what they use instead. Spheres with almost
 //! no rolling resistance keep rolling slowly on the floor long after the slope
 //! is still, so the rest phase often runs its full `settle_time_s`;
@@ -108,7 +110,7 @@ use crate::measure::MeasureError;
 use crate::packing::place::{place_random, FillTarget, PlacementSpec};
 use crate::packing::region::Region;
 use crate::packing::PackingError;
-use crate::store::RunResult;
+use crate::store::{RunResult, HEADLINE_KEY};
 use std::path::Path;
 
 /// Solid fraction of the placement column (random sequential addition
@@ -421,7 +423,7 @@ pub fn run(
     let rested = run_phase(&mut sim, &rest, dt, every, &mut sampler, &mut progress)?;
 
     let w = sim.world();
-    let slope = sampler.slope(&w.particles).map_err(BaffleError::from)?;
+    let slope = sampler.slope(&w.particles);
     let (inside, outside) = census(&w.particles, &geo);
     let removed = sampler.removed;
     let traces = std::mem::take(&mut sampler.traces);
@@ -458,12 +460,23 @@ pub fn run(
         "discharged_mass_fraction",
         (outside.mass_kg + removed.mass_kg) / placed.mass_kg,
     );
-    put("static_angle_deg", slope.angle_deg);
-    put("static_angle_r2", slope.r2);
-    put("static_angle_points", slope.points as f64);
-    put("static_angle_low_r2", flag(slope.r2 < ANGLE_R2_FLOOR));
-    put("slope_height_m", slope.height_m);
-    result.headline_angle_deg = Some(slope.angle_deg);
+    match slope {
+        Ok(slope) => {
+            put("static_angle_deg", slope.angle_deg);
+            put("static_angle_r2", slope.r2);
+            put("static_angle_points", slope.points as f64);
+            put("static_angle_low_r2", flag(slope.r2 < ANGLE_R2_FLOOR));
+            put("slope_height_m", slope.height_m);
+            result.headline_angle_deg = Some(slope.angle_deg);
+        }
+        // The run keeps its counts; the slope's reason is recorded.
+        Err(e) => {
+            let why = BaffleError::from(e).to_string();
+            for key in ["static_angle_deg", HEADLINE_KEY] {
+                result.unmeasured.insert(key.to_string(), why.clone());
+            }
+        }
+    }
     Ok(result)
 }
 

@@ -19,7 +19,11 @@
 //! Measurement ([`crate::measure::drum`]): the free-surface angle every
 //! `sample_interval_s`; the dynamic angle is the mean (± standard deviation)
 //! over the second half of the rotation (the first half is spin-up and is
-//! not averaged); the static angle is measured at the end of standing.
+//! not averaged); the static angle is measured at the end of standing. The
+//! headline is the dynamic angle, else the static one. A surface that
+//! cannot be fitted at the end leaves the static angle out with its reason
+//! in `unmeasured` (`static_angle_deg`, and the headline's when there is no
+//! dynamic angle either); the run keeps every other measurement.
 
 use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
 use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
@@ -37,7 +41,7 @@ use crate::measure::series::mean_std;
 use crate::packing::place::{place_lattice, place_random, FillTarget, PlacementSpec};
 use crate::packing::region::Region;
 use crate::packing::PackingError;
-use crate::store::RunResult;
+use crate::store::{RunResult, HEADLINE_KEY};
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -177,8 +181,7 @@ pub fn run(
     run_phase(&mut sim, &stand, dt, every, &mut sampler, &mut progress)?;
 
     let w = sim.world();
-    let last = drum_surface_angle(&w.particles.position, &w.particles.radius, &sampler.spec)
-        .map_err(|e| SceneError::Drum(e.into()))?;
+    let last = drum_surface_angle(&w.particles.position, &w.particles.radius, &sampler.spec);
     let dynamic = mean_std(&sampler.dynamic).ok();
     let traces = std::mem::take(&mut sampler.traces);
     drop(sampler);
@@ -198,15 +201,29 @@ pub fn run(
     };
     put("simulated_length_m", length);
     put("rotation_start_s", start);
-    put("static_angle_deg", last.angle_deg);
-    put("static_angle_r2", last.r2);
-    put("static_angle_points", last.points as f64);
+    if let Ok(last) = &last {
+        put("static_angle_deg", last.angle_deg);
+        put("static_angle_r2", last.r2);
+        put("static_angle_points", last.points as f64);
+    }
     if let Some(d) = dynamic {
         put("dynamic_angle_deg", d.mean);
         put("dynamic_angle_std_deg", d.std);
         put("dynamic_angle_samples", d.n as f64);
     }
-    result.headline_angle_deg = Some(dynamic.map_or(last.angle_deg, |d| d.mean));
+    // One angle that cannot be measured never discards the other.
+    result.headline_angle_deg = dynamic
+        .map(|d| d.mean)
+        .or(last.as_ref().ok().map(|l| l.angle_deg));
+    if let Err(e) = last {
+        let why = DrumError::from(e).to_string();
+        result
+            .unmeasured
+            .insert("static_angle_deg".into(), why.clone());
+        if result.headline_angle_deg.is_none() {
+            result.unmeasured.insert(HEADLINE_KEY.into(), why);
+        }
+    }
     Ok(result)
 }
 

@@ -98,8 +98,9 @@
 //! which the two angles must agree. The headline angle is the height angle:
 //! it is the paper's (and the standard's) measure, and on the smoke pile it
 //! scatters 0.5° between packing seeds where the profile angle scatters 3°.
-//! A pile lower than three d50 is not measurable: the run fails with that
-//! reason and the particle counts ([`StaticPileError::NoPile`]).
+//! A pile lower than three d50 is not measurable: the run has no height
+//! angle (and no headline) and records that reason with the particle counts
+//! in `unmeasured` (`height_angle_deg`); its counts are still measured.
 //!
 //! # Results and traces
 //!
@@ -135,7 +136,7 @@ use crate::measure::MeasureError;
 use crate::packing::factory::{RateFactory, RateFactorySpec};
 use crate::packing::region::Region;
 use crate::packing::PackingError;
-use crate::store::RunResult;
+use crate::store::{RunResult, HEADLINE_KEY};
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -165,24 +166,6 @@ pub enum StaticPileError {
     /// What any lab scene can fail at ([`LabError`]).
     #[error(transparent)]
     Lab(LabError),
-    /// No pile could be measured at the end; the counts say why.
-    #[error(
-        "static pile: angle not measurable: {source}; {generated} of {particle_count} \
-         particles were generated, {on_disk} rest on the disk and {in_funnel} are still \
-         in the funnel"
-    )]
-    NoPile {
-        /// Why the measurement failed.
-        source: MeasureError,
-        /// Particles generated.
-        generated: u64,
-        /// Particles the manifest asked for.
-        particle_count: u64,
-        /// Particles on the disk at the end.
-        on_disk: usize,
-        /// Particles still in the funnel at the end.
-        in_funnel: usize,
-    },
 }
 
 lab_error_conversions!(StaticPileError, "static_pile");
@@ -697,17 +680,17 @@ pub fn run(
     let w = sim.world();
     let generated = sampler.feeder.generated();
     let census = Census::of(&geometry, &w.grain_centres().0);
+    // No pile is a measurement the run could not take, with the counts
+    // that say why; the run keeps every other measurement.
     let pile = measure_pile(&geometry, &w.particles.position, &w.particles.radius, d50).map_err(
         |source| {
-            fail(StaticPileError::NoPile {
-                source,
-                generated,
-                particle_count: scene.particle_count,
-                on_disk: census.on_disk,
-                in_funnel: census.in_funnel,
-            })
+            format!(
+                "static pile: angle not measurable: {source}; {generated} of {} particles \
+                 were generated, {} rest on the disk and {} are still in the funnel",
+                scene.particle_count, census.on_disk, census.in_funnel
+            )
         },
-    )?;
+    );
     let rest_ratio = mean_kinetic_energy_j(&sim) / (mass * STANDARD_GRAVITY_M_S2 * d50);
     let traces = std::mem::take(&mut sampler.traces);
     let removed = sampler.removed;
@@ -737,6 +720,25 @@ pub fn run(
     put("particles_below_disk", census.below_disk as f64);
     put("pour_end_s", pour_end_s);
     put("final_kinetic_energy_ratio", rest_ratio);
+    put_pile(&mut result, pile);
+    Ok(result)
+}
+
+/// The pile's measurements, or why there are none (see the module docs).
+fn put_pile(result: &mut RunResult, pile: Result<PileMeasurement, String>) {
+    let pile = match pile {
+        Ok(pile) => pile,
+        Err(why) => {
+            result.measurements.insert("profile_measured".into(), 0.0);
+            for key in ["height_angle_deg", HEADLINE_KEY] {
+                result.unmeasured.insert(key.to_string(), why.clone());
+            }
+            return;
+        }
+    };
+    let mut put = |k: &str, v: f64| {
+        result.measurements.insert(k.to_string(), v);
+    };
     put(
         "profile_measured",
         f64::from(u8::from(pile.profile.is_some())),
@@ -770,5 +772,4 @@ pub fn run(
     put("rim_coverage_fraction", pile.rim_coverage_fraction);
     put("rim_height_m", pile.rim_height_m);
     result.headline_angle_deg = Some(pile.height.angle_deg);
-    Ok(result)
 }
