@@ -22,7 +22,6 @@ use crate::calibrate::search::load_model;
 use crate::calibrate::search::{search as run_search, SearchSettings};
 use crate::calibrate::train::{train_study, train_table, TableSpec, TrainOptions, TrainOutcome};
 use crate::calibrate::verify::verify as run_verify;
-use crate::calibrate::verify_seeds::verify_seeds;
 use crate::calibrate::Stage;
 use crate::doe::diagnostics::Diagnostics;
 use crate::exec::Executor;
@@ -1147,28 +1146,13 @@ pub fn verify(
     let store = open_store(store_root)?;
     let settings = exec.in_study(dir.path());
     set_quiet(true);
-    if Method::of_calibration(&study) == Method::He2019NoiseAware {
-        let v = verify_seeds(&dir, &study, &store, &settings, candidates, run_logged)?;
-        write!(out, "{}", v.markdown)?;
-        return Ok(());
-    }
     let outcome = run_verify(&dir, &study, &store, &settings, candidates, run_logged)?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(out, "  table: {}", outcome.table.display())?;
-    let unmeasured = outcome.not_measurable();
-    if unmeasured > 0 {
-        writeln!(
-            out,
-            "note: {unmeasured} of {} verification run(s) could not measure an angle: \
-             those candidates fail those scenes (reasons above)",
-            outcome.rows.len()
-        )?;
-    }
-    let failed = outcome.errors();
-    if failed > 0 {
+    if outcome.failed_runs > 0 {
         return Err(CommandError::BatchIncomplete {
-            failed,
-            total: outcome.rows.len(),
+            failed: outcome.failed_runs,
+            total: outcome.runs,
         });
     }
     Ok(())

@@ -6,7 +6,8 @@
 //! for byte, and the stage tables must match the CSVs pinned in
 //! golden/calibrate_smoke/: the design, the simulated-angle table (he2019's
 //! Table A1 equivalent), the hidden-size sweep (Fig. 12), the clusters
-//! (Table 2) and the verification table (Table 3).
+//! (Table 2), the verification table (Table 3, with the one acceptance
+//! rule's verdicts) and its per-seed runs.
 //!
 //! `REPOSE_BLESS=1 cargo test --release --test calibrate_golden` rewrites the
 //! pinned files (after the determinism check); review their diff in the commit.
@@ -40,8 +41,8 @@ const CANDIDATES: usize = 3;
 /// hidden sizes, groups and verdicts are compared exactly ([`EXACT`]).
 const TOL: f64 = 1e-9;
 
-/// The five pinned tables: file name in golden/ and path in the study directory.
-fn tables(dir: &StudyDir) -> [(&'static str, PathBuf); 5] {
+/// The six pinned tables: file name in golden/ and path in the study directory.
+fn tables(dir: &StudyDir) -> [(&'static str, PathBuf); 6] {
     [
         ("design.csv", dir.stage(Stage::Sample).join("design.csv")),
         ("angles.csv", dir.stage(Stage::Batch).join("angles.csv")),
@@ -54,6 +55,7 @@ fn tables(dir: &StudyDir) -> [(&'static str, PathBuf); 5] {
             "verification.csv",
             dir.stage(Stage::Verify).join("verification.csv"),
         ),
+        ("runs.csv", dir.stage(Stage::Verify).join("runs.csv")),
     ]
 }
 
@@ -77,9 +79,13 @@ fn chain(store: &Path, jobs: usize) -> StudyDir {
 
 /// Columns compared exactly: ids, indices, counts, hidden sizes, cluster
 /// groups and sizes, scene names, statuses and verdicts.
-const EXACT: [&str; 13] = [
+const EXACT: [&str; 17] = [
     "verdict",
     "seeds_to_decide",
+    "seeds",
+    "measured",
+    "replicate",
+    "packing_seed",
     "index",
     "experiment_id",
     "status",

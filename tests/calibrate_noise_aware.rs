@@ -159,6 +159,20 @@ fn a_noise_aware_calibration_lands_a_verified_candidate_and_reproduces() {
         .unwrap();
     assert!(gp.validation_r2.unwrap() > 0.9, "{gp:?}");
     assert!(gp.interval_coverage.unwrap() >= 0.75, "{gp:?}");
+    // Beside it, what the validation means' noise allows: with σ = 0.5° on
+    // 2-seed means and a signal of several degrees the ceiling is near 1.
+    let noise = gp.noise.unwrap();
+    assert!(
+        noise.r2_ceiling > 0.9 && noise.r2_ceiling <= 1.0,
+        "{noise:?}"
+    );
+    assert!(
+        noise.rmse_floor > 0.0 && noise.rmse_floor < 0.5,
+        "{noise:?}"
+    );
+    let report = std::fs::read_to_string(dir.stage(Stage::Train).join("surrogates.md")).unwrap();
+    assert!(report.contains("R² ceiling (noise)"), "{report}");
+    assert!(report.contains("a perfect model scores R²"), "{report}");
     assert!(outcome.surrogates.iter().any(|s| s.surrogate == "ga_bp"));
 
     // The candidate's 5-seed mean in the calibration scene is in the band,

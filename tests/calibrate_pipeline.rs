@@ -344,16 +344,18 @@ fn train_and_search_recover_the_fake_response_and_rerun_byte_identically() {
         let cluster = &found.clusters[k / 2];
         let (scene, measured) = [("drum", 30.0), ("drum15", 28.0)][k % 2];
         assert_eq!((row.group, row.scene.as_str()), (cluster.group, scene));
-        assert_eq!(row.measured_deg, measured);
+        assert_eq!(row.target_deg, measured);
         let (mu_r, mu) = (cluster.centre[0], cluster.centre[1]);
         let truth = 20.0 + 30.0 * mu + 40.0 * mu_r;
-        assert_eq!(row.simulated_deg, Some(truth));
+        // The classic method runs one seed per scene (he2019's Table 3).
+        assert_eq!((row.seeds, row.measured), (1, 1));
+        assert_eq!(row.mean_deg, Some(truth));
         assert_eq!(
             row.relative_error,
             Some((truth - measured).abs() / measured)
         );
         // One run has no interval: the one acceptance rule cannot decide.
-        assert_eq!(row.judgement().verdict, Verdict::Inconclusive);
+        assert_eq!(row.judgement.verdict, Verdict::Inconclusive);
     }
 
     let first = common::snapshot(dir.path());
@@ -473,7 +475,6 @@ fn a_damaged_run_is_recomputed_by_the_next_batch_not_trusted() {
 /// failure (here an injected one, as an engine error would be) stays an error.
 #[test]
 fn a_verification_scene_that_cannot_measure_an_angle_is_a_failed_candidate() {
-    use repose::calibrate::verify::VerifyStatus;
     use repose::dem::health::{HealthCause, HealthError};
     use repose::manifest::Scene;
     use repose::measure::MeasureError;
@@ -533,40 +534,40 @@ fn a_verification_scene_that_cannot_measure_an_angle_is_a_failed_candidate() {
     for row in &checked.rows {
         match (row.scene.as_str(), row.group) {
             ("drum15", _) => {
-                assert_eq!(row.status, VerifyStatus::NotMeasurable(reason.into()));
-                assert_eq!((row.simulated_deg, row.relative_error), (None, None));
-                assert_ne!(row.judgement().verdict, Verdict::Pass);
+                // A missing replicate with its reason, never a value.
+                assert_eq!(row.failures, vec![format!("seed 0: {reason}")]);
+                assert_eq!((row.mean_deg, row.relative_error), (None, None));
+                assert_eq!(row.judgement.verdict, Verdict::Inconclusive);
             }
-            (_, 2) => assert!(matches!(row.status, VerifyStatus::Failed(_)), "{row:?}"),
-            _ => assert_eq!(row.status, VerifyStatus::Measured),
+            (_, 2) => assert_eq!((row.measured, row.failures.len()), (0, 1), "{row:?}"),
+            _ => assert_eq!((row.measured, row.failures.len()), (1, 0), "{row:?}"),
         }
     }
-    assert_eq!(checked.not_measurable(), candidates);
-    assert_eq!(checked.errors(), candidates - 1);
-    // The Markdown table and the CSV both say why.
+    // Only the engine failure counts as a failed run (by its store status):
+    // the command exits with it after writing the tables.
+    assert_eq!(checked.failed_runs, candidates - 1);
+    assert_eq!(checked.runs, 2 * candidates);
+    // The Markdown table says why.
     assert!(
-        checked.markdown.contains(
-            "| 1 | drum15 | not measurable | 28.00 | — | inconclusive (< 2 seeds measured) |"
-        ),
+        checked
+            .markdown
+            .contains("| 1 | drum15 | 1 (0) | not measurable | — | 28.00 | — | — | inconclusive (< 2 seeds measured) |"),
         "{}",
         checked.markdown
     );
     assert!(
         checked
             .markdown
-            .contains(&format!("- candidate 1 drum15: {reason}")),
+            .contains(&format!("- candidate 1 drum15: seed 0: {reason}")),
         "{}",
         checked.markdown
     );
-    // The CSV's cells hold no commas: the message's comma is a semicolon, and
-    // the table reads back with every row as wide as its header.
-    let csv = std::fs::read_to_string(&checked.table).unwrap();
-    let drum15 = csv.lines().find(|l| l.starts_with("1,drum15,")).unwrap();
+    // runs.csv's cells hold no commas: the message's comma is a semicolon,
+    // and the table reads back with every row as wide as its header.
+    let csv = std::fs::read_to_string(checked.table.with_file_name("runs.csv")).unwrap();
+    let drum15 = csv.lines().find(|l| l.starts_with("drum15,1,")).unwrap();
     let cell = reason.replace(',', ";");
-    assert!(
-        drum15.ends_with(&format!(",inconclusive,{cell}")),
-        "{drum15}"
-    );
+    assert!(drum15.ends_with(&format!(",{cell}")), "{drum15}");
     let table = repose::report::table::Table::parse(&csv).unwrap();
     assert!(table.rows.iter().all(|r| r.len() == table.header.len()));
 }

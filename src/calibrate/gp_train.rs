@@ -41,7 +41,7 @@ use super::{json_bytes, to_unit, write_output, Stage, StudyDir, StudyError};
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
 use crate::stats::gp::{GaussianProcess, GpHyper, GpSettings};
-use crate::stats::metrics::{mse, r_squared};
+use crate::stats::metrics::{mse, noise_ceiling, r_squared, seeds_for_ceiling, NoiseCeiling};
 use crate::store::Store;
 
 /// z of a two-sided 95 % normal interval.
@@ -129,6 +129,10 @@ pub struct SurrogateMetrics {
     pub validation_rmse_deg: Option<f64>,
     /// Fraction of validation means inside their 95 % predictive interval.
     pub interval_coverage: Option<f64>,
+    /// What the validation means' own noise allows: the R² ceiling, the RMSE
+    /// floor and the signal-to-noise ratio ([`NoiseCeiling`]).
+    #[serde(default)]
+    pub noise: Option<NoiseCeiling>,
 }
 
 /// What the GP training did.
@@ -207,6 +211,7 @@ fn metrics(
     name: &str,
     train_rows: usize,
     observed: &[f64],
+    noise_vars: &[f64],
     predicted: &[f64],
     half_widths: &[f64],
 ) -> SurrogateMetrics {
@@ -224,6 +229,7 @@ fn metrics(
         validation_r2: r_squared(observed, predicted),
         validation_rmse_deg: some.then(|| mse(observed, predicted).sqrt()),
         interval_coverage: some.then(|| inside as f64 / observed.len() as f64),
+        noise: noise_ceiling(observed, noise_vars),
     }
 }
 
@@ -306,6 +312,7 @@ pub fn train_gp(
         "gp",
         train_data.y.len(),
         &val_data.y,
+        &val_data.noise_var,
         &gp_pred,
         &gp_half,
     )];
@@ -323,15 +330,24 @@ pub fn train_gp(
             mse(&obs, &pred).sqrt()
         };
         let mut v_obs = Vec::new();
+        let mut v_noise = Vec::new();
         let mut v_pred = Vec::new();
         for r in &validation {
             if let Some(m) = r.1.mean() {
                 v_obs.push(m);
+                v_noise.push(sigma2 / r.1.values().len() as f64);
                 v_pred.push(net(&r.1.point));
             }
         }
         let half = vec![Z95 * train_rmse; v_obs.len()];
-        table.push(metrics("ga_bp", obs.len(), &v_obs, &v_pred, &half));
+        table.push(metrics(
+            "ga_bp",
+            obs.len(),
+            &v_obs,
+            &v_noise,
+            &v_pred,
+            &half,
+        ));
     }
     let data = data_of(study, &all, sigma2);
     let full = fit(&data, seed)?;
@@ -357,6 +373,41 @@ pub fn train_gp(
     })
 }
 
+/// What the noise of the validation means allows, in words (see
+/// [`crate::stats::metrics`]): the ceiling, the signal-to-noise ratio, the
+/// seeds per point that would lift the ceiling to 0.9, and which surrogates
+/// do not beat the validation targets' mean.
+fn noise_sentence(n: &NoiseCeiling, sigma2: f64, metrics: &[SurrogateMetrics]) -> String {
+    let mut out = format!(
+        "\nThe validation means carry their own noise (σ²/k = {:.2} deg², signal S² ≈ {:.2} \
+         deg² across them, S/N {:.2}): a perfect model scores R² ≈ {:.2} and RMSE ≈ {:.2}° \
+         against them. ",
+        n.noise_var, n.signal_var, n.signal_to_noise, n.r2_ceiling, n.rmse_floor
+    );
+    match seeds_for_ceiling(n.signal_var, sigma2, 0.9) {
+        Some(k) => out.push_str(&format!(
+            "{k} seeds per point would lift the ceiling to 0.9."
+        )),
+        None => out.push_str(
+            "No signal stands above the noise across these points: no seed count lifts \
+             the ceiling; the parameters' effects here are below the noise.",
+        ),
+    }
+    let below: Vec<&str> = metrics
+        .iter()
+        .filter(|s| s.validation_r2.is_some_and(|r| r < 0.0))
+        .map(|s| s.surrogate.as_str())
+        .collect();
+    if !below.is_empty() {
+        out.push_str(&format!(
+            " {} do(es) not beat the validation targets' mean (R² < 0).",
+            below.join(" and ")
+        ));
+    }
+    out.push('\n');
+    out
+}
+
 /// Reads `train/gp.json`.
 pub fn read_gp(dir: &StudyDir) -> Result<GpModel, StudyError> {
     let path = dir.require(gp_path(dir), Stage::Train)?;
@@ -373,7 +424,9 @@ fn markdown(study: &Study, m: &GpModel, metrics: &[SurrogateMetrics]) -> String 
         "train rows",
         "validation rows",
         "validation R²",
+        "R² ceiling (noise)",
         "RMSE (°)",
+        "RMSE floor σ/√k (°)",
         "inside 95 % interval",
     ]);
     for s in metrics {
@@ -382,12 +435,17 @@ fn markdown(study: &Study, m: &GpModel, metrics: &[SurrogateMetrics]) -> String 
             s.train_rows.to_string(),
             s.validation_rows.to_string(),
             f(s.validation_r2, 3),
+            f(s.noise.map(|n| n.r2_ceiling), 3),
             f(s.validation_rmse_deg, 2),
+            f(s.noise.map(|n| n.rmse_floor), 2),
             s.interval_coverage
                 .map_or("—".into(), |c| format!("{:.0} %", 100.0 * c)),
         ]);
     }
     let mut out = t.render();
+    if let Some(n) = metrics.first().and_then(|s| s.noise) {
+        out.push_str(&noise_sentence(&n, m.pooled_variance_deg2, metrics));
+    }
     let names = super::parameter_names(study);
     let _ = writeln!(
         out,

@@ -28,8 +28,10 @@
 //!   search/points.csv               resampled points, predicted angle, kept, cluster
 //!   search/clusters.csv, .md        centres (physical units), sizes, predicted angle
 //!   search/scatter.svg              scatter matrix of the kept points by cluster
-//!   verify/verification.csv, .md    each candidate in every scene: simulated and
-//!                                   measured angle, relative error, pass/fail
+//!   verify/acceptance.json          the acceptance rule, written before the runs
+//!   verify/verification.csv, .md,   each candidate in every scene: simulated mean
+//!   verify/runs.csv                 (one run, or the noise-aware seeds), measured
+//!                                   angle, TOST p, verdict ([`verify`])
 //!   learning-curve/curve.csv, .md   validation R², parameter spread and DEM time
 //!   learning-curve/curve.svg        against the number of training runs
 //!                                   (see [`curve`])
@@ -50,9 +52,8 @@
 //!   search/points.csv, clusters.*,  kept by the probability of the target band;
 //!   search/family.json              the family of consistent parameter sets
 //!                                   ([`gp_search`])
-//!   verify/acceptance.json          the acceptance rule, written before the runs
-//!   verify/verification.*, runs.csv every candidate x scene x seed: mean ± CI,
-//!                                   pass ([`verify_seeds`])
+//!   verify/verification.*, runs.csv every candidate x scene x `verification_seeds`
+//!                                   seeds: mean ± CI, verdict ([`verify`])
 //!   outcome.json                    the whole outcome (`calibrate --json`)
 //! ```
 //!
@@ -94,7 +95,6 @@ pub mod sample;
 pub mod search;
 pub mod train;
 pub mod verify;
-pub mod verify_seeds;
 
 use std::path::{Path, PathBuf};
 

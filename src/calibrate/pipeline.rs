@@ -29,7 +29,7 @@ use super::noise::{noise, NoiseFloor};
 use super::sample::{sample, SampleSettings};
 use super::search::{load_model, SearchSettings};
 use super::train::{train_study, TrainOptions};
-use super::verify_seeds::{verify_seeds, SeedVerifyRow};
+use super::verify::{verify, VerifyRow};
 use super::{json_bytes, write_output, Stage, StudyDir, StudyError};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
@@ -108,7 +108,7 @@ pub struct CalibrationOutcome {
     /// The acceptance rule, recorded before verification.
     pub acceptance: Record,
     /// Every candidate in every scene.
-    pub verification: Vec<SeedVerifyRow>,
+    pub verification: Vec<VerifyRow>,
     /// Some candidate passes the calibration scene.
     pub calibrated: bool,
     /// Some candidate passes every scene.
@@ -188,7 +188,7 @@ where
         1 + study.verification.len(),
         spec.verification_seeds
     ));
-    let v = verify_seeds(dir, study, store, pool, options.candidates, &runner)?;
+    let v = verify(dir, study, store, pool, options.candidates, &runner)?;
     log(&v.markdown);
     let calibrated = v
         .rows

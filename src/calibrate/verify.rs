@@ -1,126 +1,141 @@
 //! `repose verify STUDY`: he2019 §3.6 — every candidate parameter set (a
 //! cluster centre of the search) is simulated again, in the calibration scene
 //! (so the surrogate's prediction meets the DEM it stands for) and in each of
-//! the study's verification scenes (he2019: baffle lift and rotating drum);
-//! the simulated angles are compared with the measured ones: the equivalent of
-//! he2019's Table 3 (simulated, measured, relative error), with the verdict
-//! of the project's one acceptance rule ([`crate::study::acceptance`]) —
-//! which a single run cannot satisfy: it has no interval, so every row is
-//! inconclusive, and the table says so rather than passing a candidate on one
-//! draw of a noisy test. The noise-aware method verifies with seeds.
+//! the study's verification scenes (he2019: baffle lift and rotating drum),
+//! with [`verification_seeds`] packing seeds per scene: a noise-aware study's
+//! `verification_seeds`, or one run per scene for the classic method (he2019's
+//! Table 3). Every candidate in every scene is judged by the project's one
+//! acceptance rule ([`crate::study::acceptance`]: TOST against the scene's
+//! band; pass, fail, or inconclusive with the seeds that would decide) — a
+//! single run has no interval and is never decided, and the table says so
+//! rather than passing a candidate on one draw of a noisy test.
 //!
-//! Verification experiments are ordinary experiments of the study
-//! ([`Study::experiment`]) with `sample_index` = the cluster's group number,
-//! cached by id in the store like every run; a killed verify resumes, and a
-//! failed run is reported in its row without stopping the others.
+//! # The acceptance record
 //!
-//! A run whose scene could not measure an angle (a baffle slope or a drum
-//! surface with too few surface points, a pile too flat) completes without
-//! one and records why ([`RunResult::unmeasured`]): that is an outcome of
-//! the candidate, not a fault, and the row says why
-//! ([`VerifyStatus::NotMeasurable`], read from the result, never from an
-//! error's text). A run that failed (the engine's health check, I/O) is an
-//! error ([`VerifyStatus::Failed`], [`VerifyOutcome::errors`]) that
-//! `repose verify` and `repose calibrate` exit with after writing the table.
+//! The rule, the seeds and every scene's target and band are written to
+//! `verify/acceptance.json` — with its lineage record, before the first
+//! verification run — from the study (whose id fixes them), so they cannot be
+//! chosen after the result is seen; the verification table's lineage names
+//! that file. Where the study's noise floor has measured the calibration
+//! scene's σ, the record also holds the power calculation: the seeds that
+//! give TOST power ≥ 0.8 at the band's centre, capped by
+//! `verification_seeds`, and the power the seeds run actually have. Every
+//! scene runs `verification_seeds` (the cap), so a scene never has less power
+//! than the calculation asks for unless the cap is below it — which the
+//! record then says.
+//!
+//! A seed whose run could not measure the angle is a missing replicate
+//! (its reason, recorded in the run's result, is listed under the table),
+//! never a value and never an error. A run that failed (the engine's health
+//! check, I/O) is a missing replicate too, and is counted in
+//! [`VerifyOutcome::failed_runs`] by its store status, which `repose verify`
+//! and `repose calibrate` exit with after writing the tables.
+//!
+//! Verification experiments are ordinary replicates of the study
+//! ([`Study::replicate_experiment`], replicate 0 being
+//! [`Study::experiment`]) with `sample_index` = the cluster's group number,
+//! cached by id in the store like every run; a killed verify resumes.
+//!
+//! # Candidates
+//!
+//! The search's largest clusters' centres (`--candidates`, numbered by
+//! cluster group) and, when `calibrate --adaptive` ended on one, the
+//! adaptive candidate that passed in the calibration scene, under its sample
+//! index (≥ [`super::adaptive::ADAPTIVE_INDEX`]). Its calibration-scene runs
+//! are the adaptive stage's own (the same manifests, so the store returns
+//! them), and it is judged in every other scene like the search's.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
+use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::{parameter_names, write_output, Stage, StudyDir, StudyError};
-use crate::exec::{run_incomplete, Executor, Ran};
-use crate::manifest::{ContentId, Experiment, Study};
+use super::adaptive::passing_candidate;
+use super::gp_train::adaptive_path;
+use super::noise::read_noise;
+use super::replicates::{replicates_csv, run_replicated, Replicated};
+use super::{json_bytes, parameter_names, write_output, Stage, StudyDir, StudyError};
+use crate::exec::Executor;
+use crate::manifest::{Experiment, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::table::{Cell, CsvWriter, Table};
-use crate::store::{RunDir, RunResult, Store};
-use crate::study::acceptance::{judge, Judgement};
+use crate::store::{RunDir, RunResult, RunStatus, Store};
+use crate::study::acceptance::{judge, AcceptedTarget, Judgement, Record};
 
-/// One row of the Table 3 equivalent.
-#[derive(Debug, Clone, PartialEq)]
+/// One candidate in one scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct VerifyRow {
-    /// Cluster group number (1 = largest).
+    /// Candidate (cluster group).
     pub group: usize,
-    /// Scene name (`funnel`, `baffle`, `drum`, ...).
+    /// Scene name.
     pub scene: String,
-    /// The experiment.
-    pub id: ContentId,
-    /// Simulated angle, degrees (none if the run failed).
-    pub simulated_deg: Option<f64>,
+    /// Seeds run.
+    pub seeds: usize,
+    /// Seeds measured.
+    pub measured: usize,
+    /// Mean of the measured seeds, degrees.
+    pub mean_deg: Option<f64>,
+    /// Their standard deviation, degrees.
+    pub sd_deg: Option<f64>,
+    /// Half-width of the 95 % interval of the mean, degrees.
+    pub ci95_half_width_deg: Option<f64>,
     /// Measured (target) angle, degrees.
-    pub measured_deg: f64,
-    /// |simulated − measured| / measured.
+    pub target_deg: f64,
+    /// |mean − target| / target.
     pub relative_error: Option<f64>,
-    /// The scene's accepted relative error.
-    pub tolerance: f64,
-    /// The band, target × (1 ∓ tolerance), degrees.
-    pub band_deg: (f64, f64),
-    /// How the run ended.
-    pub status: VerifyStatus,
-}
-
-impl VerifyRow {
-    /// The acceptance rule ([`crate::study::acceptance`]) on this row's one
-    /// run: one value has no interval, so it is never decided — he2019's
-    /// Table 3 judges a single run, which the rule does not sign. The
-    /// noise-aware method's verification (`verify_seeds`) runs the seeds
-    /// that decide.
-    pub fn judgement(&self) -> Judgement {
-        let values: Vec<f64> = self.simulated_deg.into_iter().collect();
-        judge(&values, self.band_deg)
-    }
-}
-
-/// How a verification run ended.
-#[derive(Debug, Clone, PartialEq)]
-pub enum VerifyStatus {
-    /// The scene measured an angle.
-    Measured,
-    /// The run ended, but its scene could not measure an angle; the reason
-    /// it recorded ([`RunResult::headline_reason`]) tells why.
-    NotMeasurable(String),
-    /// The run failed for another reason (the message), or gave no angle.
-    Failed(String),
-}
-
-impl VerifyStatus {
-    /// The reason a run has no angle (none when it was measured).
-    pub fn reason(&self) -> Option<&str> {
-        match self {
-            VerifyStatus::Measured => None,
-            VerifyStatus::NotMeasurable(m) | VerifyStatus::Failed(m) => Some(m),
-        }
-    }
+    /// The acceptance rule's judgement of the measured seeds.
+    pub judgement: Judgement,
+    /// Why seeds have no angle (one line per failed seed).
+    pub failures: Vec<String>,
 }
 
 /// What verify did.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct VerifyOutcome {
-    /// One row per candidate and scene, candidates in group order.
+    /// The rule.
+    pub acceptance: Record,
+    /// One row per candidate and scene.
     pub rows: Vec<VerifyRow>,
-    /// The Markdown table (also in verification.md).
+    /// The Markdown table (also verification.md).
     pub markdown: String,
     /// verification.csv.
     pub table: PathBuf,
+    /// Runs that failed (store status), not counting runs that completed
+    /// without the angle: the errors the commands exit with.
+    pub failed_runs: usize,
+    /// Runs in all.
+    pub runs: usize,
 }
 
-impl VerifyOutcome {
-    /// The rows whose run failed for a reason other than an unmeasurable
-    /// angle: the errors the commands exit with.
-    pub fn errors(&self) -> usize {
-        self.rows
-            .iter()
-            .filter(|r| matches!(r.status, VerifyStatus::Failed(_)))
-            .count()
-    }
+/// Packing seeds per candidate and scene: a noise-aware study's
+/// `verification_seeds`; one (he2019's Table 3) for the classic method.
+pub fn verification_seeds(study: &Study) -> u32 {
+    study
+        .noise_aware
+        .as_ref()
+        .map_or(1, |n| n.verification_seeds)
+}
 
-    /// The rows whose scene could not measure an angle (failed candidates).
-    pub fn not_measurable(&self) -> usize {
-        self.rows
-            .iter()
-            .filter(|r| matches!(r.status, VerifyStatus::NotMeasurable(_)))
-            .count()
-    }
+/// The study's acceptance record (see the module docs); `noise_sd_deg` is
+/// the calibration scene's σ from the noise floor, when measured.
+pub fn acceptance(study: &Study, noise_sd_deg: Option<f64>) -> Record {
+    let seeds = verification_seeds(study) as usize;
+    let targets = std::iter::once(&study.calibration)
+        .chain(&study.verification)
+        .enumerate()
+        .map(|(k, t)| {
+            AcceptedTarget::new(
+                &t.name,
+                t.response.as_deref().unwrap_or("headline_angle_deg"),
+                t.target_angle_deg,
+                t.tolerance_fraction,
+                seeds,
+                if k == 0 { noise_sd_deg } else { None },
+            )
+        })
+        .collect();
+    Record::new(seeds, targets)
 }
 
 /// `search/clusters.csv` (written by the network's and the GP's search).
@@ -164,12 +179,18 @@ pub fn verification_path(dir: &StudyDir) -> PathBuf {
     dir.stage(Stage::Verify).join("verification.csv")
 }
 
-/// Runs the verify stage on at most `candidates` clusters (largest first).
+/// `verify/acceptance.json`.
+pub fn acceptance_path(dir: &StudyDir) -> PathBuf {
+    dir.stage(Stage::Verify).join("acceptance.json")
+}
+
+/// Runs the verification (see the module docs) on at most `candidates`
+/// clusters, largest first.
 pub fn verify<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
-    settings: &Executor,
+    pool: &Executor,
     candidates: usize,
     runner: F,
 ) -> Result<VerifyOutcome, StudyError>
@@ -177,94 +198,196 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let (clusters_file, centres) = read_candidates(dir, study, candidates)?;
-    let names = parameter_names(study);
-    let scenes: Vec<_> = std::iter::once(&study.calibration)
+    let noise_sd = read_noise(dir).ok().and_then(|f| f.sd_deg);
+    let rule = acceptance(study, noise_sd);
+    let (clusters_file, mut points) = read_candidates(dir, study, candidates)?;
+    let adaptive = passing_candidate(dir, study)?;
+    if let Some(hit) = &adaptive {
+        points.push((hit.index, hit.point.clone()));
+    }
+
+    // The rule goes on record before any verification run.
+    dir.prepare_stage(study, Stage::Verify)?;
+    let mut rule_lineage = dir
+        .lineage(Stage::Verify, json!({ "record": "acceptance rule" }))
+        .with_input(dir.input("clusters", &clusters_file)?);
+    if adaptive.is_some() {
+        rule_lineage = rule_lineage.with_input(dir.input("adaptive", &adaptive_path(dir))?);
+    }
+    write_output(&acceptance_path(dir), &json_bytes(&rule), &rule_lineage)?;
+
+    let targets: Vec<_> = std::iter::once(&study.calibration)
         .chain(&study.verification)
         .collect();
-    let mut planned = Vec::new();
-    for (group, centre) in &centres {
-        let point = names.iter().cloned().zip(centre.iter().copied()).collect();
-        for target in &scenes {
-            let experiment = study
-                .experiment(&target.scene, &point, *group)
-                .map_err(|errors| StudyError::InvalidPoint {
-                    point: *group,
-                    scene: target.name.clone(),
-                    errors,
-                })?;
-            planned.push((*group as usize, *target, experiment));
+    let mut per_scene: Vec<Vec<Replicated>> = Vec::new();
+    for target in &targets {
+        per_scene.push(
+            run_replicated(
+                study,
+                target,
+                &points,
+                rule.seeds as u32,
+                store,
+                pool,
+                &runner,
+                false,
+            )?
+            .0,
+        );
+    }
+    let mut rows = Vec::new();
+    for (k, (group, _)) in points.iter().enumerate() {
+        for (target, runs) in targets.iter().zip(&per_scene) {
+            let r = &runs[k];
+            let values = r.values();
+            let judgement = judge(&values, target.band_deg());
+            let mean = judgement.mean;
+            rows.push(VerifyRow {
+                group: *group as usize,
+                scene: target.name.clone(),
+                seeds: r.runs.len(),
+                measured: values.len(),
+                mean_deg: mean,
+                sd_deg: judgement.tost.map(|t| t.sd),
+                ci95_half_width_deg: judgement.ci95_half_width(),
+                target_deg: target.target_angle_deg,
+                relative_error: mean
+                    .map(|m| (m - target.target_angle_deg).abs() / target.target_angle_deg),
+                judgement,
+                failures: r
+                    .runs
+                    .iter()
+                    .filter_map(|s| {
+                        s.value
+                            .as_ref()
+                            .err()
+                            .map(|m| format!("seed {}: {m}", s.replicate))
+                    })
+                    .collect(),
+            });
         }
     }
-    let experiments: Vec<Experiment> = planned.iter().map(|p| p.2.clone()).collect();
-    let Ran { failures, .. } = run_incomplete(&experiments, store, settings, &runner)?;
-
     let mut lineage = dir
         .lineage(Stage::Verify, json!({ "candidates": candidates }))
-        .with_input(dir.input("clusters", &clusters_file)?);
-    let mut rows = Vec::new();
-    for (i, (group, target, experiment)) in planned.iter().enumerate() {
-        let id = experiment.id();
-        let result = store.load_result(&id)?;
-        if result.is_some() {
-            lineage = lineage.with_input(dir.input("result", &store.run_dir(&id).result_path())?);
+        .with_input(dir.input("clusters", &clusters_file)?)
+        .with_input(dir.input("acceptance", &acceptance_path(dir))?);
+    for runs in &per_scene {
+        for r in runs.iter().flat_map(|p| &p.runs) {
+            let file = store.run_dir(&r.id).result_path();
+            if file.is_file() {
+                lineage = lineage.with_input(dir.input("result", &file)?);
+            }
         }
-        let simulated = result.as_ref().and_then(|r| r.headline_angle_deg);
-        let reason = result.as_ref().and_then(RunResult::headline_reason);
-        let status = match (failures.iter().find(|f| f.0 == i), simulated, reason) {
-            (Some((_, message)), _, _) => VerifyStatus::Failed(message.clone()),
-            (None, Some(_), _) => VerifyStatus::Measured,
-            (None, None, Some(why)) => VerifyStatus::NotMeasurable(why.to_string()),
-            (None, None, None) => VerifyStatus::Failed("no angle".to_string()),
-        };
-        rows.push(VerifyRow {
-            group: *group,
-            scene: target.name.clone(),
-            id,
-            simulated_deg: simulated,
-            measured_deg: target.target_angle_deg,
-            relative_error: simulated
-                .map(|s| (s - target.target_angle_deg).abs() / target.target_angle_deg),
-            tolerance: target.tolerance_fraction,
-            band_deg: target.band_deg(),
-            status,
-        });
     }
+    let out = dir.stage(Stage::Verify);
+    let blocks: Vec<(&str, &[Replicated])> = targets
+        .iter()
+        .zip(&per_scene)
+        .map(|(t, runs)| (t.name.as_str(), runs.as_slice()))
+        .collect();
+    write_output(
+        &out.join("runs.csv"),
+        replicates_csv(study, &blocks).as_bytes(),
+        &lineage,
+    )?;
+    let markdown = markdown(&rule, &rows);
+    write_output(&out.join("verification.md"), markdown.as_bytes(), &lineage)?;
+    let table = verification_path(dir);
+    write_output(&table, csv(&rows).as_bytes(), &lineage)?;
+    let all_runs = || per_scene.iter().flatten().flat_map(|p| &p.runs);
+    let failed_runs = all_runs()
+        .filter(|r| store.status(&r.id) == RunStatus::Failed)
+        .count();
+    Ok(VerifyOutcome {
+        acceptance: rule,
+        rows,
+        markdown,
+        table,
+        failed_runs,
+        runs: all_runs().count(),
+    })
+}
+
+fn csv(rows: &[VerifyRow]) -> String {
     let mut csv = CsvWriter::new(&[
         "group",
         "scene",
-        "experiment_id",
-        "simulated_deg",
-        "measured_deg",
+        "seeds",
+        "measured",
+        "mean_deg",
+        "sd_deg",
+        "ci95_half_width_deg",
+        "target_deg",
         "relative_error",
-        "tolerance",
+        "tost_p",
         "verdict",
-        "failure",
+        "seeds_to_decide",
     ]);
-    for r in &rows {
+    for r in rows {
         csv.row(&[
             Cell::Integer(r.group as u64),
             Cell::Text(r.scene.clone()),
-            Cell::Text(r.id.to_string()),
-            r.simulated_deg.map_or(Cell::Empty, Cell::Number),
-            Cell::Number(r.measured_deg),
+            Cell::Integer(r.seeds as u64),
+            Cell::Integer(r.measured as u64),
+            r.mean_deg.map_or(Cell::Empty, Cell::Number),
+            r.sd_deg.map_or(Cell::Empty, Cell::Number),
+            r.ci95_half_width_deg.map_or(Cell::Empty, Cell::Number),
+            Cell::Number(r.target_deg),
             r.relative_error.map_or(Cell::Empty, Cell::Number),
-            Cell::Number(r.tolerance),
-            Cell::Text(r.judgement().verdict.to_string()),
-            Cell::Text(csv_word(r.status.reason().unwrap_or_default())),
+            r.judgement.p().map_or(Cell::Empty, Cell::Number),
+            Cell::Text(r.judgement.verdict.to_string()),
+            r.judgement
+                .seeds_to_decide
+                .map_or(Cell::Empty, |n| Cell::Integer(n as u64)),
         ]);
     }
-    let markdown = markdown(&rows);
-    super::create_dir(&dir.stage(Stage::Verify))?;
-    let md_path = dir.stage(Stage::Verify).join("verification.md");
-    write_output(&md_path, markdown.as_bytes(), &lineage)?;
-    let path = verification_path(dir);
-    write_output(&path, csv.finish().as_bytes(), &lineage)?;
-    Ok(VerifyOutcome {
-        rows,
-        markdown,
-        table: path,
-    })
+    csv.finish()
+}
+
+fn markdown(rule: &Record, rows: &[VerifyRow]) -> String {
+    let mut t = MarkdownTable::new(&[
+        "candidate",
+        "scene",
+        "seeds (measured)",
+        "simulated mean ± 95 % CI (°)",
+        "σ (°)",
+        "measured (°)",
+        "relative error",
+        "TOST p",
+        "verdict",
+    ]);
+    for r in rows {
+        t.row(&[
+            r.group.to_string(),
+            r.scene.clone(),
+            format!("{} ({})", r.seeds, r.measured),
+            match (r.mean_deg, r.ci95_half_width_deg) {
+                (Some(m), Some(h)) => format!("{m:.2} ± {h:.2}"),
+                (Some(m), None) => format!("{m:.2}"),
+                _ => "not measurable".into(),
+            },
+            r.sd_deg.map_or("—".into(), |s| format!("{s:.2}")),
+            format!("{:.2}", r.target_deg),
+            r.relative_error
+                .map_or("—".into(), |e| format!("{:.1} %", 100.0 * e)),
+            r.judgement.p().map_or("—".into(), |p| format!("{p:.3}")),
+            r.judgement.verdict_text(),
+        ]);
+    }
+    let mut out = rule.describe();
+    out.push('\n');
+    out.push_str(&t.render());
+    let failures: Vec<_> = rows
+        .iter()
+        .flat_map(|r| r.failures.iter().map(move |f| (r, f)))
+        .collect();
+    if !failures.is_empty() {
+        out.push_str("\nSeeds without an angle:\n\n");
+        for (r, f) in failures {
+            let _ = writeln!(out, "- candidate {} {}: {f}", r.group, r.scene);
+        }
+    }
+    out
 }
 
 /// `text` as a CSV cell of [`Cell::Text`]: commas become semicolons, quotes
@@ -280,43 +403,4 @@ pub(crate) fn csv_word(text: &str) -> String {
             c => c,
         })
         .collect()
-}
-
-fn markdown(rows: &[VerifyRow]) -> String {
-    let mut table = MarkdownTable::new(&[
-        "candidate",
-        "scene",
-        "simulated (°)",
-        "measured (°)",
-        "relative error",
-        "verdict",
-    ]);
-    for r in rows {
-        let simulated = match (&r.status, r.simulated_deg) {
-            (VerifyStatus::Measured, Some(s)) => format!("{s:.2}"),
-            (VerifyStatus::NotMeasurable(_), _) => "not measurable".to_string(),
-            _ => "failed".to_string(),
-        };
-        table.row(&[
-            r.group.to_string(),
-            r.scene.clone(),
-            simulated,
-            format!("{:.2}", r.measured_deg),
-            r.relative_error
-                .map_or_else(|| "—".to_string(), |e| format!("{:.1} %", 100.0 * e)),
-            r.judgement().verdict_text(),
-        ]);
-    }
-    let mut out = table.render();
-    let reasons: Vec<_> = rows
-        .iter()
-        .filter_map(|r| r.status.reason().map(|why| (r, why)))
-        .collect();
-    if !reasons.is_empty() {
-        out.push_str("\nWhy a scene has no angle:\n\n");
-        for (r, why) in reasons {
-            let _ = writeln!(out, "- candidate {} {}: {why}", r.group, r.scene);
-        }
-    }
-    out
 }
