@@ -4,7 +4,10 @@
 //! Every stage output has a lineage record beside it
 //! ([`crate::store::Lineage`], `<output>.lineage.json`). The audit reads every
 //! record under a path and checks, for each:
-//! - the output it describes still exists;
+//! - the output it describes still exists and, where the record holds its
+//!   sha256 (every stage output written since it was added), still has the
+//!   bytes the stage wrote: an edited table, fit or acceptance record is
+//!   reported;
 //! - every file input still exists and its bytes hash to the recorded sha256.
 //!   A relative path is looked up in the audited store only (the stages record
 //!   files of the store relative to its root), never in the current directory,
@@ -173,6 +176,16 @@ fn check_record(
             return;
         }
     };
+    if let Ok(bytes) = std::fs::read(&output) {
+        if !lineage.describes(&bytes) {
+            broken(format!(
+                "its output {} changed since the stage wrote it (sha256 {} recorded, {} now)",
+                output.display(),
+                lineage.output_sha256.as_deref().unwrap_or_default(),
+                ContentId::of_bytes(&bytes)
+            ));
+        }
+    }
     for input in &lineage.inputs {
         let label = format!("input `{}` ({})", input.role, input.id_or_path);
         if input.id_or_path == input.sha256 {

@@ -34,8 +34,9 @@ const TOL: f64 = 1e-9;
 
 /// Columns compared exactly: ids, seeds, indices, counts, term names,
 /// statuses and verdicts.
-const EXACT: [&str; 15] = [
+const EXACT: [&str; 16] = [
     "verdict",
+    "unresolved",
     "seeds_to_decide",
     "point",
     "replicate",

@@ -79,8 +79,9 @@ fn chain(store: &Path, jobs: usize) -> StudyDir {
 
 /// Columns compared exactly: ids, indices, counts, hidden sizes, cluster
 /// groups and sizes, scene names, statuses and verdicts.
-const EXACT: [&str; 17] = [
+const EXACT: [&str; 18] = [
     "verdict",
+    "unresolved",
     "seeds_to_decide",
     "seeds",
     "measured",

@@ -262,6 +262,31 @@ fn a_noise_aware_calibration_lands_a_verified_candidate_and_reproduces() {
             "{file}"
         );
     }
+
+    // The study audits clean; an acceptance record edited after the runs
+    // (a wider band, say) is reported, naming the file.
+    let store = Store::open(tmp.path().join("a")).unwrap();
+    let report = repose::audit::audit(&store, dir.path(), 0, 0).unwrap();
+    assert!(report.is_clean(), "{report:#?}");
+    let record = dir.stage(Stage::Verify).join("acceptance.json");
+    let edited = std::fs::read_to_string(&record).unwrap().replace(
+        "\"tolerance_fraction\": 0.05",
+        "\"tolerance_fraction\": 0.5",
+    );
+    std::fs::write(&record, edited).unwrap();
+    let report = repose::audit::audit(&store, dir.path(), 0, 0).unwrap();
+    // Its own record, and the three verification outputs that read it
+    // (runs.csv, verification.csv and .md).
+    let problems: Vec<&str> = report.broken.iter().map(|b| b.problem.as_str()).collect();
+    let own = problems
+        .iter()
+        .filter(|p| p.contains("acceptance.json changed since the stage wrote it"))
+        .count();
+    let readers = problems
+        .iter()
+        .filter(|p| p.contains("input `acceptance`") && p.contains("changed since the stage ran"))
+        .count();
+    assert_eq!((own, readers, problems.len()), (1, 3, 4), "{problems:#?}");
 }
 
 #[test]

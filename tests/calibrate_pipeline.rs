@@ -423,6 +423,43 @@ fn a_real_drum_design_runs_end_to_end() {
     }
 }
 
+/// A stage output edited after its stage ran is never read by the next
+/// stage (issue 40.2): train refuses the edited angles table, naming it and
+/// the stage to rerun, and a rerun of that stage restores it.
+#[test]
+fn an_edited_stage_output_is_refused_not_trusted() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (s, path) = study(tmp.path(), &[]);
+    let store = Store::open(tmp.path().join("store")).unwrap();
+    let dir = StudyDir::new(store.root(), &s, &path);
+    sample(&dir, &s, &SampleSettings::default()).unwrap();
+    let fake = Fake::new(&[]);
+    batch(&dir, &s, &store, &settings(1), |e, d| fake.run(e, d)).unwrap();
+    let angles = dir.stage(Stage::Batch).join("angles.csv");
+    let original = std::fs::read_to_string(&angles).unwrap();
+    let line = original.lines().nth(1).unwrap().to_string();
+    // The first sample's angle becomes 99°.
+    let mut cells: Vec<&str> = line.split(',').collect();
+    let at = cells.len() - 2;
+    cells[at] = "99";
+    let edited_line = cells.join(",");
+    assert_ne!(line, edited_line, "{line}");
+    std::fs::write(&angles, original.replacen(&line, &edited_line, 1)).unwrap();
+    let options = TrainOptions {
+        settings: TrainSettings::with_seed(7),
+        train_fraction: DEFAULT_TRAIN_FRACTION,
+    };
+    let err = train_study(&dir, &s, &options).unwrap_err().to_string();
+    assert!(
+        err.contains("angles.csv") && err.contains("changed since its stage wrote it"),
+        "{err}"
+    );
+    assert!(err.contains("rerun `repose batch`"), "{err}");
+    batch(&dir, &s, &store, &settings(1), |e, d| fake.run(e, d)).unwrap();
+    assert_eq!(std::fs::read_to_string(&angles).unwrap(), original);
+    train_study(&dir, &s, &options).unwrap();
+}
+
 /// A run damaged after the batch (an emptied result.json, an edited one) is
 /// recomputed by the next batch, alone, and the new lineage names the
 /// recomputed result's hash, not the tampered one's.

@@ -4,6 +4,8 @@
 //! scene, measurement or contact law would violate, the books of the powder,
 //! determinism, and the two ways a run refuses to give a number.
 
+mod common;
+
 use repose::manifest::{parse_experiment, Experiment, Scene};
 use repose::scenes::responses::{catalogue, response};
 use repose::scenes::run_experiment;
@@ -128,6 +130,11 @@ fn smoke_manifest_gives_a_plausible_angle_and_balanced_books() {
     // a cliff, not a repose slope.
     assert!(angle > 5.0 && angle < 60.0, "implausible angle {angle}");
     assert_eq!(r.headline_angle_deg, Some(angle));
+    // Resolution by hand: the 60 mm box is 10 diameters of 6 mm (below 20);
+    // the slope's height in diameters is its measured height over 6 mm.
+    common::assert_figure(&r, "box_length_diameters", 10.0, true);
+    let slope = m(&r, "slope_height_m") / 0.006;
+    common::assert_figure(&r, "slope_height_diameters", slope, slope < 5.0);
     assert!(m(&r, "static_angle_points") >= 3.0);
     let r2 = m(&r, "static_angle_r2");
     assert!(r2.is_finite() && r2 <= 1.0);

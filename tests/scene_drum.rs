@@ -2,6 +2,8 @@
 //! that a broken scene, measurement or contact law would violate, and the
 //! result's bookkeeping.
 
+mod common;
+
 use repose::manifest::{parse_experiment, Experiment};
 use repose::scenes::responses::{catalogue, response};
 use repose::scenes::run_experiment;
@@ -47,6 +49,15 @@ fn rougher_particles_stand_steeper_in_the_drum() {
         angle(&smooth)
     );
     for r in [&smooth, &rough] {
+        // Resolution by hand: the 30 mm drum is 15 diameters of 2 mm across;
+        // a 30 % fill of radius 15 mm is a segment of central angle θ with
+        // θ − sin θ = 0.6π, 15 (1 − cos θ/2) mm = 5.1023 diameters deep
+        // (scipy: `th = brentq(lambda t: t - sin(t) - 0.6*pi, 0, 2*pi)`,
+        // `7.5*(1 - cos(th/2))`); at 30 rpm Fr = π² · 0.015 / 9.81 = 0.01509,
+        // above the rolling regime.
+        common::assert_figure(r, "drum_diameters", 15.0, true);
+        common::assert_figure(r, "bed_depth_diameters", 5.10231367657122, true);
+        common::assert_figure(r, "froude_number", 0.01509113822796538, true);
         assert!(
             r.kernel.starts_with("hertz+mindlin+cdt+gravity+periodic"),
             "{}",

@@ -6,6 +6,8 @@
 //! E = 0.35 MPa, JKR + CDT, in the paper's 120 mm funnel over its 94 mm
 //! platform with a 30 mm outlet.
 
+mod common;
+
 use repose::dem::walls::Motion;
 use repose::manifest::{parse_experiment, Experiment, Scene};
 use repose::scenes::funnel::{self, geometry};
@@ -48,6 +50,9 @@ fn smoke_manifest_forms_a_measurable_pile() {
     // "pile" is a heap of clumps the he2019 line fit does not describe.
     let a = angle(&r);
     assert!(a > 22.0 && a < 70.0, "implausible pile angle {a}");
+    // Resolution by hand: the 94 mm platform is 15.67 diameters of 6 mm,
+    // below the 20 the flank fits need.
+    common::assert_figure(&r, "platform_diameters", 0.094 / 0.006, true);
     assert_eq!(r.headline_angle_deg, Some(a));
     // Every view is either fitted, with both flanks reported, or left out
     // entirely; at least MIN_VIEWS are fitted, and the headline is the mean of

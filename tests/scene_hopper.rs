@@ -6,6 +6,8 @@
 //! Runs are shared between tests (each is simulated once per test binary):
 //! the smoke manifest, a rougher variant and a narrower-orifice variant.
 
+mod common;
+
 use repose::manifest::{parse_experiment, Experiment};
 use repose::scenes::hopper::{beverloo_rate_per_s, BEVERLOO_K};
 use repose::scenes::responses::{catalogue, response};
@@ -86,6 +88,11 @@ fn trace<'a>(r: &'a RunResult, name: &str) -> &'a repose::store::Trace {
 #[test]
 fn smoke_manifest_runs_healthy_with_plausible_angles() {
     let r = smoke();
+    // Resolution by hand: the 18 mm orifice is 6 diameters of the coarse
+    // 3 mm spheres (1 mm × size factor 1.5 × 2), at the limit; Beverloo's
+    // effective orifice 6 − 1.5 = 4.5.
+    common::assert_figure(r, "orifice_diameters", 6.0, false);
+    common::assert_figure(r, "beverloo_orifice_diameters", 6.0 - BEVERLOO_K, false);
     let (alpha, theta) = (m(r, "upper_angle_deg"), m(r, "bottom_angle_deg"));
     eprintln!(
         "smoke: alpha {alpha:.2}, theta {theta:.2}, {} particles, {} steps, discharged {}",

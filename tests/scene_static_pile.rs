@@ -8,6 +8,8 @@
 //! experiments/static_pile/README.md) costs about 7 CPU-seconds; it is run once
 //! and shared by the tests that read it.
 
+mod common;
+
 use repose::dem::simulation::Simulation;
 use repose::manifest::scene::{Scene, StaticPileScene};
 use repose::manifest::{read_experiment, Experiment};
@@ -53,6 +55,8 @@ fn m(r: &RunResult, key: &str) -> f64 {
 fn smoke_pile_is_healthy_and_plausible() {
     let exp = smoke();
     let r = smoke_result();
+    // Resolution by hand: the 80 mm disk is 16 diameters of 5 mm.
+    common::assert_figure(r, "disk_diameters", 16.0, true);
     // cai2024's material: JKR cohesion and (EDEM's) constant-torque rolling
     // friction, gravity, no periodic axis.
     assert_eq!(r.kernel, "jkr+mindlin+cdt+gravity+open");

@@ -115,16 +115,28 @@ fn the_largest_allowed_step_in_the_drum_smoke_is_warned_about() {
         "{err}"
     );
     let result: Value = serde_json::from_str(&result).unwrap();
-    let warnings = result["warnings"]
+    let warnings: Vec<&str> = result["warnings"]
         .as_array()
-        .expect("warnings in result.json");
+        .expect("warnings in result.json")
+        .iter()
+        .map(|w| w.as_str().unwrap())
+        .filter(|w| w.contains("time_step"))
+        .collect();
     assert_eq!(warnings.len(), 1, "{warnings:?}");
-    assert!(err.contains(warnings[0].as_str().unwrap()), "{err}");
+    assert!(err.contains(warnings[0]), "{err}");
 }
 
+/// The smoke drum resolves its contacts in time; its only warnings are that
+/// the drum (15 grains across, 5 deep, Fr 0.09) is too coarse for its test
+/// (`src/scenes/resolution.rs`).
 #[test]
-fn the_drum_smoke_as_shipped_has_no_warning() {
+fn the_drum_smoke_as_shipped_has_no_time_step_warning() {
     let (err, result) = cli_run(&example("drum/smoke.json"));
-    assert!(!err.contains("warning"), "{err}");
-    assert!(!result.contains("warnings"), "{result}");
+    assert!(!err.contains("time_step"), "{err}");
+    let result: Value = serde_json::from_str(&result).unwrap();
+    for w in result["warnings"].as_array().unwrap() {
+        let w = w.as_str().unwrap();
+        assert!(w.starts_with("unresolved at this particle size: "), "{w}");
+        assert!(err.contains(w), "{err}");
+    }
 }

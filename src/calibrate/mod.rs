@@ -99,8 +99,8 @@ pub mod verify;
 use std::path::{Path, PathBuf};
 
 use crate::manifest::Study;
-use crate::store::{write_atomic, Lineage, StoreError};
-use crate::study::dir::{json_bytes, StageName};
+use crate::store::{write_atomic, StoreError};
+use crate::study::dir::{json_bytes, write_output, StageName};
 
 /// The stages, in pipeline order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -149,9 +149,24 @@ impl StageName for Stage {
 }
 
 impl StudyDir {
-    /// `path` if it exists, else the error telling which stage to run.
+    /// `path` if it exists with the bytes its stage wrote (the sha256 in its
+    /// lineage record, when the record has one), else the error telling which
+    /// stage to run: an output edited since its stage ran is never read.
     fn require(&self, path: PathBuf, stage: Stage) -> Result<PathBuf, StudyError> {
         if path.is_file() {
+            let bytes = std::fs::read(&path).map_err(StoreError::io(&path))?;
+            if let Ok(lineage) = crate::store::Lineage::read_beside(&path) {
+                if !lineage.describes(&bytes) {
+                    return Err(StudyError::Inconsistent {
+                        path,
+                        message: format!(
+                            "changed since its stage wrote it (sha256 in its lineage record): \
+                             rerun `repose {}`",
+                            stage.name()
+                        ),
+                    });
+                }
+            }
             Ok(path)
         } else {
             Err(StudyError::MissingStage {
@@ -181,13 +196,6 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
         }
         .into()
     })
-}
-
-/// Writes an output atomically, then its lineage record beside it.
-fn write_output(path: &Path, bytes: &[u8], lineage: &Lineage) -> Result<(), StudyError> {
-    write_file(path, bytes)?;
-    lineage.write_beside(path)?;
-    Ok(())
 }
 
 /// The name serde gives a unit enum variant (e.g. `full_factorial`), as

@@ -60,6 +60,7 @@ use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::table::{Cell, CsvWriter, Table};
+use crate::scenes::resolution::unresolved_figures;
 use crate::store::{RunDir, RunResult, RunStatus, Store};
 use crate::study::acceptance::{judge, AcceptedTarget, Judgement, Record};
 
@@ -88,6 +89,11 @@ pub struct VerifyRow {
     pub judgement: Judgement,
     /// Why seeds have no angle (one line per failed seed).
     pub failures: Vec<String>,
+    /// The scene's resolution figures outside their limits in these runs
+    /// (`froude_number = 0.0906 above 0.01`, …): the scene is unresolved at
+    /// this particle size ([`crate::scenes::resolution`]).
+    #[serde(default)]
+    pub unresolved: Vec<String>,
 }
 
 /// What verify did.
@@ -264,6 +270,7 @@ where
                             .map(|m| format!("seed {}: {m}", s.replicate))
                     })
                     .collect(),
+                unresolved: unresolved(store, r)?,
             });
         }
     }
@@ -308,6 +315,16 @@ where
     })
 }
 
+/// The resolution figures outside their limits in the runs of `r`
+/// ([`unresolved_figures`]).
+fn unresolved(store: &Store, r: &Replicated) -> Result<Vec<String>, StudyError> {
+    let mut results = Vec::new();
+    for run in &r.runs {
+        results.extend(store.load_result(&run.id)?);
+    }
+    Ok(unresolved_figures(&results))
+}
+
 fn csv(rows: &[VerifyRow]) -> String {
     let mut csv = CsvWriter::new(&[
         "group",
@@ -322,6 +339,7 @@ fn csv(rows: &[VerifyRow]) -> String {
         "tost_p",
         "verdict",
         "seeds_to_decide",
+        "unresolved",
     ]);
     for r in rows {
         csv.row(&[
@@ -339,6 +357,7 @@ fn csv(rows: &[VerifyRow]) -> String {
             r.judgement
                 .seeds_to_decide
                 .map_or(Cell::Empty, |n| Cell::Integer(n as u64)),
+            Cell::Text(r.unresolved.join("; ")),
         ]);
     }
     csv.finish()
@@ -371,7 +390,14 @@ fn markdown(rule: &Record, rows: &[VerifyRow]) -> String {
             r.relative_error
                 .map_or("—".into(), |e| format!("{:.1} %", 100.0 * e)),
             r.judgement.p().map_or("—".into(), |p| format!("{p:.3}")),
-            r.judgement.verdict_text(),
+            if r.unresolved.is_empty() {
+                r.judgement.verdict_text()
+            } else {
+                format!(
+                    "{} — unresolved at this particle size",
+                    r.judgement.verdict_text()
+                )
+            },
         ]);
     }
     let mut out = rule.describe();
@@ -385,6 +411,22 @@ fn markdown(rule: &Record, rows: &[VerifyRow]) -> String {
         out.push_str("\nSeeds without an angle:\n\n");
         for (r, f) in failures {
             let _ = writeln!(out, "- candidate {} {}: {f}", r.group, r.scene);
+        }
+    }
+    let mut unresolved: Vec<(&str, &[String])> = Vec::new();
+    for r in rows.iter().filter(|r| !r.unresolved.is_empty()) {
+        if !unresolved.iter().any(|(scene, _)| *scene == r.scene) {
+            unresolved.push((&r.scene, &r.unresolved));
+        }
+    }
+    if !unresolved.is_empty() {
+        out.push_str(
+            "\nScenes unresolved at this particle size (src/scenes/resolution.rs gives each \
+             limit and its source); their verdicts say more about the particle size than the \
+             parameters:\n\n",
+        );
+        for (scene, figures) in unresolved {
+            let _ = writeln!(out, "- {scene}: {}", figures.join("; "));
         }
     }
     out

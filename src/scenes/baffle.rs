@@ -94,6 +94,7 @@
 
 use super::physics::STANDARD_GRAVITY_M_S2;
 use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::resolution;
 use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::SceneError;
 use crate::dem::domain::Domain;
@@ -460,6 +461,7 @@ pub fn run(
         "discharged_mass_fraction",
         (outside.mass_kg + removed.mass_kg) / placed.mass_kg,
     );
+    let slope_height_m = slope.as_ref().ok().map(|s| s.height_m);
     match slope {
         Ok(slope) => {
             put("static_angle_deg", slope.angle_deg);
@@ -476,6 +478,20 @@ pub fn run(
                 result.unmeasured.insert(key.to_string(), why.clone());
             }
         }
+    }
+    resolution::at_least(
+        &mut result,
+        "box_length_diameters",
+        scene.box_length_m / d_mean,
+        resolution::ACROSS_MIN,
+    );
+    if let Some(height) = slope_height_m {
+        resolution::at_least(
+            &mut result,
+            "slope_height_diameters",
+            height / d_mean,
+            resolution::SLOPE_HEIGHT_MIN,
+        );
     }
     Ok(result)
 }

@@ -26,6 +26,7 @@
 //! dynamic angle either); the run keeps every other measurement.
 
 use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::resolution;
 use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::SceneError;
 use crate::dem::domain::Domain;
@@ -215,6 +216,26 @@ pub fn run(
     result.headline_angle_deg = dynamic
         .map(|d| d.mean)
         .or(last.as_ref().ok().map(|l| l.angle_deg));
+    resolution::at_least(
+        &mut result,
+        "drum_diameters",
+        scene.inner_diameter_m / d_mean,
+        resolution::ACROSS_MIN,
+    );
+    resolution::at_least(
+        &mut result,
+        "bed_depth_diameters",
+        resolution::bed_depth_m(r_drum, scene.fill_fraction) / d_mean,
+        resolution::BED_DEPTH_MIN,
+    );
+    let (lo, hi) = resolution::FROUDE_ROLLING;
+    resolution::record(
+        &mut result,
+        "froude_number",
+        resolution::froude_number(scene.rpm, r_drum),
+        Some(lo),
+        Some(hi),
+    );
     if let Err(e) = last {
         let why = DrumError::from(e).to_string();
         result

@@ -121,6 +121,7 @@ pub mod geometry;
 
 use self::geometry::FunnelGeometry;
 use super::protocol::{run_phase, Phase, Progress, Sampler, SettleCriterion, Traces};
+use super::resolution;
 use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::{physics, SceneError};
 use crate::dem::health::HealthLimits;
@@ -543,6 +544,12 @@ pub fn simulate(
             "funnel_pile: height angle: not measurable: no particle at rest on the platform",
         );
     }
+    resolution::at_least(
+        &mut result,
+        "platform_diameters",
+        2.0 * geom.platform_radius_m / d_mean,
+        resolution::ACROSS_MIN,
+    );
     Ok(FunnelOutcome {
         result,
         world: w.clone(),

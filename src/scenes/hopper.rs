@@ -103,6 +103,7 @@ use self::geometry::{Geometry, LID_WALL};
 use self::sampler::DischargeSampler;
 use super::physics::STANDARD_GRAVITY_M_S2 as G_M_S2;
 use super::protocol::{run_phase, Phase, Progress, SettleCriterion};
+use super::resolution;
 use super::skeleton::{finish, lab_error_conversions, open_log, Lab, LabError};
 use super::SceneError;
 use crate::dem::health::HealthLimits;
@@ -116,7 +117,7 @@ use crate::measure::MeasureError;
 use crate::packing::distribution::SizeDistribution;
 use crate::packing::place::{place_random, FillTarget, Placement, PlacementSpec};
 use crate::packing::PackingError;
-use crate::store::{RunResult, Trace};
+use crate::store::{RunResult, Trace, HEADLINE_KEY};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -288,10 +289,30 @@ fn run_hopper(
         );
         match angle {
             Ok(a) => angles::record(&mut result.measurements, name, a),
-            Err(e) => result.warnings.push(format!("{which} {e}")),
+            Err(e) => {
+                let why = format!("{which} {e}");
+                if name == "bottom_angle" {
+                    result.unmeasured.insert(HEADLINE_KEY.into(), why.clone());
+                }
+                result.unmeasured.insert(format!("{name}_deg"), why);
+            }
         }
     }
     result.headline_angle_deg = theta.as_ref().ok().map(|t| t.mean_deg);
+    let orifice = scene.orifice_diameter_m / d_mean;
+    resolution::at_least(
+        &mut result,
+        "orifice_diameters",
+        orifice,
+        resolution::ORIFICE_MIN,
+    );
+    resolution::record(
+        &mut result,
+        "beverloo_orifice_diameters",
+        orifice - BEVERLOO_K,
+        None,
+        None,
+    );
     Ok(result)
 }
 

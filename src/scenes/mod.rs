@@ -17,6 +17,7 @@ pub mod pair;
 pub mod physics;
 pub mod plan;
 pub mod protocol;
+pub mod resolution;
 pub mod responses;
 pub mod skeleton;
 pub mod static_pile;

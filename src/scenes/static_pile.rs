@@ -119,6 +119,7 @@ use super::protocol::{
     mean_kinetic_energy_j, run_phase, Phase, Progress, Sampler, SettleCriterion, Traces,
     STANDARD_GRAVITY_M_S2,
 };
+use super::resolution;
 use super::skeleton::{finish, lab_error_conversions, open_log, Grains, Lab, LabError};
 use super::SceneError;
 use crate::dem::domain::Domain;
@@ -721,6 +722,12 @@ pub fn run(
     put("pour_end_s", pour_end_s);
     put("final_kinetic_energy_ratio", rest_ratio);
     put_pile(&mut result, pile);
+    resolution::at_least(
+        &mut result,
+        "disk_diameters",
+        2.0 * geometry.disk_radius_m / d50,
+        resolution::ACROSS_MIN,
+    );
     Ok(result)
 }
 

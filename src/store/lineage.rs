@@ -22,6 +22,11 @@ pub struct Lineage {
     pub parameters: serde_json::Value,
     /// Every input, in the order the stage read them.
     pub inputs: Vec<InputRef>,
+    /// sha256 (hex) of the output's bytes as the stage wrote them, so an
+    /// output edited afterwards is caught by `repose audit` and by a stage
+    /// that would reuse it. Absent in records written before it existed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_sha256: Option<String>,
 }
 
 /// One input of a stage.
@@ -79,7 +84,22 @@ impl Lineage {
             repose_version: env!("CARGO_PKG_VERSION").to_string(),
             parameters,
             inputs: Vec::new(),
+            output_sha256: None,
         }
+    }
+
+    /// Records the sha256 of the output's `bytes`.
+    pub fn with_output(mut self, bytes: &[u8]) -> Lineage {
+        self.output_sha256 = Some(hex::encode(Sha256::digest(bytes)));
+        self
+    }
+
+    /// Whether `bytes` are the output this record was written for: true when
+    /// they hash to [`Lineage::output_sha256`] (or the record predates it).
+    pub fn describes(&self, bytes: &[u8]) -> bool {
+        self.output_sha256
+            .as_ref()
+            .is_none_or(|h| *h == hex::encode(Sha256::digest(bytes)))
     }
 
     /// Adds an input.

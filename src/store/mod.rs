@@ -38,7 +38,10 @@ use serde::de::DeserializeOwned;
 pub use atomic::{remove_stale_temps, write_atomic, AtomicFile, TEMP_PREFIX};
 pub use lineage::{InputRef, Lineage};
 pub use lookup::RunSummary;
-pub use result::{CoarseGrainingReport, ErrorRecord, RunResult, TimingRecord, Trace, HEADLINE_KEY};
+pub use result::{
+    CoarseGrainingReport, ErrorRecord, ResolutionFigure, RunResult, TimingRecord, Trace,
+    HEADLINE_KEY,
+};
 pub use seal::{Depth, Seal, SEAL_FILE};
 
 use crate::manifest::{

@@ -49,6 +49,40 @@ pub struct RunResult {
     /// result.json when empty.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub unmeasured: BTreeMap<String, String>,
+    /// The scene's resolution figures (particle diameters across the device,
+    /// bed depth, Froude number, …; [`crate::scenes::resolution`]), each with
+    /// its limits; one outside them also adds a warning. Absent from
+    /// result.json when empty.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub resolution: BTreeMap<String, ResolutionFigure>,
+}
+
+/// One resolution figure of a run and the limits it must lie within.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ResolutionFigure {
+    /// The figure (dimensionless: diameters, a Froude number).
+    pub value: f64,
+    /// Lowest resolved value, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    /// Highest resolved value, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+}
+
+impl ResolutionFigure {
+    /// How the value breaks its limits (`below 20`, `above 0.01`), if it does.
+    /// A value within 10⁻⁹ (relative) of a limit meets it: figures are ratios
+    /// of decimal lengths (0.018 m / 0.003 m is 5.999… in binary).
+    pub fn violation(&self) -> Option<String> {
+        const SLACK: f64 = 1e-9;
+        match (self.min, self.max) {
+            (Some(min), _) if self.value < min - SLACK * min.abs() => Some(format!("below {min}")),
+            (_, Some(max)) if self.value > max + SLACK * max.abs() => Some(format!("above {max}")),
+            _ => None,
+        }
+    }
 }
 
 /// What coarse graining did to the particle (he2019 Eq. 1–3, cai2024 §1.2):
@@ -109,7 +143,17 @@ impl RunResult {
             coarse_graining: None,
             warnings: Vec::new(),
             unmeasured: BTreeMap::new(),
+            resolution: BTreeMap::new(),
         }
+    }
+
+    /// The resolution figures outside their limits, by name.
+    pub fn unresolved(&self) -> Vec<&str> {
+        self.resolution
+            .iter()
+            .filter(|(_, f)| f.violation().is_some())
+            .map(|(name, _)| name.as_str())
+            .collect()
     }
 
     /// Why the run has no headline angle, when it has none and the scene

@@ -176,13 +176,14 @@ pub(crate) fn create_dir(path: &Path) -> Result<(), StoreError> {
     std::fs::create_dir_all(path).map_err(StoreError::io(path))
 }
 
-/// Writes an output atomically, then its lineage record beside it.
+/// Writes an output atomically, then its lineage record beside it with the
+/// output's sha256.
 pub fn write_output(path: &Path, bytes: &[u8], lineage: &Lineage) -> Result<(), StudyError> {
     if let Some(parent) = path.parent() {
         create_dir(parent)?;
     }
     write_atomic(path, bytes).map_err(StoreError::io(path))?;
-    lineage.write_beside(path)?;
+    lineage.clone().with_output(bytes).write_beside(path)?;
     Ok(())
 }
 

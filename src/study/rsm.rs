@@ -711,8 +711,8 @@ fn gp_markdown(o: &RsmOutcome) -> String {
 
 fn summary_markdown(o: &RsmOutcome) -> String {
     let mut md = format!(
-        "# {} — response surface ({} runs, {} were in the store)\n\nStudy id {}.{}\n\n| Factor | Label | Address | Low (−1) | High (+1) |\n|---|---|---|---:|---:|\n",
-        o.study, o.runs, o.cached, o.study_id, incomplete_note(o.incomplete)
+        "# {} — response surface ({} runs)\n\nStudy id {}.{}\n\n| Factor | Label | Address | Low (−1) | High (+1) |\n|---|---|---|---:|---:|\n",
+        o.study, o.runs, o.study_id, incomplete_note(o.incomplete)
     );
     for (n, l, a, lo, hi) in &o.factors {
         md.push_str(&format!("| {n} | {l} | `{a}` | {lo} | {hi} |\n"));

@@ -269,10 +269,9 @@ fn levels_csv(s: &Screen) -> String {
 /// The screening summary in Markdown.
 pub fn markdown(study: &DesignStudy, s: &Screen) -> String {
     let mut md = format!(
-        "# {} — one-factor screening ({} runs, {} were in the store; α = {}).{}\n\n",
+        "# {} — one-factor screening ({} runs; α = {}).{}\n\n",
         study.name,
         s.runs,
-        s.cached,
         s.alpha,
         super::rsm::incomplete_note(s.incomplete)
     );

@@ -23,6 +23,7 @@ use super::StudyError;
 use crate::exec::Executor;
 use crate::manifest::Experiment;
 use crate::report::table::{Cell, CsvWriter};
+use crate::scenes::resolution::unresolved_figures;
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store};
 use crate::study::acceptance::{judge, AcceptedTarget, Judgement, Record};
@@ -48,6 +49,10 @@ pub struct Check {
     pub relative_error: Option<f64>,
     /// The acceptance rule's judgement (None without a target).
     pub judgement: Option<Judgement>,
+    /// The response's scene's resolution figures outside their limits in
+    /// these runs ([`crate::scenes::resolution`]): unresolved at this
+    /// particle size.
+    pub unresolved: Vec<String>,
 }
 
 /// What verification found.
@@ -225,6 +230,7 @@ where
                     .iter()
                     .find(|t| t.response == *response)
                     .map(|t| judge(&values[k], t.band)),
+                unresolved: unresolved(store, study, &runs, k, response)?,
             });
         }
     }
@@ -254,6 +260,30 @@ where
     Ok(Some(outcome))
 }
 
+/// The resolution figures outside their limits in point `k`'s runs of the
+/// scene that measures `response`.
+fn unresolved(
+    store: &Store,
+    study: &DesignStudy,
+    runs: &super::runs::Runs,
+    k: usize,
+    response: &str,
+) -> Result<Vec<String>, StudyError> {
+    let Some(scene) = study.responses.get(response).map(|r| &r.scene) else {
+        return Ok(Vec::new());
+    };
+    let mut results = Vec::new();
+    for id in runs
+        .replicates
+        .iter()
+        .filter(|r| r.point == k)
+        .filter_map(|r| r.ids.get(scene))
+    {
+        results.extend(store.load_result(id)?);
+    }
+    Ok(unresolved_figures(&results))
+}
+
 fn csv(v: &Verification) -> String {
     let mut csv = CsvWriter::new(
         &[
@@ -268,6 +298,7 @@ fn csv(v: &Verification) -> String {
             "tost_p",
             "verdict",
             "seeds_to_decide",
+            "unresolved",
         ]
         .map(String::from),
     );
@@ -287,6 +318,7 @@ fn csv(v: &Verification) -> String {
             c.judgement
                 .and_then(|j| j.seeds_to_decide)
                 .map_or(Cell::Empty, |n| Cell::Integer(n as u64)),
+            Cell::Text(c.unresolved.join("; ")),
         ]);
     }
     csv.finish()
@@ -296,10 +328,9 @@ fn csv(v: &Verification) -> String {
 pub fn markdown(study: &DesignStudy, v: &Verification) -> String {
     let names = study.factor_names();
     let mut md = format!(
-        "# {} — verification ({} runs, {} were in the store).{}\n\n| Point | {} |\n|---|{}\n",
+        "# {} — verification ({} runs).{}\n\n| Point | {} |\n|---|{}\n",
         study.name,
         v.runs,
-        v.cached,
         super::rsm::incomplete_note(v.incomplete),
         names.join(" | "),
         "---:|".repeat(names.len())
@@ -328,7 +359,16 @@ pub fn markdown(study: &DesignStudy, v: &Verification) -> String {
             c.judgement
                 .and_then(|j| j.p())
                 .map_or(String::new(), |p| format!("{p:.3}")),
-            c.judgement.map_or(String::new(), |j| j.verdict_text())
+            c.judgement
+                .map_or(String::new(), |j| if c.unresolved.is_empty() {
+                    j.verdict_text()
+                } else {
+                    format!(
+                        "{} — unresolved at this particle size ({})",
+                        j.verdict_text(),
+                        c.unresolved.join("; ")
+                    )
+                })
         ));
     }
     md

@@ -261,3 +261,25 @@ pub fn table_verdicts(
         })
         .collect()
 }
+
+/// Checks resolution figure `name` of `r` against a hand computation
+/// `value` (to 1e-9 relative) and that a warning names it, with its limit,
+/// exactly when `unresolved`.
+#[allow(dead_code)]
+pub fn assert_figure(r: &repose::store::RunResult, name: &str, value: f64, unresolved: bool) {
+    let figure = r
+        .resolution
+        .get(name)
+        .unwrap_or_else(|| panic!("no resolution figure `{name}`: {:?}", r.resolution));
+    assert!(
+        (figure.value - value).abs() <= 1e-9 * value.abs(),
+        "{name}: {} vs hand {value}",
+        figure.value
+    );
+    let warned = r
+        .warnings
+        .iter()
+        .any(|w| w.contains(&format!("unresolved at this particle size: {name} = ")));
+    assert_eq!(warned, unresolved, "{name}: {:?}", r.warnings);
+    assert_eq!(figure.violation().is_some(), unresolved, "{name}");
+}

@@ -113,12 +113,21 @@ pub struct SensitivityOutcome {
     pub stages: Vec<StageState>,
 }
 
-/// A stage's JSON outcome if it lies beside `lineage` unchanged.
+/// A stage's JSON outcome if it lies beside `lineage` (the same stage, the
+/// same inputs) with the bytes that stage wrote: an output edited since, or
+/// one whose record predates output hashes, is recomputed, never served.
 fn cached<T: DeserializeOwned>(json: &Path, lineage: &Lineage) -> Option<T> {
-    if Lineage::read_beside(json).ok().as_ref() != Some(lineage) {
+    let stored = Lineage::read_beside(json).ok()?;
+    let bytes = std::fs::read(json).ok()?;
+    let written = stored.output_sha256.is_some() && stored.describes(&bytes);
+    let same_stage = Lineage {
+        output_sha256: None,
+        ..stored
+    } == *lineage;
+    if !(written && same_stage) {
         return None;
     }
-    serde_json::from_slice(&std::fs::read(json).ok()?).ok()
+    serde_json::from_slice(&bytes).ok()
 }
 
 /// Runs the levels asked for (see the module docs) and writes the reports.

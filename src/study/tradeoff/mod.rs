@@ -20,9 +20,7 @@ use crate::exec::{run_incomplete, ExecError, Executor, Ran};
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::run_logged;
 use crate::stats::summary::{difference_ci, mean_ci, MeanCi};
-use crate::store::{
-    write_atomic, InputRef, Lineage, RunResult, RunStatus, Store, StoreError, TimingRecord,
-};
+use crate::store::{InputRef, Lineage, RunResult, RunStatus, Store, StoreError, TimingRecord};
 use pareto::pareto_front;
 use plan::Point;
 
@@ -101,8 +99,7 @@ pub fn sweep(
         }
     }
     for (path, text) in &outputs {
-        write_atomic(path, text.as_bytes()).map_err(StoreError::io(path))?;
-        lineage.write_beside(path)?;
+        crate::study::dir::write_output(path, text.as_bytes(), &lineage)?;
     }
     Ok(Sweep {
         rows,
