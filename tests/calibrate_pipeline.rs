@@ -423,18 +423,26 @@ fn a_real_drum_design_runs_end_to_end() {
     }
 }
 
+/// The smoke study sampled and batched with the fake DEM on one worker, in a
+/// store under `tmp`.
+fn sampled_and_batched(tmp: &Path) -> (Study, Store, StudyDir) {
+    let (s, path) = study(tmp, &[]);
+    let store = Store::open(tmp.join("store")).unwrap();
+    let dir = StudyDir::new(store.root(), &s, &path);
+    sample(&dir, &s, &SampleSettings::default()).unwrap();
+    let fake = Fake::new(&[]);
+    batch(&dir, &s, &store, &settings(1), |e, d| fake.run(e, d)).unwrap();
+    (s, store, dir)
+}
+
 /// A stage output edited after its stage ran is never read by the next
 /// stage (issue 40.2): train refuses the edited angles table, naming it and
 /// the stage to rerun, and a rerun of that stage restores it.
 #[test]
 fn an_edited_stage_output_is_refused_not_trusted() {
     let tmp = tempfile::tempdir().unwrap();
-    let (s, path) = study(tmp.path(), &[]);
-    let store = Store::open(tmp.path().join("store")).unwrap();
-    let dir = StudyDir::new(store.root(), &s, &path);
-    sample(&dir, &s, &SampleSettings::default()).unwrap();
+    let (s, store, dir) = sampled_and_batched(tmp.path());
     let fake = Fake::new(&[]);
-    batch(&dir, &s, &store, &settings(1), |e, d| fake.run(e, d)).unwrap();
     let angles = dir.stage(Stage::Batch).join("angles.csv");
     let original = std::fs::read_to_string(&angles).unwrap();
     let line = original.lines().nth(1).unwrap().to_string();
@@ -466,12 +474,7 @@ fn an_edited_stage_output_is_refused_not_trusted() {
 #[test]
 fn a_damaged_run_is_recomputed_by_the_next_batch_not_trusted() {
     let tmp = tempfile::tempdir().unwrap();
-    let (s, path) = study(tmp.path(), &[]);
-    let store = Store::open(tmp.path().join("store")).unwrap();
-    let dir = StudyDir::new(store.root(), &s, &path);
-    sample(&dir, &s, &SampleSettings::default()).unwrap();
-    let first = Fake::new(&[]);
-    batch(&dir, &s, &store, &settings(1), |e, d| first.run(e, d)).unwrap();
+    let (s, store, dir) = sampled_and_batched(tmp.path());
     let before = common::snapshot(dir.path());
 
     let e3 = repose::manifest::read_experiment(&experiment_path(&dir, 3)).unwrap();
