@@ -165,6 +165,21 @@ fn bad_table_options_name_what_is_wrong() {
     assert!(e.contains("--ranges `A=0.6:0.2`"), "{e}");
     let e = run(&["--factors", "A,B,C,D", "--ranges", "A=0.2:0.6,Z=0:1"]);
     assert!(e.contains("no range for factor `B`"), "{e}");
+    // Issue 40 (low): a response cell that is not a number is an error
+    // naming its line, column and value, not a silently missing value; a
+    // repeated header is refused.
+    let text = std::fs::read_to_string(&coded).unwrap();
+    for bad in ["NaN", "abc", "1e999", "inf"] {
+        let mut lines: Vec<String> = text.lines().map(String::from).collect();
+        let last = lines[3].rfind(',').unwrap();
+        lines[3] = format!("{},{bad}", &lines[3][..last]);
+        std::fs::write(&coded, lines.join("\n")).unwrap();
+        let e = run(&["--factors", "A,B,C,D"]);
+        assert!(e.contains(&format!(":4: column `y` = `{bad}`")), "{e}");
+    }
+    std::fs::write(&coded, text.replacen("A,B,C,D,y", "A,B,C,D,A", 1)).unwrap();
+    let e = run(&["--factors", "A,B,C,D"]);
+    assert!(e.contains(":1: column 5 repeats the header `A`"), "{e}");
 }
 
 #[test]

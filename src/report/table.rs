@@ -89,7 +89,19 @@ impl Table {
             }
             let cells: Vec<String> = record.iter().map(str::to_string).collect();
             match &header {
-                None => header = Some(cells),
+                None => {
+                    if let Some((k, name)) = cells
+                        .iter()
+                        .enumerate()
+                        .find(|(k, c)| cells[..*k].contains(c))
+                    {
+                        return Err((
+                            line,
+                            format!("column {} repeats the header `{name}`", k + 1),
+                        ));
+                    }
+                    header = Some(cells)
+                }
                 Some(h) if cells.len() != h.len() => {
                     return Err((
                         line,
@@ -119,6 +131,32 @@ impl Table {
             .collect()
     }
 
+    /// Column `name` as optional numbers: an empty cell is `None` (a value
+    /// that was not measured); any other cell that is not a finite number
+    /// (`NaN`, `inf`, `1e999`, `abc`) is an error naming its line, column and
+    /// value.
+    pub fn optional_numbers(
+        &self,
+        path: &Path,
+        name: &str,
+    ) -> Result<Vec<Option<f64>>, TableError> {
+        let k = self.require(path, name)?;
+        self.rows
+            .iter()
+            .enumerate()
+            .map(|(i, row)| {
+                let cell = row[k].trim();
+                if cell.is_empty() {
+                    Ok(None)
+                } else {
+                    parse_number(cell)
+                        .map(Some)
+                        .ok_or_else(|| self.bad(path, i, name, cell))
+                }
+            })
+            .collect()
+    }
+
     /// The index of column `name`, or an error listing the columns.
     pub fn require(&self, path: &Path, name: &str) -> Result<usize, TableError> {
         self.index(name).ok_or_else(|| TableError::MissingColumn {
@@ -144,7 +182,10 @@ impl Table {
         TableError::Format {
             path: path.to_path_buf(),
             line: row + 2,
-            message: format!("column `{column}` = `{cell}`: must be a finite number"),
+            message: format!(
+                "column `{column}` = `{cell}`: must be a finite number (or empty where \
+                 nothing was measured)"
+            ),
         }
     }
 }

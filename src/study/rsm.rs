@@ -787,7 +787,7 @@ pub fn analyse_table(path: &Path, spec: &TableSpec) -> Result<ResponseAnalysis, 
         .iter()
         .map(|f| table.numbers(path, f))
         .collect::<Result<Vec<_>, _>>()?;
-    let response_column = table.require(path, &spec.response)?;
+    let response = table.optional_numbers(path, &spec.response)?;
     let ranges = spec.ranges.clone().unwrap_or_else(|| {
         vec![
             Range {
@@ -805,8 +805,8 @@ pub fn analyse_table(path: &Path, spec: &TableSpec) -> Result<ResponseAnalysis, 
         )));
     }
     let (mut x, mut y, mut missing) = (Vec::new(), Vec::new(), 0);
-    for (i, row) in table.rows.iter().enumerate() {
-        match crate::report::table::parse_number(&row[response_column]) {
+    for (i, cell) in response.iter().enumerate() {
+        match *cell {
             Some(v) => {
                 x.push(
                     columns

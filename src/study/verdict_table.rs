@@ -17,7 +17,7 @@ use serde::Serialize;
 use super::acceptance::{judge, Judgement};
 use super::StudyError;
 use crate::report::markdown::MarkdownTable;
-use crate::report::table::{parse_number, Table, TableError};
+use crate::report::table::Table;
 
 /// What to judge in a table.
 #[derive(Debug, Clone)]
@@ -77,7 +77,7 @@ pub fn judge_table(path: &Path, spec: &VerdictSpec) -> Result<TableVerdicts, Stu
         )));
     }
     let table = Table::read(path)?;
-    let value = table.require(path, &spec.value)?;
+    let values = table.optional_numbers(path, &spec.value)?;
     let keys = spec
         .group
         .iter()
@@ -91,20 +91,7 @@ pub fn judge_table(path: &Path, spec: &VerdictSpec) -> Result<TableVerdicts, Stu
     let mut groups: Vec<(Vec<String>, Vec<f64>, usize)> = Vec::new();
     for (i, row) in table.rows.iter().enumerate() {
         let key: Vec<String> = keys.iter().map(|&k| row[k].clone()).collect();
-        let cell = row[value].trim();
-        let parsed = if cell.is_empty() {
-            None
-        } else {
-            Some(parse_number(cell).ok_or_else(|| TableError::Format {
-                path: path.to_path_buf(),
-                line: i + 2,
-                message: format!(
-                    "column `{}` = `{cell}`: must be a finite number (or empty for a \
-                     replicate that was not measured)",
-                    spec.value
-                ),
-            })?)
-        };
+        let parsed = values[i];
         let entry = match groups.iter().position(|g| g.0 == key) {
             Some(k) => &mut groups[k],
             None => {
