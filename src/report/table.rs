@@ -182,10 +182,7 @@ impl Table {
         TableError::Format {
             path: path.to_path_buf(),
             line: row + 2,
-            message: format!(
-                "column `{column}` = `{cell}`: must be a finite number (or empty where \
-                 nothing was measured)"
-            ),
+            message: format!("column `{column}` = `{cell}`: must be a finite number"),
         }
     }
 }
