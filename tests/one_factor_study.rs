@@ -32,8 +32,9 @@ fn fake(e: &Experiment, _: &RunDir) -> Result<RunResult, std::io::Error> {
     Ok(r)
 }
 
-#[test]
-fn a_one_factor_study_is_analysed_whole() {
+/// cai2024-smoke reduced to its static scene and factor A, on `design`
+/// with `replicates`.
+fn one_factor(design: serde_json::Value, replicates: u32) -> serde_json::Value {
     let mut v = common::example("cai2024-smoke/study.json");
     let o = v.as_object_mut().unwrap();
     o["scenes"].as_object_mut().unwrap().remove("drum");
@@ -49,13 +50,19 @@ fn a_one_factor_study_is_analysed_whole() {
         .as_object_mut()
         .unwrap()
         .retain(|name, _| name == "A");
-    o.insert(
-        "design".into(),
-        json!({ "kind": "full_factorial", "levels": { "A": [0.2, 0.4, 0.6] } }),
-    );
-    o.insert("replicates".into(), json!(2));
+    o.insert("design".into(), design);
+    o.insert("replicates".into(), json!(replicates));
     o.remove("screening");
     o.remove("verification");
+    v
+}
+
+#[test]
+fn a_one_factor_study_is_analysed_whole() {
+    let v = one_factor(
+        json!({ "kind": "full_factorial", "levels": { "A": [0.2, 0.4, 0.6] } }),
+        2,
+    );
     let study = parse_design_study(&v.to_string()).unwrap();
 
     let tmp = tempfile::tempdir().unwrap();
@@ -90,4 +97,38 @@ fn a_one_factor_study_is_analysed_whole() {
         Table::read(&dir.join("responses.csv")).unwrap().rows.len(),
         6
     );
+}
+
+/// Issue 40 (low): a design that cannot carry the quadratic (two levels of a
+/// factor, or no more runs than terms) is refused before any run, not
+/// simulated and then refused.
+#[test]
+fn a_design_the_quadratic_cannot_fit_is_refused_before_the_runs() {
+    let runs = std::sync::atomic::AtomicUsize::new(0);
+    let counting = |e: &Experiment, d: &RunDir| {
+        runs.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        fake(e, d)
+    };
+    let pool = Executor::local(1, Default::default());
+    for (design, replicates, says) in [
+        (
+            json!({ "kind": "full_factorial", "levels": { "A": [0.2, 0.6] } }),
+            2,
+            "design.levels.A = [0.2, 0.6]: a quadratic fit needs at least 3 levels",
+        ),
+        (
+            json!({ "kind": "full_factorial", "levels": { "A": [0.2, 0.4, 0.6] } }),
+            1,
+            "3 runs are too few for the 3 terms",
+        ),
+    ] {
+        let study = parse_design_study(&one_factor(design, replicates).to_string()).unwrap();
+        study.validate().unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let store = Store::open(tmp.path()).unwrap();
+        let err = repose::study::run_rsm(tmp.path(), &study, &store, &pool, &counting).unwrap_err();
+        assert!(err.is_invalid_input());
+        assert!(err.to_string().contains(says), "{err}");
+    }
+    assert_eq!(runs.into_inner(), 0);
 }

@@ -209,6 +209,9 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
+    if study.fit == FitChoice::Quadratic {
+        study.check_quadratic()?;
+    }
     let stage = dir.create_stage("rsm")?;
     let coded = coded_design(study)?;
     let names = study.factor_names();

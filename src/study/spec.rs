@@ -528,6 +528,7 @@ impl DesignStudy {
                 "must be >= 1".into(),
             );
         }
+
         if let Some(s) = &self.screening {
             if s.factors.is_empty() {
                 fail(
@@ -618,6 +619,48 @@ impl DesignStudy {
             Ok(())
         } else {
             Err(ValidationErrors(errors))
+        }
+    }
+
+    /// Whether the design can carry a full quadratic fit: three levels of
+    /// each factor and more runs than the (k + 1)(k + 2)/2 terms. `repose
+    /// rsm` asks this before any run (a sensitivity study needs neither, so
+    /// validation does not), so a design that cannot be fitted is refused
+    /// instead of simulated and then refused.
+    pub fn check_quadratic(&self) -> Result<(), super::StudyError> {
+        let mut problems = Vec::new();
+        let k = self.factors.len();
+        let terms = (k + 1) * (k + 2) / 2;
+        if let DesignSpec::FullFactorial { levels } = &self.design {
+            for (name, l) in levels.iter().filter(|(_, l)| l.len() < 3) {
+                problems.push(format!(
+                    "design.levels.{name} = {l:?}: a quadratic fit needs at least 3 levels of \
+                     each factor (or fit \"gp\")"
+                ));
+            }
+        }
+        let points = match &self.design {
+            DesignSpec::FullFactorial { levels } => self
+                .factors
+                .keys()
+                .map(|f| levels.get(f).map_or(0, Vec::len))
+                .product(),
+            DesignSpec::Lhs { points } => *points as usize,
+            DesignSpec::BoxBehnken { .. } => usize::MAX,
+        };
+        let runs = points.saturating_mul(self.replicates as usize);
+        if runs <= terms {
+            problems.push(format!(
+                "replicates = {}: {points} design point(s) x {} replicate(s) = {runs} runs are \
+                 too few for the {terms} terms of a full quadratic in {k} factor(s) (more than \
+                 {terms} are needed for a residual)",
+                self.replicates, self.replicates
+            ));
+        }
+        if problems.is_empty() {
+            Ok(())
+        } else {
+            Err(super::StudyError::Settings(problems.join("; ")))
         }
     }
 
