@@ -318,10 +318,7 @@ where
 /// The resolution figures outside their limits in the runs of `r`
 /// ([`unresolved_figures`]).
 fn unresolved(store: &Store, r: &Replicated) -> Result<Vec<String>, StudyError> {
-    let mut results = Vec::new();
-    for run in &r.runs {
-        results.extend(store.load_result(&run.id)?);
-    }
+    let results = store.load_results(r.runs.iter().map(|run| &run.id))?;
     Ok(unresolved_figures(&results))
 }
 

@@ -421,6 +421,19 @@ impl Store {
         }
     }
 
+    /// The results of the completed runs among `ids` (an incomplete or failed
+    /// run has none); fails on a damaged one, as [`Store::load_result`].
+    pub fn load_results<'a>(
+        &self,
+        ids: impl IntoIterator<Item = &'a ContentId>,
+    ) -> Result<Vec<RunResult>, StoreError> {
+        let mut results = Vec::new();
+        for id in ids {
+            results.extend(self.load_result(id)?);
+        }
+        Ok(results)
+    }
+
     /// The stored manifest of run `id` (parsed, not re-validated: a manifest of an
     /// older physics version still loads for listing).
     pub fn load_manifest(&self, id: &ContentId) -> Result<Experiment, StoreError> {

@@ -155,6 +155,13 @@ pub fn seeds_for_power(sigma: f64, band: (f64, f64), cap: usize) -> Option<usize
     equivalence::replicates_for_power(sigma, band, ALPHA, TARGET_POWER, cap)
 }
 
+/// The band target × (1 ∓ tolerance) as (lo, hi), lo ≤ hi for a target of
+/// either sign.
+pub fn band(target: f64, tolerance: f64) -> (f64, f64) {
+    let (a, b) = (target * (1.0 - tolerance), target * (1.0 + tolerance));
+    (a.min(b), a.max(b))
+}
+
 /// One judged target of an acceptance record: a scene's (or a design
 /// study's) response, its band and the power its seeds have.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -191,10 +198,7 @@ impl AcceptedTarget {
         seeds: usize,
         sigma: Option<f64>,
     ) -> AcceptedTarget {
-        let band = (
-            target * (1.0 - tolerance_fraction),
-            target * (1.0 + tolerance_fraction),
-        );
+        let band = band(target, tolerance_fraction);
         let centre = 0.5 * (band.0 + band.1);
         AcceptedTarget {
             name: name.to_string(),

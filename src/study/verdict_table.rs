@@ -14,7 +14,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::acceptance::{judge, Judgement};
+use super::acceptance::{band, judge, Judgement};
 use super::StudyError;
 use crate::report::markdown::MarkdownTable;
 use crate::report::table::Table;
@@ -83,11 +83,7 @@ pub fn judge_table(path: &Path, spec: &VerdictSpec) -> Result<TableVerdicts, Stu
         .iter()
         .map(|g| table.require(path, g))
         .collect::<Result<Vec<_>, _>>()?;
-    let (a, b) = (
-        spec.target * (1.0 - spec.tolerance),
-        spec.target * (1.0 + spec.tolerance),
-    );
-    let band = (a.min(b), a.max(b));
+    let band = band(spec.target, spec.tolerance);
     let mut groups: Vec<(Vec<String>, Vec<f64>, usize)> = Vec::new();
     for (i, row) in table.rows.iter().enumerate() {
         let key: Vec<String> = keys.iter().map(|&k| row[k].clone()).collect();

@@ -272,16 +272,12 @@ fn unresolved(
     let Some(scene) = study.responses.get(response).map(|r| &r.scene) else {
         return Ok(Vec::new());
     };
-    let mut results = Vec::new();
-    for id in runs
+    let ids = runs
         .replicates
         .iter()
         .filter(|r| r.point == k)
-        .filter_map(|r| r.ids.get(scene))
-    {
-        results.extend(store.load_result(id)?);
-    }
-    Ok(unresolved_figures(&results))
+        .filter_map(|r| r.ids.get(scene));
+    Ok(unresolved_figures(&store.load_results(ids)?))
 }
 
 fn csv(v: &Verification) -> String {
