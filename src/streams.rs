@@ -7,14 +7,15 @@
 //! The packing seeds of a point's replicates follow one [`SeedRule`]. Both
 //! rules are inside the experiment ids of every committed study and cached
 //! run, so neither may change:
-//! - [`SeedRule::Offset`]: base, base + 1, … — he2019 studies (replicate r of
-//!   sample i runs the study's packing seed + r), the noise floor and the
+//! - [`SeedRule::Offset`]: base, base + 1, … — classic he2019 studies
+//!   (replicate r of sample i runs the study's packing seed + r) and the
 //!   tradeoff sweep (replicates of one manifest), where a replicate is "the
 //!   same experiment, next packing";
 //! - [`SeedRule::Drawn`]: the r-th draw of the ChaCha8 stream of (study seed,
 //!   [`SeedStage`], point), below 2³² so any JSON reader keeps it exact —
-//!   design studies, where every point of every stage gets unrelated
-//!   packings (a centre point repeated in a design gets a real pure error).
+//!   design studies and noise-aware he2019 studies, where every point of
+//!   every stage gets unrelated packings (a centre point repeated in a design
+//!   gets a real pure error; a GP's noise is independent between points).
 
 use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -54,6 +55,9 @@ pub enum SeedStage {
     Design = 2,
     /// `repose verify`.
     Verify = 3,
+    /// Every point of a noise-aware he2019 calibration (design, noise floor,
+    /// adaptive, verification: disjoint sample indices).
+    Calibrate = 4,
 }
 
 /// How the replicates of one point get their packing seeds (module docs).

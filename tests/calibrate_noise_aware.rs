@@ -17,6 +17,7 @@ use repose::calibrate::replicates::read_replicates_csv;
 use repose::calibrate::sample::SampleSettings;
 use repose::calibrate::search::SearchSettings;
 use repose::calibrate::train::TrainOptions;
+use repose::calibrate::verify::{acceptance, VERIFY_INDEX};
 use repose::calibrate::Stage;
 use repose::exec::Executor;
 use repose::manifest::{parse_study, validate_study, Experiment, Study};
@@ -133,7 +134,7 @@ fn a_noise_aware_calibration_lands_a_verified_candidate_and_reproduces() {
 
     // Noise floor: the 8 seeds' spread is exactly that of the injected noise.
     let injected: Vec<f64> = (0..8)
-        .map(|r| packing_noise(study.packing_seed + r, NOISE_INDEX))
+        .map(|r| packing_noise(study.seed_rule(NOISE_INDEX).packing_seed(r), NOISE_INDEX))
         .collect();
     let floor = &outcome.noise_floor;
     assert_eq!((floor.seeds, floor.measured), (8, 8));
@@ -211,7 +212,15 @@ fn a_noise_aware_calibration_lands_a_verified_candidate_and_reproduces() {
             let r = outcome
                 .verification
                 .iter()
-                .find(|r| r.scene == target.name && r.group.to_string() == key[1])
+                .find(|r| {
+                    let index = r.group as u64;
+                    let index = if index >= ADAPTIVE_INDEX {
+                        index
+                    } else {
+                        VERIFY_INDEX + index
+                    };
+                    r.scene == target.name && index.to_string() == key[1]
+                })
                 .unwrap();
             assert_eq!(*verdict, r.judgement.verdict.to_string(), "{key:?}");
             assert_eq!(*p, r.judgement.p(), "{key:?}");
@@ -421,8 +430,11 @@ fn a_replicated_batch_counts_what_it_simulated() {
     // Sample 0's second replicate fails; sample 1's first completes without
     // an angle (not measurable: a failure of the row, but a computed run).
     let failing = |e: &Experiment, d: &RunDir| -> Result<RunResult, std::io::Error> {
-        let replicate = e.seeds.packing_seed - study.packing_seed;
-        match (e.seeds.sample_index, replicate) {
+        let i = e.seeds.sample_index;
+        let replicate = (0..2)
+            .find(|r| study.seed_rule(i).packing_seed(*r) == e.seeds.packing_seed)
+            .unwrap();
+        match (i, replicate) {
             (0, 1) => Err(std::io::Error::other("injected failure")),
             (1, 0) => Ok(RunResult::new(e, "fake")),
             _ => fake(e, d),
@@ -442,4 +454,110 @@ fn a_replicated_batch_counts_what_it_simulated() {
     assert_eq!(second.cached, total, "nothing simulated again");
     assert_eq!(second.computed, 0);
     assert_eq!(second.failures.len(), 2, "the failures are still reported");
+}
+
+/// The acceptance record pre-registers the calibration scene's seeds by the
+/// power calculation on the noise floor's σ, between `verification_seeds`
+/// and `max_verification_seeds`, at α/K for K candidates; the scene without
+/// a measured σ keeps `verification_seeds`. Expected counts from scipy
+/// (the exact TOST power, an integral over the chi-distributed sample sd:
+/// `quad(lambda w: max(0, norm.cdf((hi - c*s*w/sqrt(nu*n) - mu)/se) -
+/// norm.cdf((lo + c*s*w/sqrt(nu*n) - mu)/se)) * chi.pdf(w, nu), 0,
+/// sqrt(nu) + 12)` with c = t.ppf(1 - a, nu), se = s/sqrt(n), band
+/// 28.5–31.5, s = 2.5, mu = 30): the fewest n with power ≥ 0.8 is 26 at
+/// a = 0.05 (power 0.8165; 25 gives 0.7955) and 32 at a = 0.025 (0.8156).
+#[test]
+fn the_calibration_scenes_seeds_come_from_the_power_calculation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (wide, _) = study(
+        tmp.path(),
+        &[("/noise_aware/max_verification_seeds", json!(40))],
+    );
+    let one = acceptance(&wide, Some(2.5), 1);
+    let seeds: Vec<usize> = one.targets.iter().map(|t| t.seeds).collect();
+    assert_eq!(seeds, [26, 5]);
+    assert!((one.targets[0].power_at_seeds.unwrap() - 0.8165289677976998).abs() < 1e-6);
+    let two = acceptance(&wide, Some(2.5), 2);
+    assert_eq!(two.alpha, 0.025);
+    assert_eq!(two.targets[0].seeds, 32);
+    // The cap binds: the record says the power it reaches instead.
+    let (capped, _) = study_capped(tmp.path());
+    let record = acceptance(&capped, Some(2.5), 1);
+    assert_eq!(record.targets[0].seeds, 12);
+    assert_eq!(record.targets[0].seeds_for_power, None);
+    assert!(record
+        .describe()
+        .contains("more than 12 seeds would reach 0.8"));
+    // A cap below the minimum is refused, naming the field.
+    let (mut low, _) = study(tmp.path(), &[]);
+    low.noise_aware.as_mut().unwrap().max_verification_seeds = Some(3);
+    let err = validate_study(&low).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("noise_aware.max_verification_seeds"),
+        "{err}"
+    );
+}
+
+fn study_capped(dir: &Path) -> (Study, std::path::PathBuf) {
+    study(dir, &[("/noise_aware/max_verification_seeds", json!(12))])
+}
+
+/// Screening: with a third calibrated parameter that the (fake) response
+/// ignores, the GP's main effect of restitution is far below the noise
+/// floor's σ and, with `noise_aware.screen`, the search fixes it at the
+/// centre of its range (0.5) while μ and μ_r, whose ranges move the angle by
+/// 21° and 12°, are searched; the outcome and `search/screening.csv` say so.
+#[test]
+fn screening_fixes_a_parameter_below_the_noise_at_its_centre() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut v = common::example("calibrate-smoke/study.json");
+    let mut block = noise_aware_block(8);
+    block["screen"] = json!(true);
+    v = common::edit(v, "/noise_aware", Some(block));
+    v = common::edit(v, "/fixed/particle_particle.restitution", None);
+    v = common::edit(
+        v,
+        "/parameters/particle_particle.restitution",
+        Some(json!({ "min": 0.2, "max": 0.8 })),
+    );
+    let path = tmp.path().join("study.json");
+    std::fs::write(&path, v.to_string()).unwrap();
+    let study = parse_study(&v.to_string()).unwrap();
+    let root = tmp.path().join("s");
+    let store = Store::open(&root).unwrap();
+    let dir = StudyDir::new(&root, &study, &path);
+    let outcome = calibrate(&dir, &study, &store, false);
+    let effect = |name: &str| {
+        outcome
+            .screening
+            .iter()
+            .find(|e| e.parameter == name)
+            .unwrap()
+            .clone()
+    };
+    let sigma = outcome.noise_floor.sd_deg.unwrap();
+    let e = effect("particle_particle.restitution");
+    assert!(e.range < sigma && !e.above_noise && !e.active, "{e:?}");
+    for name in [
+        "particle_particle.static_friction",
+        "particle_particle.rolling_friction",
+    ] {
+        let e = effect(name);
+        assert!(e.range > 5.0 && e.active, "{e:?}");
+    }
+    let k = repose::calibrate::parameter_names(&study)
+        .iter()
+        .position(|n| n == "particle_particle.restitution")
+        .unwrap();
+    for c in &outcome.candidates {
+        assert!((c.centre[k] - 0.5).abs() < 1e-12, "{c:?}");
+    }
+    let csv = std::fs::read_to_string(dir.stage(Stage::Search).join("screening.csv")).unwrap();
+    assert!(csv.contains("particle_particle.restitution,"), "{csv}");
+    let md = std::fs::read_to_string(dir.stage(Stage::Search).join("clusters.md")).unwrap();
+    assert!(
+        md.contains("Fixed at the centre of their ranges") && md.contains("restitution"),
+        "{md}"
+    );
 }

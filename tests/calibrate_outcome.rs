@@ -9,7 +9,7 @@
 //! would run exactly the recorded experiments: the study id, the physics
 //! version, the noise floor's and the design's experiment ids (re-sampled
 //! here, < 1 s) and the verification experiments built from the recorded
-//! candidate centres. A change to a manifest, the study, the design or the
+//! candidate centres and the seeds of the recorded acceptance record. A change to a manifest, the study, the design or the
 //! physics version therefore fails here until someone re-runs `repose
 //! calibrate` and updates the file and the READMEs. (Ids cover what a run is
 //! asked to do; a change of what the code does for the same manifest must
@@ -19,8 +19,10 @@ mod common;
 
 use std::collections::BTreeMap;
 
+use repose::calibrate::adaptive::ADAPTIVE_INDEX;
 use repose::calibrate::noise::NOISE_INDEX;
 use repose::calibrate::sample::{sample, SampleSettings};
+use repose::calibrate::verify::VERIFY_INDEX;
 use repose::calibrate::{parameter_names, to_physical};
 use repose::manifest::{parse_study, PHYSICS_VERSION};
 use repose::study::dir::StudyDir;
@@ -184,11 +186,24 @@ fn the_recorded_outcome_is_of_the_experiments_todays_code_runs() {
             (c["group"].as_u64().unwrap(), centre)
         })
         .collect();
+    // Seeds per scene as the recorded acceptance record pre-registered them.
+    let seeds: Vec<u64> = o["outcome"]["acceptance"]["targets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["seeds"].as_u64().unwrap())
+        .collect();
     let mut ids = Vec::new();
-    for target in std::iter::once(&study.calibration).chain(&study.verification) {
+    let targets = std::iter::once(&study.calibration).chain(&study.verification);
+    for (target, seeds) in targets.zip(&seeds) {
         for g in &groups {
-            for r in 0..spec.verification_seeds {
-                let e = study.replicate_experiment(&target.scene, &point(&centres[g]), *g, r);
+            let index = if *g >= ADAPTIVE_INDEX {
+                *g
+            } else {
+                VERIFY_INDEX + g
+            };
+            for r in 0..*seeds as u32 {
+                let e = study.replicate_experiment(&target.scene, &point(&centres[g]), index, r);
                 ids.push(e.unwrap().id().to_string());
             }
         }

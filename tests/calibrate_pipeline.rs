@@ -14,7 +14,7 @@ use repose::calibrate::batch::{angles_path, batch, read_angles};
 use repose::calibrate::sample::{design_path, experiment_path, sample, SampleSettings};
 use repose::calibrate::search::{search, SearchSettings};
 use repose::calibrate::train::{train_study, TrainOptions};
-use repose::calibrate::verify::verify;
+use repose::calibrate::verify::{verify, VERIFY_INDEX};
 use repose::calibrate::Stage;
 use repose::exec::Executor;
 use repose::manifest::{parse_study, Experiment, Study};
@@ -554,7 +554,7 @@ fn a_verification_scene_that_cannot_measure_an_angle_is_a_failed_candidate() {
             r.unmeasured.insert(HEADLINE_KEY.into(), why);
             return Ok(r);
         }
-        if e.seeds.sample_index == 2 {
+        if e.seeds.sample_index == VERIFY_INDEX + 2 {
             return Err(DrumError::from(HealthError {
                 particle_id: 7,
                 body_id: None,

@@ -89,7 +89,7 @@ fn stages_prints_what_each_stage_uses() {
     );
     assert_eq!(
         stages[2],
-        json!({"stage": "simulate", "scenes": ["funnel"], "replicates": 2})
+        json!({"stage": "simulate", "scenes": ["funnel"], "replicates": 1})
     );
     assert_eq!(
         stages[3],
@@ -97,9 +97,12 @@ fn stages_prints_what_each_stage_uses() {
     );
     assert_eq!(
         stages[4],
-        json!({"stage": "search", "search": "probability"})
+        json!({"stage": "search", "search": "probability", "screen": true})
     );
-    assert_eq!(stages[5], json!({"stage": "verify", "seeds": 5}));
+    assert_eq!(
+        stages[5],
+        json!({"stage": "verify", "seeds": 5, "max_seeds": 28})
+    );
 
     let out = common::repose(
         tmp.path(),

@@ -7,13 +7,22 @@
 //! ([`super::gp_train::fit_model`]); a pool of [`POOL`] Latin-hypercube
 //! points (the adaptive stream, one sub-stream per round) is scored by the
 //! probability that its angle lies in the band. The best point is the
-//! round's **candidate** and runs `verification_seeds` packing seeds, as
-//! verification would; the next best at least [`MIN_SEPARATION`] (unit cube)
+//! round's **candidate** and runs the calibration scene's pre-registered
+//! seeds, as verification would; the next best at least [`MIN_SEPARATION`] (unit cube)
 //! from every point taken, up to `batch` points in all, explore with
 //! `replicates` seeds each, so one round does not spend its runs on one
 //! spot. The stage stops when the acceptance rule
 //! ([`crate::study::acceptance`], verification's rule) passes a candidate
 //! in the calibration scene, or when the next round would pass `max_runs`.
+//!
+//! Each round tries a new candidate until one passes: a sequential search
+//! whose every round is a chance of a wrong pass. The stage therefore writes
+//! its acceptance record (`adaptive/acceptance.json`, the rule, the seeds
+//! and α) before its first round, with α = 0.05 divided by every round the
+//! budget allows plus the search candidates verification will judge
+//! ([`max_rounds`], [`super::verify::comparisons`]; Bonferroni), the same
+//! record verification then writes: stopping at the first pass keeps the
+//! chance of any wrong pass ≤ 0.05.
 //!
 //! A design point or the noise floor's centre whose mean happens to fall in
 //! the band does not end the stage: a 2-seed mean is one draw of a noisy
@@ -30,15 +39,17 @@ use serde::Serialize;
 use serde_json::json;
 
 use super::gp_train::{adaptive_path, fit_model};
+use super::noise::read_noise;
 use super::replicates::{read_replicates_csv, replicates_csv, run_replicated, Replicated};
-use super::{parameter_names, to_physical, write_output, Stage, StudyDir, StudyError};
+use super::verify::{acceptance, comparisons};
+use super::{json_bytes, parameter_names, to_physical, write_output, Stage, StudyDir, StudyError};
 use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::search::acquisition::probability_in_band;
 use crate::store::{RunDir, RunResult, Store};
 use crate::streams::{rng, Stream};
-use crate::study::acceptance::{judge, Verdict, RULE};
+use crate::study::acceptance::{Record, Verdict, RULE};
 
 /// `sample_index` of the first adaptive point.
 pub const ADAPTIVE_INDEX: u64 = 2_000_000_000;
@@ -88,17 +99,17 @@ pub struct Hit {
     pub mean_deg: f64,
 }
 
-/// The first round candidate among `points` that the acceptance rule passes
-/// against `band` (degrees): the rule of verification, applied to the
-/// calibration scene.
-fn passing(points: &[Replicated], band: (f64, f64)) -> Option<Hit> {
+/// The first round candidate among `points` that the acceptance `rule`
+/// passes in the calibration scene (its first target): the rule of
+/// verification, at the record's α.
+fn passing(points: &[Replicated], rule: &Record) -> Option<Hit> {
     points
         .iter()
         .filter(|p| (p.index - ADAPTIVE_INDEX).is_multiple_of(ROUND_STRIDE))
         .find_map(|p| {
             let v = p.values();
             let mean = p.mean()?;
-            (judge(&v, band).verdict == Verdict::Pass).then(|| Hit {
+            (rule.judge(0, &v).verdict == Verdict::Pass).then(|| Hit {
                 index: p.index,
                 point: p.point.clone(),
                 seeds: p.runs.len(),
@@ -108,26 +119,51 @@ fn passing(points: &[Replicated], band: (f64, f64)) -> Option<Hit> {
         })
 }
 
-/// The adaptive stage's passing candidate, when the stage has run and found
-/// one (`adaptive/replicates.csv`): verification re-simulates it in every
-/// scene beside the search's candidates, so the point that ended the stage
-/// is the one judged.
-pub fn passing_candidate(dir: &StudyDir, study: &Study) -> Result<Option<Hit>, StudyError> {
+/// The adaptive stage's passing candidate under verification's `rule`, when
+/// the stage has run and found one (`adaptive/replicates.csv`): verification
+/// re-simulates it in every scene beside the search's candidates, so the
+/// point that ended the stage is the one judged.
+pub fn passing_candidate(
+    dir: &StudyDir,
+    study: &Study,
+    rule: &Record,
+) -> Result<Option<Hit>, StudyError> {
     let path = adaptive_path(dir);
     if !path.is_file() {
         return Ok(None);
     }
     let points = read_replicates_csv(&path, study)?;
-    Ok(passing(&points, study.calibration.band_deg()))
+    Ok(passing(&points, rule))
 }
 
-/// Runs the adaptive rounds (see the module docs), seeded by `seed`.
+/// Runs one round takes: the candidate's pre-registered seeds in the
+/// calibration scene and `replicates` for each other point of the batch.
+fn round_runs(study: &Study, candidate_seeds: usize) -> usize {
+    study.noise_aware.as_ref().map_or(0, |n| {
+        candidate_seeds + (n.adaptive.batch as usize).saturating_sub(1) * n.replicates as usize
+    })
+}
+
+/// The most rounds the adaptive budget allows: the rounds the acceptance
+/// rule counts as comparisons before the first one runs. They are counted
+/// at the fewest seeds a candidate may run (`verification_seeds`), so the
+/// count bounds the rounds whatever the power calculation picks.
+pub fn max_rounds(study: &Study) -> usize {
+    study.noise_aware.as_ref().map_or(0, |n| {
+        n.adaptive.max_runs as usize / round_runs(study, n.verification_seeds as usize).max(1)
+    })
+}
+
+/// Runs the adaptive rounds (see the module docs), seeded by `seed`, for a
+/// calibration that will verify `candidates` search candidates beside them.
+#[allow(clippy::too_many_arguments)]
 pub fn adaptive<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
     pool: &Executor,
     seed: u64,
+    candidates: usize,
     runner: F,
     progress: &mut dyn FnMut(&str),
 ) -> Result<AdaptiveOutcome, StudyError>
@@ -144,9 +180,18 @@ where
     };
     let (lo, hi) = study.calibration.band_deg();
     let names = parameter_names(study);
-    let seeds = spec.verification_seeds as usize;
+    let noise_sd = read_noise(dir).ok().and_then(|f| f.sd_deg);
+    let rule = acceptance(study, noise_sd, comparisons(study, candidates, true));
+    // The rule goes on record before the first round.
+    dir.prepare_stage(study, Stage::Adaptive)?;
+    write_output(
+        &dir.stage(Stage::Adaptive).join("acceptance.json"),
+        &json_bytes(&rule),
+        &dir.lineage(Stage::Adaptive, json!({ "record": "acceptance rule" })),
+    )?;
+    let seeds = rule.targets[0].seeds;
     let explore = spec.replicates as usize;
-    let round_runs = seeds + (spec.adaptive.batch as usize).saturating_sub(1) * explore;
+    let round_runs = round_runs(study, seeds);
     let budget = spec.adaptive.max_runs as usize;
     loop {
         let rounds = points
@@ -155,7 +200,7 @@ where
             .max()
             .unwrap_or(0) as usize;
         let runs: usize = points.iter().map(|p| p.runs.len()).sum();
-        let hit = passing(&points, (lo, hi));
+        let hit = passing(&points, &rule);
         if hit.is_some() {
             return Ok(AdaptiveOutcome {
                 rounds,
@@ -220,10 +265,7 @@ where
         ));
         let explorers = new.split_off(1.min(new.len()));
         let mut ran = Vec::new();
-        for (group, replicates) in [
-            (&new, spec.verification_seeds),
-            (&explorers, spec.replicates),
-        ] {
+        for (group, replicates) in [(&new, seeds as u32), (&explorers, spec.replicates)] {
             let (r, _) = run_replicated(
                 study,
                 &study.calibration,
@@ -237,13 +279,12 @@ where
             ran.extend(r);
         }
         points.extend(ran);
-        dir.prepare_stage(study, Stage::Adaptive)?;
         let mut lineage = dir.lineage(
             Stage::Adaptive,
             json!({ "batch": spec.adaptive.batch, "max_runs": budget, "pool": POOL,
                     "min_separation": MIN_SEPARATION, "seed": seed,
                     "candidate_seeds": seeds, "explore_seeds": explore,
-                    "rule": RULE,
+                    "rule": RULE, "alpha": rule.alpha, "comparisons": rule.comparisons,
                     "score": "probability of the target band under the GP" }),
         );
         for r in points.iter().flat_map(|p| &p.runs) {

@@ -34,6 +34,7 @@ use super::{json_bytes, write_output, Stage, StudyDir, StudyError};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::search::band::Family;
+use crate::search::screen::MainEffect;
 use crate::store::{RunDir, RunResult, Store};
 use crate::study::acceptance::Record;
 use crate::study::acceptance::Verdict;
@@ -105,6 +106,9 @@ pub struct CalibrationOutcome {
     pub candidates: Vec<Candidate>,
     /// The parameter sets consistent with the target.
     pub family: Family,
+    /// Every parameter's main effect under the GP against the noise floor,
+    /// and whether the search varied it or fixed it at the centre.
+    pub screening: Vec<MainEffect>,
     /// The acceptance rule, recorded before verification.
     pub acceptance: Record,
     /// Every candidate in every scene.
@@ -164,7 +168,16 @@ where
     let mut adaptive_outcome = None;
     if options.adaptive {
         log("== adaptive");
-        let a = adaptive(dir, study, store, pool, seed, &runner, &mut |m| log(m))?;
+        let a = adaptive(
+            dir,
+            study,
+            store,
+            pool,
+            seed,
+            options.candidates,
+            &runner,
+            &mut |m| log(m),
+        )?;
         log(&format!(
             "stopped ({:?}) after {} round(s), {} run(s){}",
             a.stop,
@@ -183,10 +196,9 @@ where
     log(&found.markdown);
     let adaptive_hit = adaptive_outcome.as_ref().and_then(|a| a.hit.as_ref());
     log(&format!(
-        "== verify: {} candidate(s) x {} scene(s) x {} seeds",
+        "== verify: {} candidate(s) x {} scene(s), seeds by the acceptance record",
         options.candidates.min(found.candidates.len()) + usize::from(adaptive_hit.is_some()),
         1 + study.verification.len(),
-        spec.verification_seeds
     ));
     let v = verify(dir, study, store, pool, options.candidates, &runner)?;
     log(&v.markdown);
@@ -225,6 +237,7 @@ where
         surrogates: gp.metrics,
         candidates: found.candidates,
         family: found.family,
+        screening: found.screening,
         acceptance: v.acceptance,
         verification: v.rows,
         calibrated,

@@ -2,8 +2,9 @@
 //! runs of every noise-aware stage (noise floor, design batch, adaptive
 //! batches, verification).
 //!
-//! Replicate `r` of a point is [`Study::replicate_experiment`] with packing
-//! seed `packing_seed + r`. Every experiment is handed to
+//! Replicate `r` of a point is [`Study::replicate_experiment`] with the
+//! packing seed of [`Study::seed_rule`] (drawn per point in a noise-aware
+//! study). Every experiment is handed to
 //! [`crate::exec::run_incomplete`] at once, so a killed stage resumes and a
 //! run shared with another stage is simulated once. A run that failed before
 //! is not run again unless asked (`retry_failed`): its error.json already
@@ -21,12 +22,11 @@ use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::scenes::responses::response;
 use crate::stats::summary::{mean_ci, MeanCi};
 use crate::store::{ErrorRecord, RunDir, RunResult, RunStatus, Store};
-use crate::streams::SeedRule;
 
 /// One packing seed of a point.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SeedRun {
-    /// Replicate number; the packing seed is the study's + this.
+    /// Replicate number; its packing seed follows [`Study::seed_rule`].
     pub replicate: u32,
     /// The experiment.
     pub id: ContentId,
@@ -227,9 +227,7 @@ pub fn replicates_csv(study: &Study, scenes: &[(&str, &[Replicated])]) -> String
             let mut cells = vec![Cell::Text(scene.to_string()), Cell::Integer(p.index)];
             cells.extend(p.point.iter().map(|v| Cell::Number(*v)));
             cells.push(Cell::Integer(u64::from(r.replicate)));
-            let rule = SeedRule::Offset {
-                base: study.packing_seed,
-            };
+            let rule = study.seed_rule(p.index);
             cells.push(Cell::Integer(rule.packing_seed(u64::from(r.replicate))));
             cells.push(Cell::Text(r.id.to_string()));
             cells.push(r.value.as_ref().map_or(Cell::Empty, |v| Cell::Number(*v)));

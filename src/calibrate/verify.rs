@@ -2,27 +2,33 @@
 //! cluster centre of the search) is simulated again, in the calibration scene
 //! (so the surrogate's prediction meets the DEM it stands for) and in each of
 //! the study's verification scenes (he2019: baffle lift and rotating drum),
-//! with [`verification_seeds`] packing seeds per scene: a noise-aware study's
-//! `verification_seeds`, or one run per scene for the classic method (he2019's
-//! Table 3). Every candidate in every scene is judged by the project's one
-//! acceptance rule ([`crate::study::acceptance`]: TOST against the scene's
-//! band; pass, fail, or inconclusive with the seeds that would decide) — a
-//! single run has no interval and is never decided, and the table says so
-//! rather than passing a candidate on one draw of a noisy test.
+//! with the packing seeds the acceptance record gives each scene. Every
+//! candidate in every scene is judged by the project's one acceptance rule
+//! ([`crate::study::acceptance`]: TOST against the scene's band; pass, fail,
+//! or inconclusive with the seeds that would decide) — a single run (the
+//! classic method's one seed per scene, he2019's Table 3) has no interval
+//! and is never decided, and the table says so rather than passing a
+//! candidate on one draw of a noisy test.
 //!
 //! # The acceptance record
 //!
-//! The rule, the seeds and every scene's target and band are written to
+//! The rule, α, the seeds and every scene's target and band are written to
 //! `verify/acceptance.json` — with its lineage record, before the first
-//! verification run — from the study (whose id fixes them), so they cannot be
-//! chosen after the result is seen; the verification table's lineage names
-//! that file. Where the study's noise floor has measured the calibration
-//! scene's σ, the record also holds the power calculation: the seeds that
-//! give TOST power ≥ 0.8 at the band's centre, capped by
-//! `verification_seeds`, and the power the seeds run actually have. Every
-//! scene runs `verification_seeds` (the cap), so a scene never has less power
-//! than the calculation asks for unless the cap is below it — which the
-//! record then says.
+//! verification run — from the study (whose id fixes them), the noise floor
+//! and the number of candidates, so they cannot be chosen after the result
+//! is seen; the verification table's lineage names that file.
+//! - **Seeds.** Each scene runs [`verification_seeds`] (a noise-aware
+//!   study's `verification_seeds`, 1 for the classic method). Where the
+//!   noise floor has measured the calibration scene's σ, that scene's seeds
+//!   are chosen by the power calculation instead: the fewest that give TOST
+//!   power ≥ 0.8 at the band's centre, at least `verification_seeds` and at
+//!   most `max_verification_seeds` (the record shows the power reached when
+//!   the cap binds). The other scenes' noise is not measured, so no power
+//!   can be computed for them.
+//! - **α.** 0.05 divided by the candidates judged ([`comparisons`]: the
+//!   search's `--candidates`, plus every round the adaptive budget allows
+//!   when the adaptive stage ran), so a calibration that tries several
+//!   candidates keeps a ≤ 5 % chance of passing any wrongly.
 //!
 //! A seed whose run could not measure the angle is a missing replicate
 //! (its reason, recorded in the run's result, is listed under the table),
@@ -32,9 +38,10 @@
 //! and `repose calibrate` exit with after writing the tables.
 //!
 //! Verification experiments are ordinary replicates of the study
-//! ([`Study::replicate_experiment`], replicate 0 being
-//! [`Study::experiment`]) with `sample_index` = the cluster's group number,
-//! cached by id in the store like every run; a killed verify resumes.
+//! ([`Study::replicate_experiment`]) whose `sample_index` is the cluster's
+//! group number plus [`VERIFY_INDEX`], so a noise-aware study draws their
+//! packing seeds apart from every training run's; cached by id in the store
+//! like every run, a killed verify resumes.
 //!
 //! # Candidates
 //!
@@ -62,7 +69,7 @@ use crate::report::markdown::MarkdownTable;
 use crate::report::table::{Cell, CsvWriter, Table};
 use crate::scenes::resolution::unresolved_figures;
 use crate::store::{RunDir, RunResult, RunStatus, Store};
-use crate::study::acceptance::{judge, AcceptedTarget, Judgement, Record};
+use crate::study::acceptance::{comparison_alpha, AcceptedTarget, Judgement, Record};
 
 /// One candidate in one scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -114,7 +121,13 @@ pub struct VerifyOutcome {
     pub runs: usize,
 }
 
-/// Packing seeds per candidate and scene: a noise-aware study's
+/// `sample_index` of the first verification point: the search's candidate
+/// of cluster group g is verified as `VERIFY_INDEX + g`, so its packing seeds
+/// in a noise-aware study are drawn apart from the design's (whose indices
+/// start at 0), the noise floor's and the adaptive points'.
+pub const VERIFY_INDEX: u64 = 3_000_000_000;
+
+/// Fewest packing seeds per candidate and scene: a noise-aware study's
 /// `verification_seeds`; one (he2019's Table 3) for the classic method.
 pub fn verification_seeds(study: &Study) -> u32 {
     study
@@ -123,25 +136,48 @@ pub fn verification_seeds(study: &Study) -> u32 {
         .map_or(1, |n| n.verification_seeds)
 }
 
-/// The study's acceptance record (see the module docs); `noise_sd_deg` is
-/// the calibration scene's σ from the noise floor, when measured.
-pub fn acceptance(study: &Study, noise_sd_deg: Option<f64>) -> Record {
+/// The study's acceptance record for `comparisons` candidates (see the
+/// module docs); `noise_sd_deg` is the calibration scene's σ from the noise
+/// floor, when measured, from which the calibration scene's seeds are
+/// chosen by power within [`verification_seeds`, `max_verification_seeds`].
+pub fn acceptance(study: &Study, noise_sd_deg: Option<f64>, comparisons: usize) -> Record {
     let seeds = verification_seeds(study) as usize;
+    let cap = study
+        .noise_aware
+        .as_ref()
+        .and_then(|n| n.max_verification_seeds)
+        .map_or(seeds, |c| c as usize);
+    let alpha = comparison_alpha(comparisons);
     let targets = std::iter::once(&study.calibration)
         .chain(&study.verification)
         .enumerate()
         .map(|(k, t)| {
-            AcceptedTarget::new(
+            let target = AcceptedTarget::new(
                 &t.name,
                 t.response.as_deref().unwrap_or("headline_angle_deg"),
                 t.target_angle_deg,
                 t.tolerance_fraction,
                 seeds,
-                if k == 0 { noise_sd_deg } else { None },
-            )
+            );
+            match noise_sd_deg.filter(|s| *s > 0.0) {
+                Some(sigma) if k == 0 => target.with_power(sigma, cap, alpha),
+                _ => target,
+            }
         })
         .collect();
-    Record::new(seeds, targets)
+    Record::new(comparisons, targets)
+}
+
+/// Candidates a calibration judges, K of the acceptance rule: the search's
+/// `candidates` and, when the adaptive stage runs, every round its budget
+/// allows (each round's candidate is a chance of a wrong pass).
+pub fn comparisons(study: &Study, candidates: usize, adaptive: bool) -> usize {
+    candidates
+        + if adaptive {
+            super::adaptive::max_rounds(study)
+        } else {
+            0
+        }
 }
 
 /// `search/clusters.csv` (written by the network's and the GP's search).
@@ -205,9 +241,18 @@ where
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
     let noise_sd = read_noise(dir).ok().and_then(|f| f.sd_deg);
-    let rule = acceptance(study, noise_sd);
-    let (clusters_file, mut points) = read_candidates(dir, study, candidates)?;
-    let adaptive = passing_candidate(dir, study)?;
+    let ran_adaptive = adaptive_path(dir).is_file();
+    let rule = acceptance(
+        study,
+        noise_sd,
+        comparisons(study, candidates, ran_adaptive),
+    );
+    let (clusters_file, centres) = read_candidates(dir, study, candidates)?;
+    let mut points: Vec<(u64, Vec<f64>)> = centres
+        .into_iter()
+        .map(|(g, p)| (VERIFY_INDEX + g, p))
+        .collect();
+    let adaptive = passing_candidate(dir, study, &rule)?;
     if let Some(hit) = &adaptive {
         points.push((hit.index, hit.point.clone()));
     }
@@ -226,13 +271,13 @@ where
         .chain(&study.verification)
         .collect();
     let mut per_scene: Vec<Vec<Replicated>> = Vec::new();
-    for target in &targets {
+    for (target, accepted) in targets.iter().zip(&rule.targets) {
         per_scene.push(
             run_replicated(
                 study,
                 target,
                 &points,
-                rule.seeds as u32,
+                accepted.seeds as u32,
                 store,
                 pool,
                 &runner,
@@ -242,14 +287,14 @@ where
         );
     }
     let mut rows = Vec::new();
-    for (k, (group, _)) in points.iter().enumerate() {
-        for (target, runs) in targets.iter().zip(&per_scene) {
+    for (k, (index, _)) in points.iter().enumerate() {
+        for (j, (target, runs)) in targets.iter().zip(&per_scene).enumerate() {
             let r = &runs[k];
             let values = r.values();
-            let judgement = judge(&values, target.band_deg());
+            let judgement = rule.judge(j, &values);
             let mean = judgement.mean;
             rows.push(VerifyRow {
-                group: *group as usize,
+                group: group_of(*index) as usize,
                 scene: target.name.clone(),
                 seeds: r.runs.len(),
                 measured: values.len(),
@@ -313,6 +358,16 @@ where
         failed_runs,
         runs: all_runs().count(),
     })
+}
+
+/// The candidate number of a verified point: the cluster group of a search
+/// candidate, the sample index of the adaptive one.
+fn group_of(index: u64) -> u64 {
+    if index >= VERIFY_INDEX {
+        index - VERIFY_INDEX
+    } else {
+        index
+    }
 }
 
 /// The resolution figures outside their limits in the runs of `r`

@@ -5,7 +5,7 @@
 //! calibrated (with ranges) and which are fixed, and names the calibration scene and
 //! the verification scenes with their measured target angles.
 
-use crate::streams::SeedRule;
+use crate::streams::{SeedRule, SeedStage};
 use std::collections::BTreeMap;
 use std::fmt;
 
@@ -72,11 +72,20 @@ pub struct Study {
 
 /// How a noise-aware calibration treats the packing noise of its runs.
 ///
-/// Replicate `r` (0-based) of any point — a design sample, the noise floor's
-/// centre, an adaptive point, a verified candidate — runs with packing seed
-/// `packing_seed + r`: replicates differ in packing only, and every point
-/// shares the same packings (common random numbers, so differences between
-/// points are not blurred by packing noise more than they must be).
+/// Every point — a design sample, the noise floor's centre, an adaptive
+/// point, a verified candidate — draws its own packing seeds: replicate `r`
+/// of the point with `sample_index` i runs with the r-th draw of the ChaCha
+/// stream ([`SeedRule::Drawn`]) of (`packing_seed`, [`SeedStage::Calibrate`],
+/// i). The sample indices of the stages are disjoint (design 0…, noise floor
+/// `NOISE_INDEX`, adaptive `ADAPTIVE_INDEX` + …, verification
+/// `VERIFY_INDEX` + group), so no two points share a packing: the noise of
+/// two points' means is independent, as the Gaussian process's noise model
+/// and the acceptance rule's t-tests assume, and a candidate is never
+/// verified on the packings its surrogate was trained on. (The one place a
+/// comparison reuses runs on purpose: the adaptive candidate that ended the
+/// adaptive stage is verified in the calibration scene on the very runs that
+/// passed it.) The classic method keeps he2019's one packing seed for every
+/// run ([`SeedRule::Offset`]), as its committed study ids record.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NoiseAware {
@@ -89,11 +98,26 @@ pub struct NoiseAware {
     /// resampled point's angle lies inside the target band for the search to
     /// keep it, in (0, 1).
     pub min_probability: f64,
-    /// Packing seeds of every verification run of a candidate (≥ 5).
+    /// Packing seeds of a candidate in each scene whose noise the study has
+    /// not measured, and the fewest in the calibration scene (≥ 5).
     pub verification_seeds: u32,
+    /// Most packing seeds of a candidate in the calibration scene: the
+    /// acceptance record's power calculation on the noise floor's σ picks
+    /// the seeds (TOST power 0.8 at the band's centre) between
+    /// `verification_seeds` and this cap (absent: `verification_seeds`, no
+    /// power calculation raises it). See `calibrate::verify`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_verification_seeds: Option<u32>,
     /// Active learning after the initial design (`repose calibrate
     /// --adaptive`).
     pub adaptive: Adaptive,
+    /// Screen before searching: parameters whose main effect under the GP
+    /// (over their whole range) is below the noise floor's σ are fixed at
+    /// the centre of their ranges and only the others are searched
+    /// ([`crate::search::screen`]); absent or false: every parameter is
+    /// searched and the main effects are reported only.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub screen: bool,
 }
 
 /// Batches of points chosen by the surrogate until a point's replicate mean
@@ -249,8 +273,25 @@ impl Study {
         self.replicate_experiment(scene, point, sample_index, 0)
     }
 
-    /// [`Study::experiment`] with packing seed `packing_seed + replicate`
-    /// (see [`NoiseAware`]).
+    /// How the replicates of the point `sample_index` get their packing
+    /// seeds: drawn per point in a noise-aware study, `packing_seed + r` in
+    /// the classic method (see [`NoiseAware`]).
+    pub fn seed_rule(&self, sample_index: u64) -> SeedRule {
+        if self.noise_aware.is_some() {
+            SeedRule::Drawn {
+                seed: self.packing_seed,
+                stage: SeedStage::Calibrate,
+                point: sample_index,
+            }
+        } else {
+            SeedRule::Offset {
+                base: self.packing_seed,
+            }
+        }
+    }
+
+    /// [`Study::experiment`] with the packing seed of `replicate` by
+    /// [`Study::seed_rule`].
     pub fn replicate_experiment(
         &self,
         scene: &Scene,
@@ -311,10 +352,9 @@ impl Study {
             seeds: Seeds {
                 design_seed: self.design.seed,
                 sample_index,
-                packing_seed: SeedRule::Offset {
-                    base: self.packing_seed,
-                }
-                .packing_seed(u64::from(replicate)),
+                packing_seed: self
+                    .seed_rule(sample_index)
+                    .packing_seed(u64::from(replicate)),
             },
             time_step: self.time_step,
             coarse_graining: self.coarse_graining,

@@ -10,9 +10,12 @@
 //! - [`meanshift`]: mean-shift clustering and its bandwidth estimate;
 //! - [`acquisition`]: probability of the band and expected improvement;
 //! - [`desirability`]: Derringer–Suich desirability and its maximisation
-//!   (cai2024's joint optimum of several responses).
+//!   (cai2024's joint optimum of several responses);
+//! - [`screen`]: main effects of a surrogate and which parameters move it by
+//!   more than the noise (the noise-aware he2019 search's screening).
 
 pub mod acquisition;
 pub mod band;
 pub mod desirability;
 pub mod meanshift;
+pub mod screen;

@@ -5,30 +5,45 @@
 //! so nothing is judged twice by different standards.
 //!
 //! For n measured replicates (distinct packing seeds; a run that could not
-//! measure the response is a missing replicate, not a value) and the band
-//! [lo, hi] = target × (1 ∓ tolerance):
-//! - **pass** when both one-sided t-tests of TOST reject at α = [`ALPHA`]
-//!   (the 90 % interval of the mean lies inside the band);
-//! - **fail** when the 95 % interval of the mean lies wholly outside the
+//! measure the response is a missing replicate, not a value), the band
+//! [lo, hi] = target × (1 ∓ tolerance) and the level α of the comparison:
+//! - **pass** when both one-sided t-tests of TOST reject at α (the
+//!   (1 − 2α) interval of the mean lies inside the band);
+//! - **fail** when the (1 − α) interval of the mean lies wholly outside the
 //!   band;
 //! - **inconclusive** otherwise, with the replicates that would decide it at
 //!   the measured mean and sd ([`equivalence::replicates_to_decide`]). With
 //!   fewer than two measured replicates there is no interval, so the verdict
 //!   is inconclusive and the count unknown.
 //!
+//! α is [`ALPHA`] = 0.05 (the 90 % and 95 % intervals) for one comparison.
+//! A stage that judges K candidates and calls the study calibrated when any
+//! of them passes — several search candidates, or the rounds of the adaptive
+//! stage, each a new candidate until one passes — makes K chances of a
+//! wrong pass, so each comparison is judged at α/K (Bonferroni,
+//! [`comparison_alpha`]): the chance that any of them passes a candidate
+//! whose true mean lies outside the band stays ≤ 0.05 whatever the
+//! correlation between them and whenever the stage stops. K is fixed before
+//! the first run from the study and the stage's settings (the adaptive
+//! stage's K counts the rounds its budget allows, not those it ran), and
+//! written in the record. Bonferroni rather than Pocock or O'Brien–Fleming
+//! boundaries because the rounds test different candidates, whose
+//! statistics are not the nested sums those boundaries are computed for.
+//!
 //! The statistics are in [`crate::stats::equivalence`]. Every verification
 //! stage writes its [`Record`] (`acceptance.json`: the rule's wording
-//! [`RULE`], the seeds, each target's band and, where the study has measured
-//! its noise, the power calculation) with its lineage before its first
-//! verification run, so neither the rule nor the seeds can be chosen after
-//! the result is seen.
+//! [`RULE`], α and K, each target's band and seeds and, where the study has
+//! measured its noise, the power calculation that chose the seeds) with its
+//! lineage before its first verification run, so neither the rule nor the
+//! seeds can be chosen after the result is seen.
 
 use serde::{Deserialize, Serialize};
 
 use crate::stats::equivalence::{self, tost_power, Tost};
+use crate::stats::summary::t_quantile;
 
-/// Level of each one-sided test (and 1 − confidence of the fail interval's
-/// tails: the fail interval is the 95 % two-sided one).
+/// Level of each one-sided test of a single comparison (and the tails of
+/// its fail interval: the two-sided 95 % one).
 pub const ALPHA: f64 = 0.05;
 
 /// Power a pre-registered seed count aims at when the candidate sits at the
@@ -36,10 +51,17 @@ pub const ALPHA: f64 = 0.05;
 pub const TARGET_POWER: f64 = 0.8;
 
 /// The rule in words, as acceptance records and reports print it.
-pub const RULE: &str = "pass when both one-sided t-tests (TOST, alpha = 0.05) reject, i.e. the \
-    90 % interval of the mean of the measured seeds lies inside the band target x (1 -/+ \
-    tolerance); fail when the 95 % interval lies wholly outside the band; inconclusive \
-    otherwise (and with fewer than 2 measured seeds)";
+pub const RULE: &str = "pass when both one-sided t-tests (TOST) reject at level alpha, i.e. \
+    the (1 - 2 alpha) interval of the mean of the measured seeds lies inside the band target x \
+    (1 -/+ tolerance); fail when the (1 - alpha) interval lies wholly outside the band; \
+    inconclusive otherwise (and with fewer than 2 measured seeds); alpha = 0.05 / K for K \
+    candidates judged (Bonferroni: 0.05 for one, the 90 % and 95 % intervals)";
+
+/// The level of each of `comparisons` comparisons whose family keeps a
+/// chance ≤ [`ALPHA`] of any wrong pass (Bonferroni; module docs).
+pub fn comparison_alpha(comparisons: usize) -> f64 {
+    ALPHA / comparisons.max(1) as f64
+}
 
 /// The verdict on one candidate in one scene.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
@@ -120,21 +142,33 @@ impl Judgement {
     }
 }
 
-/// The rule (module docs) on the measured `values` against `band` = (lo, hi).
+/// The rule (module docs) for one comparison (α = [`ALPHA`]) on the
+/// measured `values` against `band` = (lo, hi).
 pub fn judge(values: &[f64], band: (f64, f64)) -> Judgement {
+    judge_at(values, band, ALPHA)
+}
+
+/// The rule (module docs) at level `alpha` (in (0, 0.5)) on the measured
+/// `values` against `band` = (lo, hi).
+pub fn judge_at(values: &[f64], band: (f64, f64), alpha: f64) -> Judgement {
     let n = values.len();
     let mean = (n > 0).then(|| values.iter().sum::<f64>() / n as f64);
     let tost = equivalence::tost(values, band);
     let verdict = match tost {
-        Some(t) if t.p < ALPHA => Verdict::Pass,
-        Some(t) if t.mean + t.ci95_half_width < band.0 || t.mean - t.ci95_half_width > band.1 => {
-            Verdict::Fail
+        Some(t) if t.p < alpha => Verdict::Pass,
+        Some(t) => {
+            let half = t_quantile(1.0 - alpha / 2.0, t.df) * t.sd / (t.n as f64).sqrt();
+            if t.mean + half < band.0 || t.mean - half > band.1 {
+                Verdict::Fail
+            } else {
+                Verdict::Inconclusive
+            }
         }
-        _ => Verdict::Inconclusive,
+        None => Verdict::Inconclusive,
     };
     let seeds_to_decide = match (verdict, &tost) {
         (Verdict::Inconclusive, Some(t)) => {
-            equivalence::replicates_to_decide(t, band, 1.0 - ALPHA, 1.0 - ALPHA / 2.0)
+            equivalence::replicates_to_decide(t, band, 1.0 - alpha, 1.0 - alpha / 2.0)
         }
         _ => None,
     };
@@ -149,10 +183,11 @@ pub fn judge(values: &[f64], band: (f64, f64)) -> Judgement {
 }
 
 /// The seeds to pre-register for a scene whose per-run noise is `sigma`
-/// (units of the band): the fewest with TOST power ≥ [`TARGET_POWER`] at the
-/// band's centre, at most `cap`; `None` when `cap` seeds do not reach it.
-pub fn seeds_for_power(sigma: f64, band: (f64, f64), cap: usize) -> Option<usize> {
-    equivalence::replicates_for_power(sigma, band, ALPHA, TARGET_POWER, cap)
+/// (units of the band), judged at level `alpha`: the fewest with TOST power
+/// ≥ [`TARGET_POWER`] at the band's centre, at most `cap`; `None` when `cap`
+/// seeds do not reach it.
+pub fn seeds_for_power(sigma: f64, band: (f64, f64), alpha: f64, cap: usize) -> Option<usize> {
+    equivalence::replicates_for_power(sigma, band, alpha, TARGET_POWER, cap)
 }
 
 /// The band target × (1 ∓ tolerance) as (lo, hi), lo ≤ hi for a target of
@@ -177,10 +212,13 @@ pub struct AcceptedTarget {
     pub tolerance_fraction: f64,
     /// [lo, hi] = target × (1 ∓ tolerance).
     pub band: (f64, f64),
+    /// Packing seeds each candidate (or point) runs for this target.
+    pub seeds: usize,
     /// Seed-to-seed σ from the study's noise floor, when measured.
     pub sigma: Option<f64>,
     /// Seeds that give TOST power ≥ [`TARGET_POWER`] at the band's centre at
-    /// that σ (none without a σ, or when more than the cap would be needed).
+    /// that σ and the record's α (none without a σ, or when more than the
+    /// cap would be needed).
     pub seeds_for_power: Option<usize>,
     /// TOST power at the band's centre with the seeds run (with a σ).
     pub power_at_seeds: Option<f64>,
@@ -188,27 +226,41 @@ pub struct AcceptedTarget {
 
 impl AcceptedTarget {
     /// The target `name`/`response` at `target` ± `tolerance_fraction`,
-    /// judged with `seeds` replicates (also the cap of the power
-    /// calculation) and, when known, the per-run noise `sigma`.
+    /// judged with `seeds` replicates, its noise unmeasured.
     pub fn new(
         name: &str,
         response: &str,
         target: f64,
         tolerance_fraction: f64,
         seeds: usize,
-        sigma: Option<f64>,
     ) -> AcceptedTarget {
-        let band = band(target, tolerance_fraction);
-        let centre = 0.5 * (band.0 + band.1);
         AcceptedTarget {
             name: name.to_string(),
             response: response.to_string(),
             target,
             tolerance_fraction,
-            band,
-            sigma,
-            seeds_for_power: sigma.and_then(|s| seeds_for_power(s, band, seeds)),
-            power_at_seeds: sigma.map(|s| tost_power(seeds, s, band, centre, ALPHA)),
+            band: band(target, tolerance_fraction),
+            seeds,
+            sigma: None,
+            seeds_for_power: None,
+            power_at_seeds: None,
+        }
+    }
+
+    /// The target with its per-run noise `sigma` measured: its seeds become
+    /// the fewest that reach [`TARGET_POWER`] at the band's centre at level
+    /// `alpha`, at least the seeds it had and at most `cap` (the cap when
+    /// even `cap` does not reach it, which the record then shows).
+    pub fn with_power(self, sigma: f64, cap: usize, alpha: f64) -> AcceptedTarget {
+        let needed = seeds_for_power(sigma, self.band, alpha, cap);
+        let seeds = needed.unwrap_or(cap).max(self.seeds);
+        let centre = 0.5 * (self.band.0 + self.band.1);
+        AcceptedTarget {
+            seeds,
+            sigma: Some(sigma),
+            seeds_for_power: needed,
+            power_at_seeds: Some(tost_power(seeds, sigma, self.band, centre, alpha)),
+            ..self
         }
     }
 }
@@ -218,43 +270,60 @@ impl AcceptedTarget {
 pub struct Record {
     /// The rule in words ([`RULE`]).
     pub rule: String,
-    /// Level of each one-sided test.
+    /// Chance of any wrong pass the record's comparisons keep ([`ALPHA`]).
+    pub family_alpha: f64,
+    /// Candidates judged (K of the module docs).
+    pub comparisons: usize,
+    /// Level of each one-sided test of each comparison, α/K.
     pub alpha: f64,
-    /// Packing seeds per candidate (or point) and target.
-    pub seeds: usize,
     /// Every target judged.
     pub targets: Vec<AcceptedTarget>,
 }
 
 impl Record {
-    /// The record of `targets` judged with `seeds` seeds each.
-    pub fn new(seeds: usize, targets: Vec<AcceptedTarget>) -> Record {
+    /// The record of `targets` for `comparisons` candidates (≥ 1).
+    pub fn new(comparisons: usize, targets: Vec<AcceptedTarget>) -> Record {
         Record {
             rule: RULE.to_string(),
-            alpha: ALPHA,
-            seeds,
+            family_alpha: ALPHA,
+            comparisons: comparisons.max(1),
+            alpha: comparison_alpha(comparisons),
             targets,
         }
     }
 
+    /// The rule at the record's α on `values` measured for `target` (an
+    /// index into [`Record::targets`]).
+    pub fn judge(&self, target: usize, values: &[f64]) -> Judgement {
+        judge_at(values, self.targets[target].band, self.alpha)
+    }
+
     /// The record in words, as a Markdown paragraph for the head of a
-    /// verification table: the rule, the seeds, and each power calculation.
+    /// verification table: the rule, α, each target's seeds and each power
+    /// calculation.
     pub fn describe(&self) -> String {
+        let seeds: Vec<String> = self
+            .targets
+            .iter()
+            .map(|t| format!("{} {}", t.name, t.seeds))
+            .collect();
         let mut out = format!(
-            "Acceptance rule (recorded before the runs), {} packing seeds per candidate and \
-             target: {}.\n",
-            self.seeds, self.rule
+            "Acceptance rule (recorded before the runs): {}. {} candidate(s) judged, so alpha = \
+             {:.4} per one-sided test. Packing seeds per candidate: {}.\n",
+            self.rule,
+            self.comparisons,
+            self.alpha,
+            seeds.join(", ")
         );
         for t in &self.targets {
             if let (Some(sigma), Some(power)) = (t.sigma, t.power_at_seeds) {
                 out.push_str(&format!(
-                    "\n{} at σ = {sigma:.2} (noise floor): power {:.2} with {} seeds at the band's \
-                     centre; {}.\n",
+                    "\n{} at σ = {sigma:.2} (noise floor): power {power:.2} with {} seeds at the \
+                     band's centre; {}.\n",
                     t.name,
-                    power,
-                    self.seeds,
+                    t.seeds,
                     t.seeds_for_power.map_or_else(
-                        || format!("more than {} seeds would reach {TARGET_POWER}", self.seeds),
+                        || format!("more than {} seeds would reach {TARGET_POWER}", t.seeds),
                         |n| format!("{n} seeds reach {TARGET_POWER}")
                     )
                 ));
@@ -306,7 +375,69 @@ mod tests {
 
     #[test]
     fn seeds_for_power_caps() {
-        assert_eq!(seeds_for_power(2.0, BAND, 20), Some(8));
-        assert_eq!(seeds_for_power(4.1, BAND, 20), None);
+        assert_eq!(seeds_for_power(2.0, BAND, ALPHA, 20), Some(8));
+        assert_eq!(seeds_for_power(4.1, BAND, ALPHA, 20), None);
+    }
+
+    /// Bonferroni keeps the family's error: K = 5 candidates whose true
+    /// mean sits on the band's lower edge (the null hypothesis at its most
+    /// likely to pass), 8 normal seeds each at σ = 2 (at the funnel's 4.1
+    /// the band is too narrow for 8 seeds to pass anything); the fraction of
+    /// 4000 trials in which any candidate passes stays within 3 standard
+    /// errors of ≤ 0.05 at α/K, and is about 1 − 0.95⁵ ≈ 0.23 unadjusted.
+    #[test]
+    fn bonferroni_keeps_the_chance_of_any_wrong_pass() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(39);
+        let mut normal = || {
+            let (u, v): (f64, f64) = (rng.random(), rng.random());
+            (-2.0 * (1.0 - u).ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+        };
+        let (k, trials, sigma) = (5, 4000, 2.0);
+        let (mut adjusted, mut unadjusted) = (0usize, 0usize);
+        for _ in 0..trials {
+            let (mut any_adjusted, mut any_unadjusted) = (false, false);
+            for _ in 0..k {
+                let values: Vec<f64> = (0..8).map(|_| BAND.0 + sigma * normal()).collect();
+                any_adjusted |=
+                    judge_at(&values, BAND, comparison_alpha(k)).verdict == Verdict::Pass;
+                any_unadjusted |= judge(&values, BAND).verdict == Verdict::Pass;
+            }
+            adjusted += usize::from(any_adjusted);
+            unadjusted += usize::from(any_unadjusted);
+        }
+        let rate = |c: usize| c as f64 / trials as f64;
+        let se = (ALPHA * (1.0 - ALPHA) / trials as f64).sqrt();
+        assert!(rate(adjusted) <= ALPHA + 3.0 * se, "{}", rate(adjusted));
+        assert!(rate(unadjusted) > 0.18, "{}", rate(unadjusted));
+    }
+
+    /// A record of K comparisons judges at α/K: a table that passes one
+    /// comparison is inconclusive among four (TOST p 0.0251: statsmodels
+    /// `DescrStatsW(np.array(values)).ttost_mean(45.41, 50.19)[0]`).
+    #[test]
+    fn a_record_judges_at_its_comparisons_alpha() {
+        let target = || AcceptedTarget::new("funnel", "angle", 47.8, 0.05, 5);
+        let values = [47.0, 50.9, 48.1, 45.4, 49.8, 47.5];
+        let one = Record::new(1, vec![target()]);
+        let four = Record::new(4, vec![target()]);
+        assert_eq!(four.alpha, 0.0125);
+        assert_eq!(one.judge(0, &values).verdict, Verdict::Pass);
+        assert_eq!(four.judge(0, &values).verdict, Verdict::Inconclusive);
+    }
+
+    /// The power calculation picks the seeds between the minimum and the
+    /// cap, and the cap when the power is out of reach.
+    #[test]
+    fn seeds_are_chosen_by_power_within_their_bounds() {
+        let t = || AcceptedTarget::new("funnel", "angle", 47.8, 0.05, 5);
+        let powered = t().with_power(2.0, 40, ALPHA);
+        assert_eq!((powered.seeds, powered.seeds_for_power), (8, Some(8)));
+        assert!(powered.power_at_seeds.unwrap() >= TARGET_POWER);
+        let small = t().with_power(0.5, 40, ALPHA);
+        assert_eq!(small.seeds, 5, "never fewer than the minimum");
+        let capped = t().with_power(4.1, 12, ALPHA);
+        assert_eq!((capped.seeds, capped.seeds_for_power), (12, None));
+        assert!(capped.power_at_seeds.unwrap() < TARGET_POWER);
     }
 }

@@ -178,13 +178,22 @@ pub enum Stage {
     Search {
         /// How they are picked.
         search: SearchKind,
+        /// Parameters whose main effect is below the noise are fixed at
+        /// their centre first (noise-aware he2019 with `screen`).
+        #[serde(skip_serializing_if = "std::ops::Not::not")]
+        screen: bool,
     },
     /// yan2015's sensitivity levels.
     Sensitivity,
     /// Candidates re-simulated in every scene.
     Verify {
-        /// Packing seeds per candidate and scene.
+        /// Packing seeds per candidate and scene (the fewest, when a power
+        /// calculation may raise them).
         seeds: u32,
+        /// Most seeds the calibration scene's power calculation may ask
+        /// for (noise-aware he2019 with `max_verification_seeds`).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        max_seeds: Option<u32>,
     },
     /// Fidelity knobs swept with replicates.
     Tradeoff {
@@ -260,8 +269,12 @@ impl StudySpec {
                 },
                 Stage::Search {
                     search: SearchKind::Tolerance,
+                    screen: false,
                 },
-                Stage::Verify { seeds: 1 },
+                Stage::Verify {
+                    seeds: 1,
+                    max_seeds: None,
+                },
             ],
             Some(n) => {
                 let mut stages = vec![
@@ -284,9 +297,11 @@ impl StudySpec {
                 }
                 stages.push(Stage::Search {
                     search: SearchKind::Probability,
+                    screen: n.screen,
                 });
                 stages.push(Stage::Verify {
                     seeds: n.verification_seeds,
+                    max_seeds: n.max_verification_seeds,
                 });
                 stages
             }
@@ -331,6 +346,7 @@ impl StudySpec {
                 });
                 stages.push(Stage::Search {
                     search: SearchKind::Desirability,
+                    screen: false,
                 });
                 Method::ResponseSurface
             }
@@ -345,6 +361,7 @@ impl StudySpec {
         if let Some(v) = &study.verification {
             stages.push(Stage::Verify {
                 seeds: v.replicates,
+                max_seeds: None,
             });
         }
         StudySpec {
@@ -399,9 +416,21 @@ impl StudySpec {
                 ),
                 Stage::Fit { models } => models.iter().map(word).collect::<Vec<_>>().join(", "),
                 Stage::Adaptive { max_runs } => format!("up to {max_runs} runs"),
-                Stage::Search { search } => word(search),
+                Stage::Search { search, screen } => {
+                    let mut w = word(search);
+                    if *screen {
+                        w.push_str(", parameters below the noise fixed at their centre");
+                    }
+                    w
+                }
                 Stage::Sensitivity => "levels 1-3".to_string(),
-                Stage::Verify { seeds } => format!("{seeds} seed(s) per candidate and scene"),
+                Stage::Verify { seeds, max_seeds } => match max_seeds {
+                    Some(max) => format!(
+                        "{seeds} seed(s) per candidate and scene; the calibration scene's by \
+                         power on the noise floor, up to {max}"
+                    ),
+                    None => format!("{seeds} seed(s) per candidate and scene"),
+                },
                 Stage::Tradeoff { knobs, replicates } => {
                     format!("knobs {} x {replicates} seed(s)", knobs.join(", "))
                 }

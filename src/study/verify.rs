@@ -26,7 +26,7 @@ use crate::report::table::{Cell, CsvWriter};
 use crate::scenes::resolution::unresolved_figures;
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store};
-use crate::study::acceptance::{judge, AcceptedTarget, Judgement, Record};
+use crate::study::acceptance::{judge_at, AcceptedTarget, Judgement, Record};
 
 /// One response at one verified point.
 #[derive(Debug, Clone, Serialize)]
@@ -170,7 +170,7 @@ where
         .collect();
     let stage = dir.create_stage(stage_name)?;
     let record = Record::new(
-        plan.replicates as usize,
+        1,
         responses
             .iter()
             .filter_map(|r| {
@@ -181,7 +181,6 @@ where
                         t.value,
                         t.tolerance_fraction,
                         plan.replicates as usize,
-                        None,
                     )
                 })
             })
@@ -229,7 +228,7 @@ where
                     .targets
                     .iter()
                     .find(|t| t.response == *response)
-                    .map(|t| judge(&values[k], t.band)),
+                    .map(|t| judge_at(&values[k], t.band, record.alpha)),
                 unresolved: unresolved(store, study, &runs, k, response)?,
             });
         }

@@ -34,6 +34,11 @@ pub(crate) fn check_study(c: &mut Checker, s: &Study) {
     }
 }
 
+/// Most seeds a calibration scene's power calculation may pre-register: a
+/// study that needs more is better served by a finer test than by more
+/// packings.
+const MAX_VERIFICATION_SEEDS: u32 = 200;
+
 fn check_noise_aware(c: &mut Checker, n: &NoiseAware) {
     let mut at_least = |field: &str, v: u32, min: u32, why: &str| {
         if v < min {
@@ -74,6 +79,19 @@ fn check_noise_aware(c: &mut Checker, n: &NoiseAware) {
         n.min_probability,
         Interval::open(0.0, 1.0),
     );
+    if let Some(cap) = n.max_verification_seeds {
+        if cap < n.verification_seeds || cap > MAX_VERIFICATION_SEEDS {
+            c.fail(
+                "noise_aware.max_verification_seeds",
+                cap.to_string(),
+                format!(
+                    "must lie in [verification_seeds = {}, {MAX_VERIFICATION_SEEDS}] (the cap \
+                     of the calibration scene's seeds)",
+                    n.verification_seeds
+                ),
+            );
+        }
+    }
 }
 
 fn check_parameters(c: &mut Checker, s: &Study) {
