@@ -175,6 +175,43 @@ fn a_noise_aware_calibration_lands_a_verified_candidate_and_reproduces() {
     assert!(report.contains("a perfect model scores R²"), "{report}");
     assert!(outcome.surrogates.iter().any(|s| s.surrogate == "ga_bp"));
 
+    // The GP's noise is the replicates': gp.json records the homogeneity
+    // test over the 12 design points and the centre, the model it chose and
+    // each row's noise variance, and no nugget is fitted on top. The fake
+    // noise has one spread everywhere, and the seed pairs at hand do not
+    // reject it (p is recorded, so a change of that shows here).
+    let gp_json: Value =
+        serde_json::from_slice(&std::fs::read(dir.stage(Stage::Train).join("gp.json")).unwrap())
+            .unwrap();
+    let noise = &gp_json["noise"];
+    let test = &noise["homogeneity"];
+    assert_eq!(test["test"], "bartlett", "{noise}");
+    assert_eq!(
+        (test["points"].as_u64(), test["df"].as_u64()),
+        (Some(13), Some(12))
+    );
+    let p = test["p"].as_f64().unwrap();
+    assert!(p >= 0.05, "{noise}");
+    assert_eq!(noise["model"], "pooled", "{noise}");
+    assert_eq!(noise["prior_df"], Value::Null, "{noise}");
+    assert_eq!(gp_json["nugget_var"].as_f64(), Some(0.0));
+    let sigma2 = noise["pooled_variance_deg2"].as_f64().unwrap();
+    let data = &gp_json["data"];
+    let n: Vec<u64> = serde_json::from_value(data["n"].clone()).unwrap();
+    let noise_var: Vec<f64> = serde_json::from_value(data["noise_var"].clone()).unwrap();
+    let sample_var: Vec<Option<f64>> = serde_json::from_value(data["sample_var"].clone()).unwrap();
+    assert_eq!((n.len(), noise_var.len(), sample_var.len()), (13, 13, 13));
+    for (k, v) in n.iter().zip(&noise_var) {
+        assert!(
+            (v - sigma2 / *k as f64).abs() <= 1e-12 * sigma2,
+            "{v} vs {sigma2}/{k}"
+        );
+    }
+    assert!(
+        report.contains("Bartlett's test of equal variances over 13 points"),
+        "{report}"
+    );
+
     // The candidate's 5-seed mean in the calibration scene is in the band,
     // judged by the rule recorded before the runs.
     assert!(outcome.calibrated, "{:#?}", outcome.verification);
