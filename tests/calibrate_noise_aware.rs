@@ -176,6 +176,43 @@ fn a_noise_aware_calibration_lands_a_verified_candidate_and_reproduces() {
     assert!(report.contains("a perfect model scores R²"), "{report}");
     assert!(outcome.surrogates.iter().any(|s| s.surrogate == "ga_bp"));
 
+    // The GP's noise is the replicates': gp.json records the homogeneity
+    // test over the 12 design points and the centre, the model it chose and
+    // each row's noise variance, and no nugget is fitted on top. The fake
+    // noise has one spread everywhere, and the seed pairs at hand do not
+    // reject it (p is recorded, so a change of that shows here).
+    let gp_json: Value =
+        serde_json::from_slice(&std::fs::read(dir.stage(Stage::Train).join("gp.json")).unwrap())
+            .unwrap();
+    let noise = &gp_json["noise"];
+    let test = &noise["homogeneity"];
+    assert_eq!(test["test"], "bartlett", "{noise}");
+    assert_eq!(
+        (test["points"].as_u64(), test["df"].as_u64()),
+        (Some(13), Some(12))
+    );
+    let p = test["p"].as_f64().unwrap();
+    assert!(p >= 0.05, "{noise}");
+    assert_eq!(noise["model"], "pooled", "{noise}");
+    assert_eq!(noise["prior_df"], Value::Null, "{noise}");
+    assert_eq!(gp_json["nugget_var"].as_f64(), Some(0.0));
+    let sigma2 = noise["pooled_variance_deg2"].as_f64().unwrap();
+    let data = &gp_json["data"];
+    let n: Vec<u64> = serde_json::from_value(data["n"].clone()).unwrap();
+    let noise_var: Vec<f64> = serde_json::from_value(data["noise_var"].clone()).unwrap();
+    let sample_var: Vec<Option<f64>> = serde_json::from_value(data["sample_var"].clone()).unwrap();
+    assert_eq!((n.len(), noise_var.len(), sample_var.len()), (13, 13, 13));
+    for (k, v) in n.iter().zip(&noise_var) {
+        assert!(
+            (v - sigma2 / *k as f64).abs() <= 1e-12 * sigma2,
+            "{v} vs {sigma2}/{k}"
+        );
+    }
+    assert!(
+        report.contains("Bartlett's test of equal variances over 13 points"),
+        "{report}"
+    );
+
     // The candidate's 5-seed mean in the calibration scene is in the band,
     // judged by the rule recorded before the runs.
     assert!(outcome.calibrated, "{:#?}", outcome.verification);
@@ -559,5 +596,94 @@ fn screening_fixes_a_parameter_below_the_noise_at_its_centre() {
     assert!(
         md.contains("Fixed at the centre of their ranges") && md.contains("restitution"),
         "{md}"
+    );
+}
+
+/// When half the design is ten times noisier than the rest, Bartlett's
+/// test rejects one shared variance and the GP's rows carry their own
+/// variances, shrunk towards the pooled one; the GP still fits without a
+/// nugget. (Five times noisier is not enough with two seeds per point:
+/// these pairs then give p = 0.069 and the pooled variance — one degree of
+/// freedom per point says little, see `stats::homogeneity`.)
+#[test]
+fn a_noisier_half_of_the_design_gives_the_gp_per_point_noise() {
+    use repose::calibrate::batch::{batch, replicates_path};
+    use repose::calibrate::gp_train::{train_gp, NoiseModel, PRIOR_DF};
+    use repose::calibrate::sample::sample;
+    let tmp = tempfile::tempdir().unwrap();
+    let (study, path) = study(tmp.path(), &[]);
+    let root = tmp.path().join("store");
+    let store = Store::open(&root).unwrap();
+    let dir = StudyDir::new(&root, &study, &path);
+    // μ above the centre of its range (0.45): the packing noise × 10.
+    let noisy = |e: &Experiment| e.contact.particle_particle.static_friction > 0.45;
+    let runner = |e: &Experiment, _: &RunDir| -> Result<RunResult, std::io::Error> {
+        let mut r = RunResult::new(e, "fake");
+        let extra = if noisy(e) {
+            9.0 * packing_noise(e.seeds.packing_seed, e.seeds.sample_index)
+        } else {
+            0.0
+        };
+        r.headline_angle_deg = Some(fake_angle(e) + extra);
+        Ok(r)
+    };
+    noise(&dir, &study, &store, &pool(), runner).unwrap();
+    sample(&dir, &study, &SampleSettings::default()).unwrap();
+    batch(&dir, &study, &store, &pool(), runner).unwrap();
+    let out = train_gp(
+        &dir,
+        &study,
+        DEFAULT_TRAIN_FRACTION,
+        study.design.seed,
+        None,
+    )
+    .unwrap();
+
+    let noise_model = &out.model.noise;
+    let test = noise_model.homogeneity.clone().unwrap();
+    assert!(test.p < 0.05, "{noise_model:?}");
+    assert_eq!(noise_model.model, NoiseModel::PerPoint);
+    assert_eq!(noise_model.prior_df, Some(PRIOR_DF));
+    assert_eq!(out.model.nugget_var, 0.0);
+    // Each design row's noise is (ν₀σ² + Σ(y − ȳ)²)/(ν₀ + n − 1)/n of its
+    // own replicates, and the noisy half's is larger on average.
+    let design = read_replicates_csv(&replicates_path(&dir), &study).unwrap();
+    let sigma2 = noise_model.pooled_variance_deg2;
+    let (mut loud, mut quiet) = (Vec::new(), Vec::new());
+    let data = &out.model.data;
+    for (i, (source, index)) in data.source.iter().zip(&data.index).enumerate() {
+        if source != "design" {
+            continue;
+        }
+        let p = design.iter().find(|p| p.index == *index).unwrap();
+        let v = p.values();
+        let n = v.len() as f64;
+        let m = v.iter().sum::<f64>() / n;
+        let ss: f64 = v.iter().map(|y| (y - m) * (y - m)).sum();
+        let expected = (PRIOR_DF * sigma2 + ss) / (PRIOR_DF + n - 1.0) / n;
+        assert!(
+            (data.noise_var[i] - expected).abs() <= 1e-12 * expected,
+            "row {i}: {} vs {expected}",
+            data.noise_var[i]
+        );
+        // The design's first parameter is μ_r, its second μ (sorted names).
+        let mu = p.point[1];
+        if mu > 0.45 { &mut loud } else { &mut quiet }.push(data.noise_var[i]);
+    }
+    // The shrinkage damps the separation (the true variances differ 100-fold;
+    // ν₀ = 2 prior df against one of the point's own, towards a σ² the loud
+    // half dominates), but the loud half's rows are noisier on average and
+    // the quiet half's rows are quieter than the pooled σ²/n they had.
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    assert!(!loud.is_empty() && !quiet.is_empty());
+    assert!(mean(&loud) > 1.2 * mean(&quiet), "{loud:?} vs {quiet:?}");
+    assert!(
+        quiet.iter().all(|v| *v < sigma2 / 2.0),
+        "{quiet:?} vs {sigma2}"
+    );
+    assert!(
+        out.markdown.contains("the spread varies between points"),
+        "{}",
+        out.markdown
     );
 }

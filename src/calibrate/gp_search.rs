@@ -101,7 +101,7 @@ pub fn gp_search(
     let model = read_gp(dir)?;
     let gp = model.process()?;
     let names = parameter_names(study);
-    let noise_sd = model.pooled_variance_deg2.sqrt();
+    let noise_sd = model.noise.pooled_variance_deg2.sqrt();
     let others = resample(
         SCREEN_POINTS,
         names.len(),

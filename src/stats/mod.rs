@@ -16,6 +16,9 @@
 //!   (Type III) sums of squares, lack of fit against pure error, R², adjusted
 //!   and predicted R², coefficient of variation and adequate precision.
 //! - [`oneway`]: one-way analysis of variance of groups of observations.
+//! - [`homogeneity`]: Bartlett's test that groups share one variance (the
+//!   noise-aware GP's choice between a pooled and a per-point seed
+//!   variance).
 //! - [`sensitivity`]: yan2015's parameter sensitivity matrix analysis: column
 //!   norms (Eq. 17), normalised norms and the cross-correlation of parameters
 //!   (Eq. 18), with the null vector when the parameters are collinear.
@@ -27,8 +30,8 @@
 //! - [`pca`]: principal component analysis of the auto-scaled data matrix
 //!   (yan2015 Eq. 13–16): eigenvalues, explained fractions and loadings.
 //! - [`gp`]: Gaussian-process regression with a Matérn 5/2 ARD kernel, known
-//!   per-point noise variances and a fitted nugget (he2019's noise-aware
-//!   surrogate), hyperparameters by multi-start maximum likelihood; the
+//!   per-point noise variances and an optional fitted nugget (he2019's
+//!   noise-aware surrogate), hyperparameters by multi-start maximum likelihood; the
 //!   probability of a band and the expected improvement on the distance to
 //!   a target.
 //!
@@ -39,6 +42,7 @@
 
 pub mod equivalence;
 pub mod gp;
+pub mod homogeneity;
 pub mod levenberg;
 pub mod metrics;
 pub mod nlls;
@@ -113,6 +117,20 @@ pub enum StatsError {
         /// Index of the empty group.
         index: usize,
     },
+    /// A group with too few observations for its statistic (a variance
+    /// needs two).
+    #[error("group {index} has {got} values; at least {needed} are needed")]
+    GroupTooSmall {
+        /// Index of the group.
+        index: usize,
+        /// Observations it has.
+        got: usize,
+        /// Observations needed.
+        needed: usize,
+    },
+    /// Every group is constant: there is no variance to compare.
+    #[error("every group is constant: there is no variance to compare")]
+    NoVariance,
     /// A value that must be positive (it is logged, or raised to a fitted
     /// power) is zero or negative.
     #[error("non-positive value {value} in {what} at index {index} (it must be > 0)")]
@@ -168,10 +186,17 @@ pub(crate) fn check_finite(what: &str, values: &[f64]) -> Result<(), StatsError>
 /// Test helper: asserts |actual − expected| ≤ 1e-6 · |expected| for each pair.
 #[cfg(test)]
 pub(crate) fn assert_rel(what: &str, actual: &[f64], expected: &[f64]) {
+    assert_rel_within(what, actual, expected, 1e-6);
+}
+
+/// Test helper: asserts |actual − expected| ≤ `tol` · |expected| for each
+/// pair.
+#[cfg(test)]
+pub(crate) fn assert_rel_within(what: &str, actual: &[f64], expected: &[f64], tol: f64) {
     assert_eq!(actual.len(), expected.len(), "{what}: lengths");
     for (i, (a, e)) in actual.iter().zip(expected).enumerate() {
         assert!(
-            (a - e).abs() <= 1e-6 * e.abs(),
+            (a - e).abs() <= tol * e.abs(),
             "{what}[{i}]: {a} vs reference {e}"
         );
     }
