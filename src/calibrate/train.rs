@@ -7,8 +7,18 @@
 //! fraction 2/3. A run without an angle (failed, or never run) is left out of
 //! whichever part it belongs to and counted.
 //!
+//! Selection of the hidden size ([`crate::surrogate::ga_bp::Selection`]):
+//! he2019's highest validation R² for classic studies and tables (it
+//! reproduces Table A1), k-fold cross-validation within the training rows for
+//! noise-aware studies ([`TrainOptions::defaults`]), whose few noisy training
+//! rows would otherwise keep networks with more weights than rows; `repose
+//! train --selection` overrides either. The rule is part of the options
+//! recorded in every output's lineage.
+//!
 //! Outputs (each with its lineage record): `sweep.csv` (one row per hidden
-//! size: the Fig. 12 table), `model.json` (the kept network, see
+//! size: the Fig. 12 table, with each network's weights, effective degrees of
+//! freedom, training rows, whether the weights outnumber the rows, and the
+//! cross-validated score when that rule chose), `model.json` (the kept network, see
 //! [`crate::surrogate::ga_bp::Model`]), `parity.svg` (Fig. 13: predicted against
 //! simulated, train and validation marked) and `summary.json` (the split, the
 //! kept size and, for a table with printed predictions, their R²).
@@ -28,7 +38,10 @@ use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::stats::metrics::r_squared;
 use crate::store::InputRef;
 use crate::store::Lineage;
-use crate::surrogate::ga_bp::{sweep, Dataset, Scale, Sweep, TrainSettings};
+use crate::study::stages::Method;
+use crate::surrogate::ga_bp::{
+    sweep, Dataset, Scale, Selection, Sweep, TrainSettings, DEFAULT_FOLDS, DEFAULT_TRAIN_FRACTION,
+};
 
 /// Options of the train stage.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -75,7 +88,10 @@ struct Summary {
     train_rows: usize,
     validation_rows: usize,
     skipped_rows: usize,
+    selection: Selection,
     best_hidden: usize,
+    best_parameters: usize,
+    best_effective_dof: f64,
     best_train_r2: f64,
     best_validation_r2: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -83,6 +99,30 @@ struct Summary {
 }
 
 impl TrainOptions {
+    /// A study's defaults: [`TrainSettings::with_seed`] of its design seed,
+    /// he2019's two-thirds split and the study's [`TrainOptions::selection`].
+    pub fn defaults(study: &Study) -> TrainOptions {
+        let mut settings = TrainSettings::with_seed(study.design.seed);
+        settings.selection = TrainOptions::selection(study);
+        TrainOptions {
+            settings,
+            train_fraction: DEFAULT_TRAIN_FRACTION,
+        }
+    }
+
+    /// The selection rule a study's network uses unless told otherwise:
+    /// he2019's validation R² for a classic he2019 study (the paper's rule),
+    /// [`DEFAULT_FOLDS`]-fold cross-validation within the training rows for a
+    /// noise-aware one (few noisy rows; see the module docs).
+    pub fn selection(study: &Study) -> Selection {
+        match Method::of_calibration(study) {
+            Method::He2019NoiseAware => Selection::CrossValidation {
+                folds: DEFAULT_FOLDS,
+            },
+            _ => Selection::Validation,
+        }
+    }
+
     /// What is wrong with these options, if anything.
     fn check(&self) -> Result<(), StudyError> {
         let f = self.train_fraction;
@@ -292,7 +332,10 @@ fn run(
         train_rows: data.train.len(),
         validation_rows: data.validation.len(),
         skipped_rows: skipped,
+        selection: result.selection,
         best_hidden: best.hidden,
+        best_parameters: best.parameters,
+        best_effective_dof: best.effective_dof,
         best_train_r2: best.train_r2,
         best_validation_r2: best.validation_r2,
         reference_validation_r2: reference_r2,
@@ -317,8 +360,11 @@ fn run(
     })
 }
 
-/// Header of sweep.csv.
-pub const SWEEP_HEADER: [&str; 10] = [
+/// Header of sweep.csv: he2019's Fig. 12 columns and the kept mark, then
+/// each network's weights, effective degrees of freedom, training rows,
+/// whether the weights outnumber the rows (`yes`/`no`), and the
+/// cross-validated RMSE (degrees) and R² (empty unless cross-validation chose).
+pub const SWEEP_HEADER: [&str; 16] = [
     "hidden",
     "train_r2",
     "validation_r2",
@@ -329,6 +375,12 @@ pub const SWEEP_HEADER: [&str; 10] = [
     "lm_epochs",
     "lm_stop",
     "kept",
+    "parameters",
+    "effective_dof",
+    "train_rows",
+    "over_parameterised",
+    "cv_rmse_deg",
+    "cv_r2",
 ];
 
 /// The sweep as CSV (one row per hidden size; `kept` marks the chosen one).
@@ -345,8 +397,18 @@ pub fn sweep_csv(sweep: &Sweep) -> String {
             Cell::Number(r.lm_objective),
             Cell::Integer(r.lm_epochs as u64),
             Cell::Text(serde_name(r.lm_stop)),
-            Cell::Text(if i == sweep.best { "yes" } else { "no" }.to_string()),
+            Cell::Text(yes_no(i == sweep.best)),
+            Cell::Integer(r.parameters as u64),
+            Cell::Number(r.effective_dof),
+            Cell::Integer(r.train_rows as u64),
+            Cell::Text(yes_no(r.over_parameterised())),
+            r.cv_rmse_deg.map_or(Cell::Empty, Cell::Number),
+            r.cv_r2.map_or(Cell::Empty, Cell::Number),
         ]);
     }
     csv.finish()
+}
+
+fn yes_no(flag: bool) -> String {
+    if flag { "yes" } else { "no" }.to_string()
 }
