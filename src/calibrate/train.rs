@@ -412,3 +412,93 @@ pub fn sweep_csv(sweep: &Sweep) -> String {
 fn yes_no(flag: bool) -> String {
     if flag { "yes" } else { "no" }.to_string()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::manifest::parse_study;
+    use crate::stats::levenberg::LmStop;
+    use crate::surrogate::ga_bp::{Model, SweepRow};
+
+    fn example(name: &str) -> Study {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("experiments")
+            .join(name);
+        parse_study(&std::fs::read_to_string(path).unwrap()).unwrap()
+    }
+
+    #[test]
+    fn noise_aware_studies_cross_validate_and_classic_ones_keep_he2019s_rule() {
+        let classic = example("calibrate-smoke/study.json");
+        let noisy = example("he2019-quick/study.json");
+        assert!(classic.noise_aware.is_none() && noisy.noise_aware.is_some());
+        assert_eq!(
+            TrainOptions::defaults(&classic).settings.selection,
+            Selection::Validation
+        );
+        let options = TrainOptions::defaults(&noisy);
+        assert_eq!(
+            options.settings.selection,
+            Selection::CrossValidation {
+                folds: DEFAULT_FOLDS
+            }
+        );
+        assert_eq!(options.settings.seed, noisy.design.seed);
+        // The rule is recorded with the options in every output's lineage.
+        assert_eq!(
+            json!(options)["settings"]["selection"],
+            json!({ "cross_validation": { "folds": DEFAULT_FOLDS } })
+        );
+        assert_eq!(
+            json!(TrainOptions::defaults(&classic))["settings"]["selection"],
+            json!("validation")
+        );
+    }
+
+    fn row(hidden: usize, cv: Option<f64>) -> SweepRow {
+        SweepRow {
+            hidden,
+            train_r2: 1.0,
+            validation_r2: -0.5,
+            train_rmse_deg: 0.0,
+            validation_rmse_deg: 2.0,
+            ga_objective: 0.1,
+            lm_objective: 0.0,
+            lm_epochs: 3,
+            lm_stop: LmStop::Epochs,
+            parameters: 6 * hidden + 1,
+            effective_dof: 9.5,
+            train_rows: 10,
+            cv_rmse_deg: cv,
+            cv_r2: cv.map(|v| 1.0 - v),
+        }
+    }
+
+    #[test]
+    fn sweep_csv_appends_the_dof_columns_and_leaves_cv_empty_without_it() {
+        let model = Model {
+            kind: "ga_bp_network".to_string(),
+            inputs: Vec::new(),
+            output: Scale {
+                name: "angle_deg".to_string(),
+                min: 0.0,
+                max: 1.0,
+            },
+            hidden: 1,
+            activation: "logistic".to_string(),
+            parameters: vec![0.0; 4],
+        };
+        let sweep = Sweep {
+            selection: Selection::Validation,
+            rows: vec![row(1, None), row(2, Some(0.25))],
+            best: 0,
+            model,
+        };
+        let csv = sweep_csv(&sweep);
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines[0], SWEEP_HEADER.join(","));
+        assert!(lines[1].starts_with("1,"), "{csv}");
+        assert!(lines[1].ends_with(",yes,7,9.5,10,no,,"), "{csv}");
+        assert!(lines[2].ends_with(",no,13,9.5,10,yes,0.25,0.75"), "{csv}");
+    }
+}
