@@ -461,7 +461,7 @@ pub fn sweep(data: &Dataset, settings: &TrainSettings) -> Result<Sweep, TrainErr
     let mut trained: Vec<(SweepRow, Vec<f64>)> = Vec::with_capacity(sizes.len());
     for &h in &sizes {
         let full = fits.next().expect("one fit on all training rows per size");
-        let mut row = prepared.row(h, &full);
+        let mut row = prepared.row(h, &full, settings.weight_decay);
         if folds > 0 {
             let mut predicted = vec![0.0; prepared.train_t.len()];
             for _ in 0..folds {
@@ -523,8 +523,6 @@ struct Fit {
     lm_epochs: usize,
     /// Why LM stopped.
     lm_stop: LmStop,
-    /// Effective degrees of freedom on the rows it trained on.
-    effective_dof: f64,
     /// For a fold's network: (position among the training rows, predicted
     /// angle in degrees) of every held-out row.
     held_out: Vec<(usize, f64)>,
@@ -610,7 +608,6 @@ impl<'a> Prepared<'a> {
             &mut stream,
         );
         let lm = refine(&objective, &ga.best, &settings.lm);
-        let effective_dof = objective.effective_dof(&lm.theta);
         let held_out = (0..n)
             .filter(|&j| held(j))
             .map(|j| {
@@ -623,15 +620,22 @@ impl<'a> Prepared<'a> {
             lm_objective: lm.objective / objective.len() as f64,
             lm_epochs: lm.accepted,
             lm_stop: lm.stop,
-            effective_dof,
             held_out,
             theta: lm.theta,
         }
     }
 
-    /// The sweep row of a network trained on every training row.
-    fn row(&self, hidden: usize, fit: &Fit) -> SweepRow {
+    /// The sweep row of a network trained on every training row, with the
+    /// weight decay `weight_decay` it was trained with (for its effective
+    /// degrees of freedom).
+    fn row(&self, hidden: usize, fit: &Fit, weight_decay: f64) -> SweepRow {
         let model = self.model(hidden, fit.theta.clone());
+        let objective = Objective {
+            shape: model.shape(),
+            xs: &self.train_x,
+            ts: &self.train_t,
+            weight_decay,
+        };
         let score = |rows: &[usize]| {
             let y: Vec<f64> = rows.iter().map(|&i| self.data.targets[i]).collect();
             let p: Vec<f64> = rows
@@ -656,7 +660,7 @@ impl<'a> Prepared<'a> {
             lm_epochs: fit.lm_epochs,
             lm_stop: fit.lm_stop,
             parameters: fit.theta.len(),
-            effective_dof: fit.effective_dof,
+            effective_dof: objective.effective_dof(&fit.theta),
             train_rows: self.train_t.len(),
             cv_rmse_deg: None,
             cv_r2: None,
