@@ -486,8 +486,9 @@ struct TrainArgs {
     /// rows) [default: cv for a noise-aware study, else validation].
     #[arg(long, value_enum)]
     selection: Option<SelectionArg>,
-    /// Folds of --selection cv (capped at the training rows: leave-one-out).
-    #[arg(long, default_value_t = DEFAULT_FOLDS)]
+    /// Folds of --selection cv (capped at the training rows: leave-one-out);
+    /// only with an explicit --selection.
+    #[arg(long, default_value_t = DEFAULT_FOLDS, requires = "selection")]
     cv_folds: usize,
 }
 
