@@ -43,8 +43,7 @@ use crate::study::stages::{Analysis, Method, Stage as ClassicStage, StudyFile, S
 use crate::study::tradeoff as tradeoff_sweep;
 use crate::study::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
 use crate::study::{self, StudyError};
-use crate::surrogate::ga_bp::TrainSettings;
-use crate::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
+use crate::surrogate::ga_bp::Selection;
 
 /// Which kind of manifest a file holds, as chosen on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -1014,20 +1013,37 @@ fn write_sweep(outcome: &TrainOutcome, out: &mut dyn Write) -> Result<(), Comman
             String::new()
         }
     )?;
+    let cv = outcome.sweep.rows.iter().any(|r| r.cv_rmse_deg.is_some());
     writeln!(
         out,
-        "{:>6}  {:>9}  {:>9}  {:>11}  {:>9}",
-        "hidden", "train R2", "valid R2", "valid RMSE", "LM steps"
+        "{:>6}  {:>7}  {:>6}  {:>9}  {:>9}  {:>11}  {:>9}{}",
+        "hidden",
+        "weights",
+        "edf",
+        "train R2",
+        "valid R2",
+        "valid RMSE",
+        "LM steps",
+        if cv {
+            format!("  {:>9}", "CV RMSE")
+        } else {
+            String::new()
+        }
     )?;
     for (i, r) in outcome.sweep.rows.iter().enumerate() {
         writeln!(
             out,
-            "{:>6}  {:>9.4}  {:>9.4}  {:>11.3}  {:>9}{}",
+            "{:>6}  {:>6}{}  {:>6.2}  {:>9.4}  {:>9.4}  {:>11.3}  {:>9}{}{}",
             r.hidden,
+            r.parameters,
+            if r.over_parameterised() { "!" } else { " " },
+            r.effective_dof,
             r.train_r2,
             r.validation_r2,
             r.validation_rmse_deg,
             r.lm_epochs,
+            r.cv_rmse_deg
+                .map_or(String::new(), |v| format!("  {v:>9.3}")),
             if i == outcome.sweep.best {
                 "  <- kept"
             } else {
@@ -1035,12 +1051,29 @@ fn write_sweep(outcome: &TrainOutcome, out: &mut dyn Write) -> Result<(), Comman
             }
         )?;
     }
+    if outcome.sweep.rows.iter().any(|r| r.over_parameterised()) {
+        writeln!(
+            out,
+            "!: more weights than the {} training rows (edf: effective degrees of freedom, at most the rows)",
+            outcome.train_rows
+        )?;
+    }
     let best = &outcome.sweep.rows[outcome.sweep.best];
-    writeln!(
-        out,
-        "kept: {} hidden neurons, validation R2 {:.4} (Eq. 7)",
-        best.hidden, best.validation_r2
-    )?;
+    match outcome.sweep.selection {
+        Selection::Validation => writeln!(
+            out,
+            "kept: {} hidden neurons, validation R2 {:.4} (Eq. 7; the validation rows chose the size)",
+            best.hidden, best.validation_r2
+        )?,
+        Selection::CrossValidation { folds } => writeln!(
+            out,
+            "kept: {} hidden neurons by {}-fold cross-validation within the training rows (CV RMSE {:.3} deg); held-out validation R2 {:.4} (Eq. 7)",
+            best.hidden,
+            folds.min(outcome.train_rows),
+            best.cv_rmse_deg.unwrap_or(f64::NAN),
+            best.validation_r2
+        )?,
+    }
     if best.validation_r2 < 0.9 {
         writeln!(
             out,
@@ -1058,17 +1091,21 @@ fn write_sweep(outcome: &TrainOutcome, out: &mut dyn Write) -> Result<(), Comman
 }
 
 /// `repose train STUDY`: the GA-BP hidden-size sweep on the batch's angles;
-/// without `seed`, the genetic algorithm is seeded by the study's design seed.
+/// without `seed`, the genetic algorithm is seeded by the study's design seed,
+/// and without `selection` the hidden size is chosen by the study's rule
+/// ([`TrainOptions::selection`]).
 pub fn train(
     store_root: &Path,
     study_path: &Path,
     options: &TrainOptions,
     seed: Option<u64>,
+    selection: Option<Selection>,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
     let mut options = *options;
     options.settings.seed = seed.unwrap_or(study.design.seed);
+    options.settings.selection = selection.unwrap_or_else(|| TrainOptions::selection(&study));
     let outcome = train_study(&dir, &study, &options)?;
     write_sweep(&outcome, out)?;
     if Method::of_calibration(&study) == Method::He2019NoiseAware {
@@ -1467,13 +1504,14 @@ fn run_classic_stage(
             &mut io::stderr(),
         ),
         ClassicStage::Simulate { .. } => batch_leaving_out_failures(store_root, path, exec, out),
-        ClassicStage::Fit { .. } => {
-            let options = TrainOptions {
-                settings: TrainSettings::with_seed(seed),
-                train_fraction: DEFAULT_TRAIN_FRACTION,
-            };
-            train(store_root, path, &options, None, out)
-        }
+        ClassicStage::Fit { .. } => train(
+            store_root,
+            path,
+            &TrainOptions::defaults(study),
+            None,
+            None,
+            out,
+        ),
         ClassicStage::Search { .. } => search(
             store_root,
             path,

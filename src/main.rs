@@ -24,7 +24,7 @@ use repose::study::tradeoff::plan::{Knob, KNOB_NAMES};
 use repose::surrogate::ga_bp::genetic::GaSettings;
 use repose::surrogate::ga_bp::levenberg::TrainlmSettings;
 use repose::surrogate::ga_bp::TrainSettings;
-use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
+use repose::surrogate::ga_bp::{Selection, DEFAULT_FOLDS, DEFAULT_TRAIN_FRACTION};
 
 /// Huge pages for the engine's large arrays (see `repose::huge_pages`).
 #[cfg(target_os = "linux")]
@@ -481,6 +481,22 @@ struct TrainArgs {
     /// Levenberg-Marquardt steps.
     #[arg(long, default_value_t = TrainlmSettings::default().epochs)]
     lm_epochs: usize,
+    /// How the hidden size is chosen: `validation` (he2019: highest
+    /// validation R2) or `cv` (k-fold cross-validation within the training
+    /// rows) [default: cv for a noise-aware study, else validation].
+    #[arg(long, value_enum)]
+    selection: Option<SelectionArg>,
+    /// Folds of --selection cv (capped at the training rows: leave-one-out);
+    /// only with an explicit --selection.
+    #[arg(long, default_value_t = DEFAULT_FOLDS, requires = "selection")]
+    cv_folds: usize,
+}
+
+/// The hidden-size selection rule on the command line.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum SelectionArg {
+    Validation,
+    Cv,
 }
 
 impl TrainArgs {
@@ -496,6 +512,16 @@ impl TrainArgs {
             settings,
             train_fraction: self.train_fraction,
         }
+    }
+
+    /// The rule asked for on the command line, if any.
+    fn selection(&self) -> Option<Selection> {
+        self.selection.map(|s| match s {
+            SelectionArg::Validation => Selection::Validation,
+            SelectionArg::Cv => Selection::CrossValidation {
+                folds: self.cv_folds,
+            },
+        })
     }
 }
 
@@ -1050,7 +1076,7 @@ fn train(
     args: TrainArgs,
     out: &mut dyn io::Write,
 ) -> Result<(), CommandError> {
-    let options = args.options();
+    let mut options = args.options();
     match (&args.table, &args.study) {
         (Some(table), _) => {
             let inputs = args.inputs.clone().unwrap_or_default();
@@ -1061,9 +1087,12 @@ fn train(
                 reference: args.reference.as_deref(),
             };
             let out_dir = args.out.clone().unwrap_or_default();
+            options.settings.selection = args.selection().unwrap_or(Selection::Validation);
             commands::train_on_table(&spec, &out_dir, &options, out)
         }
-        (None, Some(study)) => commands::train(store, study, &options, args.seed, out),
+        (None, Some(study)) => {
+            commands::train(store, study, &options, args.seed, args.selection(), out)
+        }
         (None, None) => unreachable!("clap requires STUDY or --table"),
     }
 }

@@ -1,6 +1,6 @@
 //! Seeded random streams: every random draw of a study (design strata,
-//! optimiser exchanges, search resampling, the genetic algorithm, adaptive
-//! candidate pools) comes from a ChaCha8 stream of one seed and one
+//! optimiser exchanges, search resampling, the genetic algorithm and its
+//! cross-validation folds, adaptive candidate pools) comes from a ChaCha8 stream of one seed and one
 //! [`Stream`] purpose, so adding draws to one purpose never shifts another
 //! and the same seed gives the same draws on any machine and thread count.
 //!
@@ -36,6 +36,9 @@ pub enum Stream {
     Genetic = 4,
     /// The adaptive stage's candidate pools (one sub-stream per round).
     Adaptive = 5,
+    /// The genetic algorithm of the GA-BP sweep's cross-validation folds (one
+    /// sub-stream per hidden size and fold).
+    CrossValidation = 6,
 }
 
 /// The ChaCha8 stream for `purpose` (and sub-stream `index`) of `seed`.

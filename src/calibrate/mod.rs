@@ -22,7 +22,8 @@
 //!   sample/experiments/<index>.json one experiment manifest per sample (canonical
 //!                                   JSON: its sha256 is the experiment id)
 //!   batch/angles.csv                index, parameters, experiment_id, angle_deg, status
-//!   train/sweep.csv                 hidden size, train/validation R² and RMSE, ...
+//!   train/sweep.csv                 hidden size, train/validation R² and RMSE, ...,
+//!                                   weights, effective dof, CV score when it chose
 //!   train/model.json                the kept network with its scaling (search reuses it)
 //!   train/parity.svg                predicted vs simulated, train and validation marked
 //!   search/points.csv               resampled points, predicted angle, kept, cluster

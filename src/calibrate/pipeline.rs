@@ -57,17 +57,16 @@ pub struct NoiseAwareOptions {
 
 impl NoiseAwareOptions {
     /// Every stage's defaults, seeded by the study's design seed: the sample
-    /// stage's settings, the network's sweep with he2019's two-thirds split,
-    /// the search's resampling and clustering.
+    /// stage's settings, the network's sweep with he2019's two-thirds split
+    /// and the study's hidden-size selection ([`TrainOptions::defaults`]:
+    /// cross-validation within the training rows), the search's resampling
+    /// and clustering.
     pub fn defaults(study: &Study, candidates: usize, adaptive: bool) -> NoiseAwareOptions {
         NoiseAwareOptions {
             candidates,
             adaptive,
             sample: SampleSettings::default(),
-            train: TrainOptions {
-                settings: crate::surrogate::ga_bp::TrainSettings::with_seed(study.design.seed),
-                train_fraction: crate::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION,
-            },
+            train: TrainOptions::defaults(study),
             search: SearchSettings::with_seed(study.design.seed),
         }
     }

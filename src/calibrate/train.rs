@@ -7,8 +7,18 @@
 //! fraction 2/3. A run without an angle (failed, or never run) is left out of
 //! whichever part it belongs to and counted.
 //!
+//! Selection of the hidden size ([`crate::surrogate::ga_bp::Selection`]):
+//! he2019's highest validation R² for classic studies and tables (it
+//! reproduces Table A1), k-fold cross-validation within the training rows for
+//! noise-aware studies ([`TrainOptions::defaults`]), whose few noisy training
+//! rows would otherwise keep networks with more weights than rows; `repose
+//! train --selection` overrides either. The rule is part of the options
+//! recorded in every output's lineage.
+//!
 //! Outputs (each with its lineage record): `sweep.csv` (one row per hidden
-//! size: the Fig. 12 table), `model.json` (the kept network, see
+//! size: the Fig. 12 table, with each network's weights, effective degrees of
+//! freedom, training rows, whether the weights outnumber the rows, and the
+//! cross-validated score when that rule chose), `model.json` (the kept network, see
 //! [`crate::surrogate::ga_bp::Model`]), `parity.svg` (Fig. 13: predicted against
 //! simulated, train and validation marked) and `summary.json` (the split, the
 //! kept size and, for a table with printed predictions, their R²).
@@ -28,7 +38,10 @@ use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::stats::metrics::r_squared;
 use crate::store::InputRef;
 use crate::store::Lineage;
-use crate::surrogate::ga_bp::{sweep, Dataset, Scale, Sweep, TrainSettings};
+use crate::study::stages::Method;
+use crate::surrogate::ga_bp::{
+    sweep, Dataset, Scale, Selection, Sweep, TrainSettings, DEFAULT_FOLDS, DEFAULT_TRAIN_FRACTION,
+};
 
 /// Options of the train stage.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -75,7 +88,10 @@ struct Summary {
     train_rows: usize,
     validation_rows: usize,
     skipped_rows: usize,
+    selection: Selection,
     best_hidden: usize,
+    best_parameters: usize,
+    best_effective_dof: f64,
     best_train_r2: f64,
     best_validation_r2: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -83,6 +99,30 @@ struct Summary {
 }
 
 impl TrainOptions {
+    /// A study's defaults: [`TrainSettings::with_seed`] of its design seed,
+    /// he2019's two-thirds split and the study's [`TrainOptions::selection`].
+    pub fn defaults(study: &Study) -> TrainOptions {
+        let mut settings = TrainSettings::with_seed(study.design.seed);
+        settings.selection = TrainOptions::selection(study);
+        TrainOptions {
+            settings,
+            train_fraction: DEFAULT_TRAIN_FRACTION,
+        }
+    }
+
+    /// The selection rule a study's network uses unless told otherwise:
+    /// he2019's validation R² for a classic he2019 study (the paper's rule),
+    /// [`DEFAULT_FOLDS`]-fold cross-validation within the training rows for a
+    /// noise-aware one (few noisy rows; see the module docs).
+    pub fn selection(study: &Study) -> Selection {
+        match Method::of_calibration(study) {
+            Method::He2019NoiseAware => Selection::CrossValidation {
+                folds: DEFAULT_FOLDS,
+            },
+            _ => Selection::Validation,
+        }
+    }
+
     /// What is wrong with these options, if anything.
     fn check(&self) -> Result<(), StudyError> {
         let f = self.train_fraction;
@@ -292,7 +332,10 @@ fn run(
         train_rows: data.train.len(),
         validation_rows: data.validation.len(),
         skipped_rows: skipped,
+        selection: result.selection,
         best_hidden: best.hidden,
+        best_parameters: best.parameters,
+        best_effective_dof: best.effective_dof,
         best_train_r2: best.train_r2,
         best_validation_r2: best.validation_r2,
         reference_validation_r2: reference_r2,
@@ -317,8 +360,11 @@ fn run(
     })
 }
 
-/// Header of sweep.csv.
-pub const SWEEP_HEADER: [&str; 10] = [
+/// Header of sweep.csv: he2019's Fig. 12 columns and the kept mark, then
+/// each network's weights, effective degrees of freedom, training rows,
+/// whether the weights outnumber the rows (`yes`/`no`), and the
+/// cross-validated RMSE (degrees) and R² (empty unless cross-validation chose).
+pub const SWEEP_HEADER: [&str; 16] = [
     "hidden",
     "train_r2",
     "validation_r2",
@@ -329,6 +375,12 @@ pub const SWEEP_HEADER: [&str; 10] = [
     "lm_epochs",
     "lm_stop",
     "kept",
+    "parameters",
+    "effective_dof",
+    "train_rows",
+    "over_parameterised",
+    "cv_rmse_deg",
+    "cv_r2",
 ];
 
 /// The sweep as CSV (one row per hidden size; `kept` marks the chosen one).
@@ -345,8 +397,108 @@ pub fn sweep_csv(sweep: &Sweep) -> String {
             Cell::Number(r.lm_objective),
             Cell::Integer(r.lm_epochs as u64),
             Cell::Text(serde_name(r.lm_stop)),
-            Cell::Text(if i == sweep.best { "yes" } else { "no" }.to_string()),
+            Cell::Text(yes_no(i == sweep.best)),
+            Cell::Integer(r.parameters as u64),
+            Cell::Number(r.effective_dof),
+            Cell::Integer(r.train_rows as u64),
+            Cell::Text(yes_no(r.over_parameterised())),
+            r.cv_rmse_deg.map_or(Cell::Empty, Cell::Number),
+            r.cv_r2.map_or(Cell::Empty, Cell::Number),
         ]);
     }
     csv.finish()
+}
+
+fn yes_no(flag: bool) -> String {
+    if flag { "yes" } else { "no" }.to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::manifest::parse_study;
+    use crate::stats::levenberg::LmStop;
+    use crate::surrogate::ga_bp::{Model, SweepRow};
+
+    fn example(name: &str) -> Study {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("experiments")
+            .join(name);
+        parse_study(&std::fs::read_to_string(path).unwrap()).unwrap()
+    }
+
+    #[test]
+    fn noise_aware_studies_cross_validate_and_classic_ones_keep_he2019s_rule() {
+        let classic = example("calibrate-smoke/study.json");
+        let noisy = example("he2019-quick/study.json");
+        assert!(classic.noise_aware.is_none() && noisy.noise_aware.is_some());
+        assert_eq!(
+            TrainOptions::defaults(&classic).settings.selection,
+            Selection::Validation
+        );
+        let options = TrainOptions::defaults(&noisy);
+        assert_eq!(
+            options.settings.selection,
+            Selection::CrossValidation {
+                folds: DEFAULT_FOLDS
+            }
+        );
+        assert_eq!(options.settings.seed, noisy.design.seed);
+        // The rule is recorded with the options in every output's lineage.
+        assert_eq!(
+            json!(options)["settings"]["selection"],
+            json!({ "cross_validation": { "folds": DEFAULT_FOLDS } })
+        );
+        assert_eq!(
+            json!(TrainOptions::defaults(&classic))["settings"]["selection"],
+            json!("validation")
+        );
+    }
+
+    fn row(hidden: usize, cv: Option<f64>) -> SweepRow {
+        SweepRow {
+            hidden,
+            train_r2: 1.0,
+            validation_r2: -0.5,
+            train_rmse_deg: 0.0,
+            validation_rmse_deg: 2.0,
+            ga_objective: 0.1,
+            lm_objective: 0.0,
+            lm_epochs: 3,
+            lm_stop: LmStop::Epochs,
+            parameters: 6 * hidden + 1,
+            effective_dof: 9.5,
+            train_rows: 10,
+            cv_rmse_deg: cv,
+            cv_r2: cv.map(|v| 1.0 - v),
+        }
+    }
+
+    #[test]
+    fn sweep_csv_appends_the_dof_columns_and_leaves_cv_empty_without_it() {
+        let model = Model {
+            kind: "ga_bp_network".to_string(),
+            inputs: Vec::new(),
+            output: Scale {
+                name: "angle_deg".to_string(),
+                min: 0.0,
+                max: 1.0,
+            },
+            hidden: 1,
+            activation: "logistic".to_string(),
+            parameters: vec![0.0; 4],
+        };
+        let sweep = Sweep {
+            selection: Selection::Validation,
+            rows: vec![row(1, None), row(2, Some(0.25))],
+            best: 0,
+            model,
+        };
+        let csv = sweep_csv(&sweep);
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines[0], SWEEP_HEADER.join(","));
+        assert!(lines[1].starts_with("1,"), "{csv}");
+        assert!(lines[1].ends_with(",yes,7,9.5,10,no,,"), "{csv}");
+        assert!(lines[2].ends_with(",no,13,9.5,10,yes,0.25,0.75"), "{csv}");
+    }
 }
