@@ -24,7 +24,6 @@ use repose::manifest::{parse_study, validate_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
 use repose::study::dir::StudyDir;
-use repose::surrogate::ga_bp::TrainSettings;
 use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use serde_json::{json, Value};
 
@@ -93,10 +92,7 @@ fn options(study: &Study, adaptive: bool) -> NoiseAwareOptions {
         candidates: 1,
         adaptive,
         sample: SampleSettings::default(),
-        train: TrainOptions {
-            settings: TrainSettings::with_seed(study.design.seed),
-            train_fraction: DEFAULT_TRAIN_FRACTION,
-        },
+        train: TrainOptions::defaults(study),
         search: SearchSettings::with_seed(study.design.seed),
     }
 }
