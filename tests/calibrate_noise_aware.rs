@@ -540,7 +540,8 @@ fn study_capped(dir: &Path) -> (Study, std::path::PathBuf) {
 /// ignores, the GP's main effect of restitution is far below the noise
 /// floor's σ and, with `noise_aware.screen`, the search fixes it at the
 /// centre of its range (0.5) while μ and μ_r, whose ranges move the angle by
-/// 21° and 12°, are searched; the outcome and `search/screening.csv` say so.
+/// 21° and 12°, are searched; the outcome and `train/screening.csv` say so,
+/// and the GP without restitution is validated on the same rows.
 #[test]
 fn screening_fixes_a_parameter_below_the_noise_at_its_centre() {
     let tmp = tempfile::tempdir().unwrap();
@@ -586,12 +587,33 @@ fn screening_fixes_a_parameter_below_the_noise_at_its_centre() {
     for c in &outcome.candidates {
         assert!((c.centre[k] - 0.5).abs() < 1e-12, "{c:?}");
     }
-    let csv = std::fs::read_to_string(dir.stage(Stage::Search).join("screening.csv")).unwrap();
+    let csv = std::fs::read_to_string(dir.stage(Stage::Train).join("screening.csv")).unwrap();
     assert!(csv.contains("particle_particle.restitution,"), "{csv}");
-    let md = std::fs::read_to_string(dir.stage(Stage::Search).join("clusters.md")).unwrap();
+    let md = std::fs::read_to_string(dir.stage(Stage::Train).join("surrogates.md")).unwrap();
     assert!(
         md.contains("Fixed at the centre of their ranges") && md.contains("restitution"),
         "{md}"
+    );
+    // R² before and after screening, on the same validation rows.
+    let r2 = |name: &str| {
+        let m = outcome.surrogates.iter().find(|s| s.surrogate == name);
+        m.unwrap().validation_r2.unwrap()
+    };
+    let (before, after) = (r2("gp"), r2("gp_screened"));
+    assert!(before > 0.9 && after > 0.9, "{before} {after}");
+    let gp = outcome
+        .surrogates
+        .iter()
+        .find(|s| s.surrogate == "gp")
+        .unwrap();
+    let screened = outcome
+        .surrogates
+        .iter()
+        .find(|s| s.surrogate == "gp_screened")
+        .unwrap();
+    assert_eq!(
+        (gp.train_rows, gp.validation_rows),
+        (screened.train_rows, screened.validation_rows)
     );
 }
 

@@ -23,14 +23,13 @@
 //!
 //! # Screening
 //!
-//! Before resampling, every parameter's main effect under the GP is set
-//! against one run's seed-to-seed σ (the pooled replicate variance of
-//! `train/gp.json`; [`crate::search::screen`]) and written to
-//! `screening.csv` and `clusters.md`. With `noise_aware.screen`, the
-//! parameters below the noise are fixed at the centre of their ranges in
-//! every resampled point, so the kept points, the clusters and the
-//! candidates vary only the parameters these runs can calibrate; the run
-//! budget is unchanged (the screening reads the surrogate, not new runs).
+//! The train stage sets every parameter's main effect under the GP against
+//! one run's seed-to-seed σ (`train/gp.json`, `screening.csv`;
+//! [`super::gp_train`]). With `noise_aware.screen`, the parameters below the
+//! noise are fixed at the centre of their ranges in every resampled point,
+//! so the kept points, the clusters and the candidates vary only the
+//! parameters these runs can calibrate; the run budget is unchanged (the
+//! screening reads the surrogate, not new runs).
 
 use std::fmt::Write as _;
 
@@ -49,15 +48,11 @@ use crate::report::table::{Cell, CsvWriter};
 use crate::search::acquisition::probability_in_band;
 use crate::search::band::{bandwidth, cluster_column, family, kept, resample, Criterion, Family};
 use crate::search::meanshift::mean_shift;
-use crate::search::screen::{fix_inactive, main_effects, MainEffect};
+use crate::search::screen::{fix_inactive, MainEffect};
 use crate::surrogate::Prediction;
 
 /// Resampled points per point of the network's search.
 pub const RESAMPLE_FACTOR: usize = 10;
-
-/// Points of the cube (the search stream's sub-stream 2) over which the main
-/// effects of the screening are averaged.
-pub const SCREEN_POINTS: usize = 256;
 
 /// A candidate: one cluster of kept points.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -101,25 +96,17 @@ pub fn gp_search(
     let model = read_gp(dir)?;
     let gp = model.process()?;
     let names = parameter_names(study);
-    let noise_sd = model.noise.pooled_variance_deg2.sqrt();
-    let others = resample(
-        SCREEN_POINTS,
-        names.len(),
-        settings.placement,
-        settings.seed,
-        2,
-    );
-    let effects = main_effects(
-        &names,
-        |u| gp.predict(u).mean,
-        &others,
-        noise_sd,
-        spec.screen,
-    );
+    let effects = &model.screening;
     let samples = settings.samples * RESAMPLE_FACTOR;
     let unit: Vec<Vec<f64>> = resample(samples, names.len(), settings.placement, settings.seed, 1)
         .iter()
-        .map(|u| fix_inactive(u, &effects))
+        .map(|u| {
+            if effects.is_empty() {
+                u.clone()
+            } else {
+                fix_inactive(u, effects)
+            }
+        })
         .collect();
     let (lo, hi) = study.calibration.band_deg();
     let predictions: Vec<_> = unit.iter().map(|u| gp.predict(u)).collect();
@@ -185,8 +172,8 @@ pub fn gp_search(
             Stage::Search,
             json!({ "settings": settings, "surrogate": "gp", "resampled": samples,
                     "min_probability": spec.min_probability, "band_deg": [lo, hi],
-                    "screen": spec.screen, "screen_threshold_deg": noise_sd,
-                    "screen_points": SCREEN_POINTS,
+                    "fixed_by_screening": effects.iter().filter(|e| !e.active)
+                        .map(|e| e.parameter.clone()).collect::<Vec<_>>(),
                     "bandwidth_used": bandwidth }),
         )
         .with_input(dir.input("gp", &gp_path(dir))?);
@@ -235,13 +222,7 @@ pub fn gp_search(
             spec.min_probability
         ),
     );
-    let mut markdown = markdown(&names, &candidates, &family, spec.min_probability, (lo, hi));
-    markdown.push_str(&screening_markdown(&effects, noise_sd, spec.screen));
-    write_output(
-        &out.join("screening.csv"),
-        screening_csv(&effects).as_bytes(),
-        &lineage,
-    )?;
+    let markdown = markdown(&names, &candidates, &family, spec.min_probability, (lo, hi));
     write_output(
         &out.join("points.csv"),
         points.finish().as_bytes(),
@@ -255,7 +236,7 @@ pub fn gp_search(
         candidates,
         family,
         markdown,
-        screening: effects,
+        screening: effects.clone(),
     })
 }
 
@@ -328,91 +309,5 @@ fn markdown(
     }
     out.push_str(&d.render());
     let _ = writeln!(out);
-    out
-}
-
-/// `search/screening.csv`: one row per parameter.
-fn screening_csv(effects: &[MainEffect]) -> String {
-    let mut csv = CsvWriter::new(&[
-        "parameter",
-        "main_effect_range_deg",
-        "argmax_unit",
-        "above_noise",
-        "searched",
-    ]);
-    for e in effects {
-        csv.row(&[
-            Cell::Text(e.parameter.clone()),
-            Cell::Number(e.range),
-            Cell::Number(e.argmax_unit),
-            Cell::Text(e.above_noise.to_string()),
-            Cell::Text(e.active.to_string()),
-        ]);
-    }
-    csv.finish()
-}
-
-/// The screening section of `search/clusters.md`.
-fn screening_markdown(effects: &[MainEffect], noise_sd: f64, screen: bool) -> String {
-    let mut t = MarkdownTable::new(&[
-        "parameter",
-        "main-effect range (°)",
-        "largest at (unit)",
-        "above σ",
-        "searched",
-    ]);
-    for e in effects {
-        t.row(&[
-            e.parameter.clone(),
-            format!("{:.2}", e.range),
-            format!("{:.1}", e.argmax_unit),
-            if e.above_noise { "yes" } else { "no" }.into(),
-            if e.active { "yes" } else { "no (centre)" }.into(),
-        ]);
-    }
-    let mut out = format!(
-        "\n## Screening\n\nMain effect of each parameter under the GP (the predicted angle \
-         averaged over the other parameters, over the parameter's whole range) against one \
-         run's seed-to-seed σ = {noise_sd:.2}° (pooled over the replicated points):\n\n"
-    );
-    out.push_str(&t.render());
-    let fixed: Vec<&str> = effects
-        .iter()
-        .filter(|e| !e.active)
-        .map(|e| e.parameter.as_str())
-        .collect();
-    let below: Vec<&str> = effects
-        .iter()
-        .filter(|e| !e.above_noise)
-        .map(|e| e.parameter.as_str())
-        .collect();
-    let _ = if !screen {
-        writeln!(
-            out,
-            "\nNot screened (`noise_aware.screen` is off): every parameter was searched{}.",
-            if below.is_empty() {
-                String::new()
-            } else {
-                format!("; below the noise: {}", below.join(", "))
-            }
-        )
-    } else if fixed.is_empty() {
-        writeln!(
-            out,
-            "\nEvery parameter moves the angle by more than σ over its range: none fixed."
-        )
-    } else {
-        writeln!(
-            out,
-            "\nFixed at the centre of their ranges (their whole range moves the predicted angle \
-             by less than one run's σ, so these runs cannot calibrate them): {}.{}",
-            fixed.join(", "),
-            if effects.iter().any(|e| e.active && !e.above_noise) {
-                " No parameter beats the noise; the largest effect is searched alone."
-            } else {
-                ""
-            }
-        )
-    };
     out
 }

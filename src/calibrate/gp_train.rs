@@ -77,6 +77,19 @@
 //!
 //! The GP used by the search is then fitted to every row (`train/gp.json`
 //! keeps its data and hyperparameters, so the search rebuilds it exactly).
+//!
+//! # Screening
+//!
+//! Every parameter's main effect under that GP (the predicted angle averaged
+//! over the other parameters, [`SCREEN_POINTS`] points of the search
+//! stream's sub-stream 2, over the parameter's whole range) is set against
+//! one run's seed-to-seed σ, the pooled replicate sd
+//! ([`crate::search::screen`]); `gp.json` keeps the result and
+//! `screening.csv` and `surrogates.md` report it. With `noise_aware.screen`
+//! the parameters below σ are fixed at their centre by the search
+//! ([`super::gp_search`]), and the validation is repeated with those inputs
+//! dropped from the GP (`gp_screened`: the same training and validation
+//! rows), so the R² before and after screening is read at equal run counts.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -88,8 +101,12 @@ use super::batch::replicates_path;
 use super::noise::noise_runs_path;
 use super::replicates::{pooled_variance, read_replicates_csv, Replicated};
 use super::{json_bytes, to_unit, write_output, Stage, StudyDir, StudyError};
+use crate::doe::lhs::Placement;
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
+use crate::report::table::{Cell, CsvWriter};
+use crate::search::band::resample;
+use crate::search::screen::{main_effects, MainEffect};
 use crate::stats::gp::{GaussianProcess, GpHyper, GpSettings};
 use crate::stats::homogeneity::bartlett;
 use crate::stats::metrics::{mse, noise_ceiling, r_squared, seeds_for_ceiling, NoiseCeiling};
@@ -259,6 +276,11 @@ pub struct GpModel {
     pub log_marginal_likelihood: f64,
     /// The rows it was fitted to.
     pub data: GpData,
+    /// Every parameter's main effect under this GP against one run's σ, and
+    /// which the search varies ([`crate::search::screen`]; empty in a file
+    /// written before screening existed: every parameter is searched).
+    #[serde(default)]
+    pub screening: Vec<MainEffect>,
 }
 
 impl GpModel {
@@ -436,6 +458,7 @@ fn model_of(gp: &GaussianProcess, noise: RowNoise, data: GpData) -> GpModel {
         nugget_var: h.nugget_var,
         log_marginal_likelihood: gp.log_marginal_likelihood(),
         data,
+        screening: Vec::new(),
     }
 }
 
@@ -521,7 +544,38 @@ pub fn train_gp(
     }
     let data = data_of(study, &all, &noise);
     let full = fit(&data, seed)?;
-    let model = model_of(&full, noise, data);
+    let screening = screen(study, &full, noise.pooled_variance_deg2.sqrt(), seed);
+    if screening.iter().any(|e| !e.active) {
+        // The same validation with the screened parameters dropped from the
+        // GP's inputs: the same rows, so R² before and after screening are
+        // read at equal run counts.
+        let keep = |d: &GpData| GpData {
+            x_unit: d
+                .x_unit
+                .iter()
+                .map(|x| active_inputs(x, &screening))
+                .collect(),
+            ..d.clone()
+        };
+        let (t, v) = (keep(&train_data), keep(&val_data));
+        let reduced = fit(&t, seed)?;
+        let (mut pred, mut half) = (Vec::new(), Vec::new());
+        for (x, nv) in v.x_unit.iter().zip(&v.noise_var) {
+            let p = reduced.predict(x);
+            pred.push(p.mean);
+            half.push(Z95 * reduced.observation_sd(&p, *nv));
+        }
+        table.push(metrics(
+            "gp_screened",
+            t.y.len(),
+            &v.y,
+            &v.noise_var,
+            &pred,
+            &half,
+        ));
+    }
+    let mut model = model_of(&full, noise, data);
+    model.screening = screening;
     dir.prepare_stage(study, Stage::Train)?;
     let mut lineage = dir.lineage(
         Stage::Train,
@@ -533,8 +587,19 @@ pub fn train_gp(
     for f in &files {
         lineage = lineage.with_input(dir.input("replicates", f)?);
     }
-    let markdown = markdown(study, &model, &table);
+    let mut markdown = markdown(study, &model, &table);
+    let screen_on = study.noise_aware.as_ref().is_some_and(|n| n.screen);
+    markdown.push_str(&screening_markdown(
+        &model.screening,
+        model.noise.pooled_variance_deg2.sqrt(),
+        screen_on,
+    ));
     let out = dir.stage(Stage::Train);
+    write_output(
+        &out.join("screening.csv"),
+        screening_csv(&model.screening).as_bytes(),
+        &lineage,
+    )?;
     write_output(&out.join("surrogates.md"), markdown.as_bytes(), &lineage)?;
     write_output(&out.join("surrogates.json"), &json_bytes(&table), &lineage)?;
     write_output(&gp_path(dir), &json_bytes(&model), &lineage)?;
@@ -543,6 +608,116 @@ pub fn train_gp(
         metrics: table,
         markdown,
     })
+}
+
+/// Points of the cube (the search stream's sub-stream 2 of the training
+/// seed) over which the screening's main effects are averaged.
+pub const SCREEN_POINTS: usize = 256;
+
+/// The main effects of `gp`'s mean against one run's σ `noise_sd` (deg),
+/// screening when the study asks ([`crate::search::screen`]).
+fn screen(study: &Study, gp: &GaussianProcess, noise_sd: f64, seed: u64) -> Vec<MainEffect> {
+    let names = super::parameter_names(study);
+    let others = resample(SCREEN_POINTS, names.len(), Placement::Random, seed, 2);
+    let on = study.noise_aware.as_ref().is_some_and(|n| n.screen);
+    main_effects(&names, |u| gp.predict(u).mean, &others, noise_sd, on)
+}
+
+/// The coordinates of `x` whose parameter the screening keeps.
+fn active_inputs(x: &[f64], effects: &[MainEffect]) -> Vec<f64> {
+    x.iter()
+        .zip(effects)
+        .filter(|(_, e)| e.active)
+        .map(|(v, _)| *v)
+        .collect()
+}
+
+/// `train/screening.csv`: one row per parameter.
+fn screening_csv(effects: &[MainEffect]) -> String {
+    let mut csv = CsvWriter::new(&[
+        "parameter",
+        "main_effect_range_deg",
+        "argmax_unit",
+        "above_noise",
+        "searched",
+    ]);
+    for e in effects {
+        csv.row(&[
+            Cell::Text(e.parameter.clone()),
+            Cell::Number(e.range),
+            Cell::Number(e.argmax_unit),
+            Cell::Text(e.above_noise.to_string()),
+            Cell::Text(e.active.to_string()),
+        ]);
+    }
+    csv.finish()
+}
+
+/// The screening section of `train/surrogates.md`.
+fn screening_markdown(effects: &[MainEffect], noise_sd: f64, screen: bool) -> String {
+    let mut t = MarkdownTable::new(&[
+        "parameter",
+        "main-effect range (°)",
+        "largest at (unit)",
+        "above σ",
+        "searched",
+    ]);
+    for e in effects {
+        t.row(&[
+            e.parameter.clone(),
+            format!("{:.2}", e.range),
+            format!("{:.1}", e.argmax_unit),
+            if e.above_noise { "yes" } else { "no" }.into(),
+            if e.active { "yes" } else { "no (centre)" }.into(),
+        ]);
+    }
+    let mut out = format!(
+        "\n## Screening\n\nMain effect of each parameter under the GP fitted to every row (the \
+         predicted angle averaged over the other parameters, over the parameter's whole range) \
+         against one run's seed-to-seed σ = {noise_sd:.2}° (pooled over the replicated \
+         points):\n\n"
+    );
+    out.push_str(&t.render());
+    let fixed: Vec<&str> = effects
+        .iter()
+        .filter(|e| !e.active)
+        .map(|e| e.parameter.as_str())
+        .collect();
+    let below: Vec<&str> = effects
+        .iter()
+        .filter(|e| !e.above_noise)
+        .map(|e| e.parameter.as_str())
+        .collect();
+    let _ = if !screen {
+        writeln!(
+            out,
+            "\nNot screened (`noise_aware.screen` is off): the search varies every parameter{}.",
+            if below.is_empty() {
+                String::new()
+            } else {
+                format!("; below the noise: {}", below.join(", "))
+            }
+        )
+    } else if fixed.is_empty() {
+        writeln!(
+            out,
+            "\nEvery parameter moves the angle by more than σ over its range: none is fixed."
+        )
+    } else {
+        writeln!(
+            out,
+            "\nFixed at the centre of their ranges by the search (their whole range moves the \
+             predicted angle by less than one run's σ, so these runs cannot calibrate them): {}. \
+             `gp_screened` above is the GP validated on the same rows without them.{}",
+            fixed.join(", "),
+            if effects.iter().any(|e| e.active && !e.above_noise) {
+                " No parameter beats the noise; the largest effect is searched alone."
+            } else {
+                ""
+            }
+        )
+    };
+    out
 }
 
 /// What the noise of the validation means allows, in words (see
