@@ -51,6 +51,7 @@ fn quoted(o: &Value) -> Vec<String> {
     for s in out["surrogates"].as_array().unwrap() {
         let name = match s["surrogate"].as_str().unwrap() {
             "gp" => "GP",
+            "gp_screened" => "screened GP",
             _ => "GA-BP",
         };
         if let Some(r2) = s["validation_r2"].as_f64() {
@@ -71,6 +72,10 @@ fn quoted(o: &Value) -> Vec<String> {
                 _ => format!("{scene} not measurable"),
             },
         );
+        phrases.push(format!(
+            "{scene} verdict: {}",
+            row["judgement"]["verdict"].as_str().unwrap()
+        ));
     }
     phrases
 }

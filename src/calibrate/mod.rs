@@ -49,11 +49,14 @@
 //!   train/gp.json, surrogates.*     the Gaussian process beside the network,
 //!                                   validation R², RMSE and 95 % interval
 //!                                   coverage of both ([`gp_train`])
+//!   train/screening.csv             each parameter's main effect under the GP
+//!                                   against one run's σ; searched or fixed
+//!   adaptive/acceptance.json        the rule, its seeds and α, before round 1
 //!   adaptive/replicates.csv         points the GP chose (`--adaptive`, [`adaptive`])
 //!   search/points.csv, clusters.*,  kept by the probability of the target band;
 //!   search/family.json              the family of consistent parameter sets
 //!                                   ([`gp_search`])
-//!   verify/verification.*, runs.csv every candidate x scene x `verification_seeds`
+//!   verify/verification.*, runs.csv every candidate x scene x its pre-registered
 //!                                   seeds: mean ± CI, verdict ([`verify`])
 //!   outcome.json                    the whole outcome (`calibrate --json`)
 //! ```
