@@ -30,6 +30,8 @@
 //! p·s²/n (the leverages sum to p). Design-Expert calls a ratio above 4
 //! adequate signal. They are NaN when y is constant (SST = 0).
 
+use std::collections::BTreeMap;
+
 use super::regression::ols_named;
 use super::summary::{f_survival, t_quantile};
 use super::{check_finite, StatsError};
@@ -306,6 +308,31 @@ pub fn fit_quadratic(
     })
 }
 
+/// The indices of `rows` grouped by identical rows (equal coordinate by
+/// coordinate, 0.0 and −0.0 alike), groups in the order of their first
+/// member and members in row order: the replicate groups of pure error. An
+/// ordered map of the rows' bit patterns finds each row's group in
+/// O(log groups), so a table of 10⁶ distinct rows groups in about a second
+/// where a linear search over the groups took hours.
+fn identical_rows(rows: &[Vec<f64>]) -> Vec<Vec<usize>> {
+    let key = |row: &[f64]| -> Vec<u64> {
+        row.iter()
+            .map(|&v| if v == 0.0 { 0 } else { v.to_bits() })
+            .collect()
+    };
+    let mut index: BTreeMap<Vec<u64>, usize> = BTreeMap::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (i, row) in rows.iter().enumerate() {
+        let next = groups.len();
+        let g = *index.entry(key(row)).or_insert(next);
+        if g == next {
+            groups.push(Vec::new());
+        }
+        groups[g].push(i);
+    }
+    groups
+}
+
 /// Pure error and lack of fit rows from the groups of identical coded runs.
 fn replication(
     coded: &[Vec<f64>],
@@ -313,13 +340,13 @@ fn replication(
     sse: f64,
     df_res: usize,
 ) -> (Option<AnovaRow>, Option<AnovaRow>) {
-    let mut groups: Vec<(&[f64], Vec<f64>)> = Vec::new();
-    for (row, &v) in coded.iter().zip(y) {
-        match groups.iter_mut().find(|(r, _)| *r == row.as_slice()) {
-            Some((_, ys)) => ys.push(v),
-            None => groups.push((row, vec![v])),
-        }
-    }
+    let groups: Vec<(&[f64], Vec<f64>)> = identical_rows(coded)
+        .into_iter()
+        .map(|members| {
+            let ys = members.iter().map(|&i| y[i]).collect();
+            (coded[members[0]].as_slice(), ys)
+        })
+        .collect();
     let df_pe: usize = groups.iter().map(|(_, ys)| ys.len() - 1).sum();
     if df_pe == 0 {
         return (None, None);
@@ -976,6 +1003,18 @@ mod tests {
                 0.29674999999998664,
             ],
         );
+    }
+
+    #[test]
+    fn identical_rows_group_in_order_of_first_appearance() {
+        let rows = vec![
+            vec![1.0, 0.0],
+            vec![-1.0, 0.5],
+            vec![1.0, -0.0],
+            vec![-1.0, 0.5],
+            vec![0.0, 0.0],
+        ];
+        assert_eq!(identical_rows(&rows), vec![vec![0, 2], vec![1, 3], vec![4]]);
     }
 
     #[test]

@@ -148,6 +148,15 @@ where
             "--seeds = {seeds}: at least 2 are needed for a spread (8 or more recommended)"
         )));
     }
+    let first = base.seeds.packing_seed;
+    if first.checked_add(seeds as u64 - 1).is_none() {
+        return Err(StudyError::Settings(format!(
+            "seeds.packing_seed = {first}: with --seeds {seeds} the packing seeds {first} + \
+             0..{seeds} pass u64::MAX ({}) and would wrap to 0; use a packing_seed of at most {}",
+            u64::MAX,
+            u64::MAX - (seeds as u64 - 1)
+        )));
+    }
     let experiments: Vec<Experiment> = (0..seeds as u64)
         .map(|r| with_packing_offset(base, r))
         .collect();
@@ -243,6 +252,7 @@ fn fmt(v: Option<f64>, digits: usize) -> String {
 mod tests {
     use super::*;
     use crate::manifest::parse_experiment;
+    use crate::store::RunStatus;
 
     fn drum() -> Experiment {
         let text = std::fs::read_to_string(
@@ -259,6 +269,32 @@ mod tests {
         assert_eq!(e.seeds.packing_seed, base.seeds.packing_seed + 3);
         assert_ne!(e.id(), base.id());
         assert_eq!(with_packing_offset(&base, 0).id(), base.id());
+    }
+
+    /// Seeds that would pass u64::MAX are refused before any run, naming the
+    /// field, its value and the largest allowed (issue 40, low item).
+    #[test]
+    fn packing_seeds_that_would_wrap_are_refused() {
+        let mut base = drum();
+        base.seeds.packing_seed = u64::MAX - 2;
+        let tmp = tempfile::tempdir().unwrap();
+        let store = Store::open(tmp.path()).unwrap();
+        let runner = |e: &Experiment, _: &RunDir| -> Result<RunResult, std::io::Error> {
+            Ok(RunResult::new(e, "fake"))
+        };
+        let exec = Executor::local(1, Default::default());
+        let err = scene_noise(&base, 4, &store, &exec, &runner)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("seeds.packing_seed = 18446744073709551613")
+                && err.contains("at most 18446744073709551612"),
+            "{err}"
+        );
+        let first = with_packing_offset(&base, 0);
+        assert_eq!(store.status(&first.id()), RunStatus::Missing, "nothing ran");
+        // Three seeds end exactly on u64::MAX: allowed.
+        assert!(scene_noise(&base, 3, &store, &exec, &runner).is_ok());
     }
 
     #[test]
