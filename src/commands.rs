@@ -996,6 +996,12 @@ fn run_batch_and_report(
             f.message
         )?;
     }
+    if !outcome.failures.is_empty() {
+        writeln!(
+            out,
+            "  each failed run's error.json holds its whole error (`repose runs show ID`)"
+        )?;
+    }
     writeln!(out, "  angles: {}", outcome.table.display())?;
     Ok((outcome.failures.len(), outcome.total))
 }

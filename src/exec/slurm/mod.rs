@@ -198,9 +198,11 @@ fn last_task(submissions: &[Submission], id: &ContentId) -> Option<(String, usiz
     })
 }
 
-/// The stored error of a failed run, with its causes.
+/// The stored error of a failed run, with its causes: the message a local
+/// run of the same experiment reports ([`crate::errors::chain`] of the
+/// runner's error), with no path, so stage tables that quote it are the same
+/// whichever executor ran the run and wherever the store lies.
 fn failure_message(store: &Store, id: &ContentId) -> String {
-    let path = store.run_dir(id).error_path();
     match store.load_error(id) {
         Ok(Some(record)) => {
             let mut m = record.error;
@@ -210,9 +212,9 @@ fn failure_message(store: &Store, id: &ContentId) -> String {
                     m.push_str(c);
                 }
             }
-            format!("{m} (recorded in {})", path.display())
+            m
         }
-        Ok(None) => format!("no error.json at {}", path.display()),
+        Ok(None) => format!("run {id} has no error.json"),
         Err(e) => format!("its error.json cannot be read: {e}"),
     }
 }
@@ -446,4 +448,42 @@ fn wait(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::manifest::parse_experiment;
+    use crate::store::{RunDir, RunResult};
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("pile angle: not measurable")]
+    struct Outer(#[source] std::io::Error);
+
+    /// A failure read back from error.json (as the Slurm client does) is
+    /// the message a local run gives, with no path of the store in it
+    /// (issue 40, item 5).
+    #[test]
+    fn a_failure_reads_back_as_the_local_message_without_a_path() {
+        let text = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/drum/smoke.json"),
+        )
+        .unwrap();
+        let e = parse_experiment(&text).unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let store = Store::open(tmp.path()).unwrap();
+        let runner = |_: &Experiment, _: &RunDir| -> Result<RunResult, Outer> {
+            Err(Outer(std::io::Error::other(
+                "left flank has 2 surface points",
+            )))
+        };
+        let local = crate::errors::chain(&store.run_cached(&e, runner).unwrap_err());
+        let read_back = failure_message(&store, &e.id());
+        assert_eq!(read_back, local);
+        assert_eq!(
+            read_back,
+            "pile angle: not measurable: left flank has 2 surface points"
+        );
+        assert!(!read_back.contains(&tmp.path().display().to_string()));
+    }
 }
