@@ -45,7 +45,7 @@ use super::verify::{acceptance, comparisons};
 use super::{json_bytes, parameter_names, to_physical, write_output, Stage, StudyDir, StudyError};
 use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::exec::Executor;
-use crate::manifest::{Experiment, Study};
+use crate::manifest::{Experiment, NoiseAware, Study};
 use crate::search::acquisition::probability_in_band;
 use crate::store::{RunDir, RunResult, Store};
 use crate::streams::{rng, Stream};
@@ -138,10 +138,8 @@ pub fn passing_candidate(
 
 /// Runs one round takes: the candidate's pre-registered seeds in the
 /// calibration scene and `replicates` for each other point of the batch.
-fn round_runs(study: &Study, candidate_seeds: usize) -> usize {
-    study.noise_aware.as_ref().map_or(0, |n| {
-        candidate_seeds + (n.adaptive.batch as usize).saturating_sub(1) * n.replicates as usize
-    })
+fn round_runs(n: &NoiseAware, candidate_seeds: usize) -> usize {
+    candidate_seeds + (n.adaptive.batch as usize).saturating_sub(1) * n.replicates as usize
 }
 
 /// The most rounds the adaptive budget allows: the rounds the acceptance
@@ -150,7 +148,7 @@ fn round_runs(study: &Study, candidate_seeds: usize) -> usize {
 /// count bounds the rounds whatever the power calculation picks.
 pub fn max_rounds(study: &Study) -> usize {
     study.noise_aware.as_ref().map_or(0, |n| {
-        n.adaptive.max_runs as usize / round_runs(study, n.verification_seeds as usize).max(1)
+        n.adaptive.max_runs as usize / round_runs(n, n.verification_seeds as usize).max(1)
     })
 }
 
@@ -191,7 +189,7 @@ where
     )?;
     let seeds = rule.targets[0].seeds;
     let explore = spec.replicates as usize;
-    let round_runs = round_runs(study, seeds);
+    let round_runs = round_runs(&spec, seeds);
     let budget = spec.adaptive.max_runs as usize;
     loop {
         let rounds = points

@@ -100,13 +100,7 @@ pub fn gp_search(
     let samples = settings.samples * RESAMPLE_FACTOR;
     let unit: Vec<Vec<f64>> = resample(samples, names.len(), settings.placement, settings.seed, 1)
         .iter()
-        .map(|u| {
-            if effects.is_empty() {
-                u.clone()
-            } else {
-                fix_inactive(u, effects)
-            }
-        })
+        .map(|u| fix_inactive(u, effects))
         .collect();
     let (lo, hi) = study.calibration.band_deg();
     let predictions: Vec<_> = unit.iter().map(|u| gp.predict(u)).collect();

@@ -110,11 +110,16 @@ pub fn main_effects(
     effects
 }
 
-/// `unit` with every inactive input of `effects` set to the centre 0.5.
+/// `unit` with every inactive input of `effects` set to the centre 0.5; an
+/// input without an effect (none screened, as in a model written before
+/// screening) stays as it is.
 pub fn fix_inactive(unit: &[f64], effects: &[MainEffect]) -> Vec<f64> {
     unit.iter()
-        .zip(effects)
-        .map(|(&u, e)| if e.active { u } else { 0.5 })
+        .enumerate()
+        .map(|(k, &u)| match effects.get(k) {
+            Some(e) if !e.active => 0.5,
+            _ => u,
+        })
         .collect()
 }
 
