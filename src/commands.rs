@@ -39,7 +39,9 @@ use crate::store::{
 };
 use crate::study::dir::StudyDir;
 use crate::study::spec::{is_design_study, parse_design_study, read_design_study, DesignStudy};
-use crate::study::stages::{Analysis, Method, Stage as ClassicStage, StudyFile, StudySpec};
+use crate::study::stages::{
+    default_candidates, Analysis, Method, Stage as ClassicStage, StudyFile, StudySpec,
+};
 use crate::study::tradeoff as tradeoff_sweep;
 use crate::study::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
 use crate::study::{self, StudyError};
@@ -658,6 +660,20 @@ pub fn tradeoff(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
+    let points = 1 + options
+        .knobs
+        .iter()
+        .map(|k| k.values.len().saturating_sub(1) as u64)
+        .sum::<u64>();
+    StudySpec::tradeoff(
+        &manifest.display().to_string(),
+        base.id(),
+        options.knobs.iter().map(|k| k.name.to_string()).collect(),
+        points,
+        options.replicates as u64,
+    )
+    .check_runs(exec.max_runs)
+    .map_err(CommandError::Usage)?;
     let points = plan_sweep(&base, &options.knobs, options.replicates)?;
     let store = open_store(store_root)?;
     let out_dir = options
@@ -690,12 +706,13 @@ pub fn learning_curve(
     exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, dir) = open_study(store_root, study_path)?;
+    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
     if !design_path(&dir).is_file() {
         sample(
             store_root,
             study_path,
             &SampleSettings::default(),
+            exec.max_runs,
             out,
             &mut io::stderr(),
         )?;
@@ -714,6 +731,20 @@ fn read_study(path: &Path) -> Result<Study, CommandError> {
         Document::Study(study) => Ok(study),
         Document::Experiment(_) => unreachable!("read as a study"),
     }
+}
+
+/// [`open_study`] for a command that builds the design or starts runs: a
+/// study whose stages may start more than `max_runs` runs is refused first
+/// ([`StudySpec::check_runs`]).
+fn open_sized_study(
+    store_root: &Path,
+    path: &Path,
+    max_runs: u64,
+) -> Result<(Study, StudyDir), CommandError> {
+    let (study, dir) = open_study(store_root, path)?;
+    let spec = StudySpec::calibration(&study, false, default_candidates(&study));
+    spec.check_runs(max_runs).map_err(CommandError::Usage)?;
+    Ok((study, dir))
 }
 
 /// The study and its output directory in the store.
@@ -766,14 +797,17 @@ fn write_diagnostics(
 
 /// `repose sample STUDY`: the study's Latin hypercube, one experiment manifest
 /// per sample, and the design's diagnostics.
+/// A study that may start more than `max_runs` runs is refused before its
+/// design is built.
 pub fn sample(
     store_root: &Path,
     study_path: &Path,
     settings: &SampleSettings,
+    max_runs: u64,
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, dir) = open_study(store_root, study_path)?;
+    let (study, dir) = open_sized_study(store_root, study_path, max_runs)?;
     let outcome = run_sample(&dir, &study, settings)?;
     writeln!(
         out,
@@ -893,7 +927,7 @@ pub fn noise(
             base.id().short(12)
         )));
     }
-    let (study, dir) = open_study(store_root, study_path)?;
+    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
     let store = open_store(store_root)?;
     let pool = exec.in_study(dir.path());
     set_quiet(true);
@@ -915,6 +949,10 @@ pub fn scene_noise(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
+    let name = manifest.display().to_string();
+    StudySpec::noise_floor(&name, base.id(), u32::try_from(seeds).unwrap_or(u32::MAX))
+        .check_runs(exec.max_runs)
+        .map_err(CommandError::Usage)?;
     let store = open_store(store_root)?;
     let exec = exec.in_study(&store_root.join("noise").join(base.id().short(12)));
     set_quiet(true);
@@ -974,7 +1012,7 @@ fn run_batch_and_report(
     exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(usize, usize), CommandError> {
-    let (study, dir) = open_study(store_root, study_path)?;
+    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
     let store = open_store(store_root)?;
     let settings = exec.in_study(dir.path());
     set_quiet(true);
@@ -1185,7 +1223,7 @@ pub fn verify(
     if is_design_study_file(study_path) {
         return rsm(store_root, study_path, exec, false, out);
     }
-    let (study, dir) = open_study(store_root, study_path)?;
+    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
     let store = open_store(store_root)?;
     let settings = exec.in_study(dir.path());
     set_quiet(true);
@@ -1266,6 +1304,22 @@ fn exec_label(exec: &Executor) -> String {
 /// The design study at `path` and the store; a readable JSON file without a
 /// `factors` object is refused with what the stage needs (an unreadable or
 /// malformed one gets the reader's error).
+/// [`open_design_study`] for a command that starts runs: a study whose
+/// `analysis` stages may start more than `max_runs` runs is refused before
+/// anything is built ([`StudySpec::check_runs`]).
+fn open_sized_design_study(
+    store_root: &Path,
+    path: &Path,
+    analysis: Analysis,
+    max_runs: u64,
+) -> Result<(DesignStudy, Store), CommandError> {
+    let (study, store) = open_design_study(store_root, path)?;
+    StudySpec::design(&study, analysis)
+        .check_runs(max_runs)
+        .map_err(CommandError::Usage)?;
+    Ok((study, store))
+}
+
 fn open_design_study(store_root: &Path, path: &Path) -> Result<(DesignStudy, Store), CommandError> {
     let text = std::fs::read_to_string(path).map_err(|source| {
         manifest_error(path)(ManifestError::Io {
@@ -1304,7 +1358,12 @@ pub fn rsm(
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, store) = open_design_study(store_root, study_path)?;
+    let (study, store) = open_sized_design_study(
+        store_root,
+        study_path,
+        Analysis::ResponseSurface,
+        pool.max_runs,
+    )?;
     let pool = pool.in_study(&study::dir::StudyDir::path_in(store_root, &study));
     let report = study::run_rsm(store_root, &study, &store, &pool, &run_logged)?;
     if json {
@@ -1370,7 +1429,8 @@ pub fn sensitivity(
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, store) = open_design_study(store_root, study_path)?;
+    let (study, store) =
+        open_sized_design_study(store_root, study_path, Analysis::Sensitivity, pool.max_runs)?;
     let pool = pool.in_study(&study::dir::StudyDir::path_in(store_root, &study));
     let outcome = study::run_sensitivity(store_root, &study, &store, &pool, &run_logged, levels)?;
     if json {
@@ -1414,7 +1474,12 @@ pub fn screen(
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, store) = open_design_study(store_root, study_path)?;
+    let (study, store) = open_sized_design_study(
+        store_root,
+        study_path,
+        Analysis::ResponseSurface,
+        pool.max_runs,
+    )?;
     let pool = pool.in_study(&study::dir::StudyDir::path_in(store_root, &study));
     let outcome = study::run_screen(store_root, &study, &store, &pool, &run_logged)?;
     if json {
@@ -1463,6 +1528,10 @@ pub fn calibrate(
         }
     };
     let study = read_study(&path)?;
+    let candidates_or_default = candidates.unwrap_or_else(|| default_candidates(&study));
+    StudySpec::calibration(&study, flags.adaptive, candidates_or_default)
+        .check_runs(exec.max_runs)
+        .map_err(CommandError::Usage)?;
     if Method::of_calibration(&study) == Method::He2019NoiseAware {
         let candidates = candidates.unwrap_or(1);
         return calibrate_noise_aware(store_root, &path, exec, candidates, flags, out);
@@ -1474,7 +1543,7 @@ pub fn calibrate(
         )));
     }
     let candidates = candidates.unwrap_or(3);
-    let spec = StudySpec::calibration(&study, false);
+    let spec = StudySpec::calibration(&study, false, candidates);
     let total = spec.stages.len();
     for (i, stage) in spec.stages.iter().enumerate() {
         let how = match stage {
@@ -1506,6 +1575,7 @@ fn run_classic_stage(
             store_root,
             path,
             &SampleSettings::default(),
+            exec.max_runs,
             out,
             &mut io::stderr(),
         ),

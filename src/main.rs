@@ -50,6 +50,10 @@ struct Cli {
     /// Refuse a run whose estimated log (run.mcap) exceeds this many bytes.
     #[arg(long, global = true, value_name = "N", default_value_t = Limits::DEFAULT_MAX_LOG_BYTES)]
     max_log_bytes: u64,
+    /// Refuse a study (or sweep, or noise floor) that may start more runs than
+    /// this, before anything is built; `repose stages` shows a study's count.
+    #[arg(long, global = true, value_name = "N", default_value_t = repose::exec::DEFAULT_MAX_RUNS)]
+    max_runs: u64,
     #[command(subcommand)]
     command: Command,
 }
@@ -355,7 +359,12 @@ enum ExecutorKind {
 impl ExecArgs {
     /// The executor these options describe; a Slurm option without
     /// `--executor slurm` is refused, naming it.
-    fn executor(&self, jobs: usize, limits: Limits) -> Result<Executor, CommandError> {
+    fn executor(
+        &self,
+        jobs: usize,
+        limits: Limits,
+        max_runs: u64,
+    ) -> Result<Executor, CommandError> {
         let slurm_only = [
             ("--partition", self.partition.is_some()),
             ("--time-limit", self.time_limit.is_some()),
@@ -379,9 +388,10 @@ impl ExecArgs {
                 None
             }
             ExecutorKind::Slurm => {
-                if !(self.poll_seconds.is_finite() && self.poll_seconds > 0.0) {
+                if !(self.poll_seconds > 0.0 && self.poll_seconds <= MAX_POLL_SECONDS) {
                     return Err(CommandError::Usage(format!(
-                        "--poll-seconds = {}: must be a number > 0",
+                        "--poll-seconds = {}: must be a number > 0 and at most {MAX_POLL_SECONDS} \
+                         (a day)",
                         self.poll_seconds
                     )));
                 }
@@ -406,10 +416,15 @@ impl ExecArgs {
         };
         Ok(Executor {
             slurm,
+            max_runs,
             ..Executor::local(jobs, limits)
         })
     }
 }
+
+/// Longest `--poll-seconds`: a day (a longer wait between two looks at the
+/// queue is no use, and 1e300 s does not fit a `Duration`).
+const MAX_POLL_SECONDS: f64 = 86_400.0;
 
 /// Options of `repose sample`.
 #[derive(clap::Args)]
@@ -881,7 +896,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         } => commands::screen(
             &cli.store,
             &study,
-            &exec.executor(default_jobs(jobs), limits)?,
+            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
             json,
             &mut out,
         ),
@@ -904,7 +919,9 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             (None, Some(study)) => commands::rsm(
                 &cli.store,
                 study,
-                &args.exec.executor(default_jobs(args.jobs), limits)?,
+                &args
+                    .exec
+                    .executor(default_jobs(args.jobs), limits, cli.max_runs)?,
                 args.json,
                 &mut out,
             ),
@@ -933,7 +950,9 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
                 commands::sensitivity(
                     &cli.store,
                     study,
-                    &args.exec.executor(default_jobs(args.jobs), limits)?,
+                    &args
+                        .exec
+                        .executor(default_jobs(args.jobs), limits, cli.max_runs)?,
                     levels,
                     args.json,
                     &mut out,
@@ -951,7 +970,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         } => commands::verify(
             &cli.store,
             &study,
-            &exec.executor(default_jobs(jobs), limits)?,
+            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
             candidates,
             &mut out,
         ),
@@ -965,7 +984,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         } => commands::calibrate(
             &cli.store,
             study.as_deref(),
-            &exec.executor(default_jobs(jobs), limits)?,
+            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
             candidates,
             commands::CalibrateFlags { adaptive, json },
             &mut out,
@@ -977,7 +996,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             jobs,
             exec,
         } => {
-            let exec = exec.executor(default_jobs(jobs), limits)?;
+            let exec = exec.executor(default_jobs(jobs), limits, cli.max_runs)?;
             match seeds {
                 Some(n) => commands::scene_noise(&cli.store, &study, n, &exec, json, &mut out),
                 None => commands::noise(&cli.store, &study, &exec, &mut out),
@@ -985,7 +1004,9 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         }
         Command::Tradeoff(args) => {
             let options = args.options().map_err(CommandError::Usage)?;
-            let exec = args.exec.executor(default_jobs(args.jobs), limits)?;
+            let exec = args
+                .exec
+                .executor(default_jobs(args.jobs), limits, cli.max_runs)?;
             commands::tradeoff(&cli.store, &args.manifest, &options, &exec, &mut out)
         }
         Command::LearningCurve {
@@ -997,7 +1018,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             &cli.store,
             &study,
             sizes.as_deref(),
-            &exec.executor(default_jobs(jobs), limits)?,
+            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
             &mut out,
         ),
         Command::Audit { path, rerun, seed } => {
@@ -1022,11 +1043,11 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         Command::Runs {
             command: RunsCommand::Show { prefix },
         } => commands::runs_show(&cli.store, &prefix, &mut out),
-        Command::Sample(args) => sample(&cli.store, args, &mut out),
+        Command::Sample(args) => sample(&cli.store, args, cli.max_runs, &mut out),
         Command::Batch { study, jobs, exec } => commands::batch(
             &cli.store,
             &study,
-            &exec.executor(default_jobs(jobs), limits)?,
+            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
             &mut out,
         ),
         Command::Status { study, json } => commands::status(&cli.store, &study, json, &mut out),
@@ -1048,6 +1069,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
 fn sample(
     store: &std::path::Path,
     args: SampleArgs,
+    max_runs: u64,
     out: &mut dyn io::Write,
 ) -> Result<(), CommandError> {
     let mut err = io::stderr();
@@ -1065,7 +1087,7 @@ fn sample(
                 optimise_iterations: args.optimise_iterations,
                 strong_correlation: args.max_correlation,
             };
-            commands::sample(store, study, &settings, out, &mut err)
+            commands::sample(store, study, &settings, max_runs, out, &mut err)
         }
         (None, None) => unreachable!("clap requires STUDY or --diagnose"),
     }

@@ -83,6 +83,7 @@ fn pool() -> Executor {
         jobs: 2,
         progress: false,
         limits: Default::default(),
+        max_runs: repose::exec::DEFAULT_MAX_RUNS,
         slurm: None,
     }
 }

@@ -80,6 +80,7 @@ fn settings(jobs: usize) -> Executor {
         jobs,
         progress: false,
         limits: Default::default(),
+        max_runs: repose::exec::DEFAULT_MAX_RUNS,
         slurm: None,
     }
 }

@@ -292,3 +292,29 @@ fn responses_lists_every_scene_or_one_and_refuses_an_unknown_one() {
         "{err}"
     );
 }
+
+/// Issue 40, low item: `--poll-seconds 1e300` panicked converting to a
+/// `Duration`; it is refused (exit 2) naming the option and its bound.
+#[test]
+fn a_poll_interval_past_a_day_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    for value in ["1e300", "86401", "0", "NaN"] {
+        let out = repose(
+            tmp.path(),
+            &[
+                "batch",
+                "experiments/calibrate-smoke/study.json",
+                "--executor",
+                "slurm",
+                "--poll-seconds",
+                value,
+            ],
+        );
+        assert_eq!(out.status.code(), Some(2), "{value}: {}", stderr(&out));
+        let err = stderr(&out);
+        assert!(
+            err.contains("--poll-seconds") && err.contains("at most 86400"),
+            "{err}"
+        );
+    }
+}

@@ -57,6 +57,7 @@ fn prepared(tmp: &Path) -> (Study, StudyDir, Store) {
         jobs: 2,
         progress: false,
         limits: Default::default(),
+        max_runs: repose::exec::DEFAULT_MAX_RUNS,
         slurm: None,
     };
     let out = batch(&dir, &s, &store, &settings, fake).unwrap();

@@ -371,6 +371,7 @@ fn batch_refuses_over_limit_runs_before_running_any() {
             max_particles: 10,
             ..Limits::default()
         },
+        max_runs: repose::exec::DEFAULT_MAX_RUNS,
         slurm: None,
     };
     let err = batch(&dir, &s, &store, &settings, runner).unwrap_err();

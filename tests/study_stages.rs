@@ -89,7 +89,7 @@ fn stages_prints_what_each_stage_uses() {
     );
     assert_eq!(
         stages[2],
-        json!({"stage": "simulate", "scenes": ["funnel"], "replicates": 1})
+        json!({"stage": "simulate", "scenes": ["funnel"], "points": 12, "replicates": 1})
     );
     assert_eq!(
         stages[3],
@@ -101,7 +101,8 @@ fn stages_prints_what_each_stage_uses() {
     );
     assert_eq!(
         stages[5],
-        json!({"stage": "verify", "seeds": 5, "max_seeds": 28})
+        json!({"stage": "verify", "scenes": ["funnel", "baffle", "drum"], "points": 1,
+               "seeds": 5, "max_seeds": 28})
     );
 
     let out = common::repose(

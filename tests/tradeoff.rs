@@ -17,6 +17,7 @@ fn pool(jobs: usize) -> repose::exec::Executor {
         jobs,
         progress: false,
         limits: repose::scenes::plan::Limits::default(),
+        max_runs: repose::exec::DEFAULT_MAX_RUNS,
         slurm: None,
     }
 }

@@ -56,6 +56,15 @@ pub enum ExecError {
         /// The rules it breaks, or the estimates above their limits.
         reason: String,
     },
+    /// More runs are pending than [`Executor::max_runs`] allows; refused
+    /// before any run starts.
+    #[error("{runs} runs to start, more than --max-runs {max_runs}; raise --max-runs to run them")]
+    TooManyRuns {
+        /// Pending runs.
+        runs: usize,
+        /// The limit.
+        max_runs: u64,
+    },
     /// Slurm refused or failed a request (sbatch, squeue) or its files could
     /// not be written.
     #[error("slurm: {0}")]
@@ -103,7 +112,10 @@ impl ExecError {
 
     /// The error is in what the caller asked for (exit code 2).
     pub fn is_invalid_input(&self) -> bool {
-        matches!(self, ExecError::Settings(_) | ExecError::Refused { .. })
+        matches!(
+            self,
+            ExecError::Settings(_) | ExecError::Refused { .. } | ExecError::TooManyRuns { .. }
+        )
     }
 }
 
@@ -118,6 +130,11 @@ pub struct Executor {
     /// Resource limits every pending run's plan must stay within; a run beyond
     /// them refuses the whole call before anything runs.
     pub limits: Limits,
+    /// Most runs one call may start (`--max-runs`): a study checks its stages'
+    /// counts against it before it builds anything
+    /// ([`crate::study::stages::StudySpec::check_runs`]), and
+    /// [`run_incomplete`] refuses more pending runs than this.
+    pub max_runs: u64,
     /// Run on Slurm instead of this machine's workers (`--executor slurm`).
     pub slurm: Option<SlurmSettings>,
 }
@@ -130,6 +147,7 @@ impl Executor {
             jobs,
             progress: crate::scenes::protocol::progress_enabled(),
             limits,
+            max_runs: DEFAULT_MAX_RUNS,
             slurm: None,
         }
     }
@@ -144,6 +162,12 @@ impl Executor {
         e
     }
 }
+
+/// Default of [`Executor::max_runs`]: 10,000 runs, 44 times the largest
+/// committed study (cai2024-quick, at most 226 runs by `repose stages`) and
+/// a day or more of two cores at the quick profiles' cost per run;
+/// `--max-runs` raises it.
+pub const DEFAULT_MAX_RUNS: u64 = 10_000;
 
 /// What [`run_incomplete`] did.
 pub struct Ran {
@@ -172,6 +196,12 @@ where
     let pending: Vec<usize> = (0..experiments.len())
         .filter(|&i| store.status(&experiments[i].id()) != RunStatus::Complete)
         .collect();
+    if pending.len() as u64 > settings.max_runs {
+        return Err(ExecError::TooManyRuns {
+            runs: pending.len(),
+            max_runs: settings.max_runs,
+        });
+    }
     for &i in &pending {
         let refuse = |reason: String| ExecError::Refused {
             id: experiments[i].id(),

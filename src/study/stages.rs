@@ -147,6 +147,8 @@ pub enum Stage {
     Screen {
         /// Screened factors.
         factors: usize,
+        /// Levels over every screened factor.
+        levels: u64,
         /// Seeds per level.
         replicates: u32,
     },
@@ -161,6 +163,8 @@ pub enum Stage {
     Simulate {
         /// Scenes each point runs in.
         scenes: Vec<String>,
+        /// Design points.
+        points: u64,
         /// Packing seeds per point.
         replicates: u32,
     },
@@ -187,6 +191,11 @@ pub enum Stage {
     Sensitivity,
     /// Candidates re-simulated in every scene.
     Verify {
+        /// Scenes each candidate runs in.
+        scenes: Vec<String>,
+        /// Candidates verified, at most (he2019: `--candidates`; a design
+        /// study: its optimum and named points).
+        points: u64,
         /// Packing seeds per candidate and scene (the fewest, when a power
         /// calculation may raise them).
         seeds: u32,
@@ -199,8 +208,10 @@ pub enum Stage {
     Tradeoff {
         /// Knobs swept.
         knobs: Vec<String>,
+        /// Points: the reference and every coarser value of each knob.
+        points: u64,
         /// Packing seeds per point.
-        replicates: u32,
+        replicates: u64,
     },
 }
 
@@ -218,6 +229,40 @@ impl Stage {
             Stage::Sensitivity => "sensitivity",
             Stage::Verify { .. } => "verify",
             Stage::Tradeoff { .. } => "tradeoff",
+        }
+    }
+
+    /// The most runs the stage may start (saturating: a count past
+    /// `u64::MAX` reads as `u64::MAX`); 0 for a stage that runs nothing.
+    pub fn runs(&self) -> u64 {
+        match self {
+            Stage::Noise { seeds } => u64::from(*seeds),
+            Stage::Screen {
+                levels, replicates, ..
+            } => levels.saturating_mul(u64::from(*replicates)),
+            Stage::Simulate {
+                scenes,
+                points,
+                replicates,
+            } => points
+                .saturating_mul(scenes.len() as u64)
+                .saturating_mul(u64::from(*replicates)),
+            Stage::Adaptive { max_runs } => u64::from(*max_runs),
+            Stage::Verify {
+                scenes,
+                points,
+                seeds,
+                max_seeds,
+            } => points
+                .saturating_mul(scenes.len() as u64)
+                .saturating_mul(u64::from((*seeds).max(max_seeds.unwrap_or(0)))),
+            Stage::Tradeoff {
+                points, replicates, ..
+            } => points.saturating_mul(*replicates),
+            Stage::Design { .. }
+            | Stage::Fit { .. }
+            | Stage::Search { .. }
+            | Stage::Sensitivity => 0,
         }
     }
 }
@@ -238,16 +283,20 @@ pub struct StudySpec {
 impl StudySpec {
     /// The stage list of a document; `analysis` says how a design study is
     /// analysed (ignored for a calibration study); `adaptive` adds the
-    /// adaptive rounds of a noise-aware calibration.
+    /// adaptive rounds of a noise-aware calibration, whose verification runs
+    /// [`default_candidates`] candidates.
     pub fn of(document: &StudyFile, analysis: Analysis, adaptive: bool) -> StudySpec {
         match document {
-            StudyFile::Calibration(study) => StudySpec::calibration(study, adaptive),
+            StudyFile::Calibration(study) => {
+                StudySpec::calibration(study, adaptive, default_candidates(study))
+            }
             StudyFile::Design(study) => StudySpec::design(study, analysis),
         }
     }
 
-    /// he2019's stage list, classic or noise-aware.
-    pub fn calibration(study: &Study, adaptive: bool) -> StudySpec {
+    /// he2019's stage list, classic or noise-aware, verifying `candidates`
+    /// clusters.
+    pub fn calibration(study: &Study, adaptive: bool, candidates: usize) -> StudySpec {
         let design = match study.design.kind {
             DesignKind::Lhs => DesignOf::Lhs,
             DesignKind::LhsOptimised => DesignOf::OptimisedLhs,
@@ -255,13 +304,20 @@ impl StudySpec {
             DesignKind::BoxBehnken => DesignOf::BoxBehnken,
         };
         let factors = study.parameters.len();
+        let points = design_points(design, study.design.size, factors);
         let calibration_scene = vec![study.calibration.name.clone()];
+        let scenes: Vec<String> = std::iter::once(&study.calibration)
+            .chain(&study.verification)
+            .map(|t| t.name.clone())
+            .collect();
+        let candidates = candidates as u64;
         let method = Method::of_calibration(study);
         let stages = match &study.noise_aware {
             None => vec![
                 Stage::Design { design, factors },
                 Stage::Simulate {
                     scenes: calibration_scene,
+                    points,
                     replicates: 1,
                 },
                 Stage::Fit {
@@ -272,6 +328,8 @@ impl StudySpec {
                     screen: false,
                 },
                 Stage::Verify {
+                    scenes,
+                    points: candidates,
                     seeds: 1,
                     max_seeds: None,
                 },
@@ -284,6 +342,7 @@ impl StudySpec {
                     Stage::Design { design, factors },
                     Stage::Simulate {
                         scenes: calibration_scene,
+                        points,
                         replicates: n.replicates,
                     },
                     Stage::Fit {
@@ -300,6 +359,8 @@ impl StudySpec {
                     screen: n.screen,
                 });
                 stages.push(Stage::Verify {
+                    scenes,
+                    points: candidates,
                     seeds: n.verification_seeds,
                     max_seeds: n.max_verification_seeds,
                 });
@@ -316,15 +377,26 @@ impl StudySpec {
 
     /// A design study's stage list for `analysis`.
     pub fn design(study: &DesignStudy, analysis: Analysis) -> StudySpec {
-        let design = match study.design {
-            DesignSpec::BoxBehnken { .. } => DesignOf::BoxBehnken,
-            DesignSpec::FullFactorial { .. } => DesignOf::FullFactorial,
-            DesignSpec::Lhs { .. } => DesignOf::Lhs,
+        let k = study.factors.len() as u64;
+        let (design, points) = match &study.design {
+            DesignSpec::BoxBehnken { centre_points } => (
+                DesignOf::BoxBehnken,
+                (2 * k * k.saturating_sub(1)).saturating_add(u64::from(*centre_points)),
+            ),
+            DesignSpec::FullFactorial { levels } => (
+                DesignOf::FullFactorial,
+                levels
+                    .values()
+                    .fold(1u64, |n, l| n.saturating_mul(l.len() as u64)),
+            ),
+            DesignSpec::Lhs { points } => (DesignOf::Lhs, u64::from(*points)),
         };
+        let scenes: Vec<String> = study.scenes.keys().cloned().collect();
         let mut stages = Vec::new();
         if let (Analysis::ResponseSurface, Some(s)) = (analysis, &study.screening) {
             stages.push(Stage::Screen {
                 factors: s.factors.len(),
+                levels: s.factors.values().map(|f| f.levels.len() as u64).sum(),
                 replicates: s.replicates,
             });
         }
@@ -333,7 +405,8 @@ impl StudySpec {
             factors: study.factors.len(),
         });
         stages.push(Stage::Simulate {
-            scenes: study.scenes.keys().cloned().collect(),
+            scenes: scenes.clone(),
+            points,
             replicates: study.replicates,
         });
         let method = match analysis {
@@ -360,6 +433,9 @@ impl StudySpec {
         };
         if let Some(v) = &study.verification {
             stages.push(Stage::Verify {
+                scenes,
+                // The desirability optimum and every named point.
+                points: 1 + v.points.len() as u64,
                 seeds: v.replicates,
                 max_seeds: None,
             });
@@ -382,14 +458,58 @@ impl StudySpec {
         }
     }
 
-    /// The tradeoff sweep of `knobs` around one experiment.
-    pub fn tradeoff(name: &str, id: ContentId, knobs: Vec<String>, replicates: u32) -> StudySpec {
+    /// The tradeoff sweep of `knobs` around one experiment: `points` (the
+    /// reference and each coarser knob value) × `replicates` runs.
+    pub fn tradeoff(
+        name: &str,
+        id: ContentId,
+        knobs: Vec<String>,
+        points: u64,
+        replicates: u64,
+    ) -> StudySpec {
         StudySpec {
             name: name.to_string(),
             id,
             method: Method::Tradeoff,
-            stages: vec![Stage::Tradeoff { knobs, replicates }],
+            stages: vec![Stage::Tradeoff {
+                knobs,
+                points,
+                replicates,
+            }],
         }
+    }
+
+    /// The most runs the study may start: every stage's [`Stage::runs`]
+    /// (saturating).
+    pub fn runs(&self) -> u64 {
+        self.stages
+            .iter()
+            .fold(0u64, |n, s| n.saturating_add(s.runs()))
+    }
+
+    /// Refuses a study that may start more than `max_runs` runs, before
+    /// anything is built (issue 40: a million replicates or a billion centre
+    /// points once spun or ran out of memory); the message gives the count,
+    /// each stage's share and the flag that raises the limit.
+    pub fn check_runs(&self, max_runs: u64) -> Result<(), String> {
+        let total = self.runs();
+        if total <= max_runs {
+            return Ok(());
+        }
+        let shares: Vec<String> = self
+            .stages
+            .iter()
+            .filter(|s| s.runs() > 0)
+            .map(|s| format!("{} {}", s.name(), count(s.runs())))
+            .collect();
+        Err(format!(
+            "{}: up to {} runs ({}), more than --max-runs {}; make the study smaller or \
+             raise --max-runs",
+            self.name,
+            count(total),
+            shares.join(", "),
+            count(max_runs)
+        ))
     }
 
     /// The stage list as text: one numbered line per stage with what it uses.
@@ -405,13 +525,21 @@ impl StudySpec {
                 Stage::Noise { seeds } => format!("{seeds} packing seeds at one point"),
                 Stage::Screen {
                     factors,
+                    levels,
                     replicates,
-                } => format!("{factors} factor(s) one at a time, {replicates} seed(s) per level"),
+                } => format!(
+                    "{factors} factor(s) one at a time, {levels} level(s), {replicates} seed(s) \
+                     per level"
+                ),
                 Stage::Design { design, factors } => {
                     format!("{} over {factors} factor(s)", word(design))
                 }
-                Stage::Simulate { scenes, replicates } => format!(
-                    "scenes {} x {replicates} seed(s) per point",
+                Stage::Simulate {
+                    scenes,
+                    points,
+                    replicates,
+                } => format!(
+                    "{points} point(s) x scenes {} x {replicates} seed(s) per point",
                     scenes.join(", ")
                 ),
                 Stage::Fit { models } => models.iter().map(word).collect::<Vec<_>>().join(", "),
@@ -424,21 +552,81 @@ impl StudySpec {
                     w
                 }
                 Stage::Sensitivity => "levels 1-3".to_string(),
-                Stage::Verify { seeds, max_seeds } => match max_seeds {
-                    Some(max) => format!(
-                        "{seeds} seed(s) per candidate and scene; the calibration scene's by \
-                         power on the noise floor, up to {max}"
-                    ),
-                    None => format!("{seeds} seed(s) per candidate and scene"),
-                },
-                Stage::Tradeoff { knobs, replicates } => {
-                    format!("knobs {} x {replicates} seed(s)", knobs.join(", "))
+                Stage::Verify {
+                    scenes,
+                    points,
+                    seeds,
+                    max_seeds,
+                } => {
+                    let per = match max_seeds {
+                        Some(max) => format!(
+                            "{seeds} seed(s) per candidate and scene; the calibration scene's \
+                             by power on the noise floor, up to {max}"
+                        ),
+                        None => format!("{seeds} seed(s) per candidate and scene"),
+                    };
+                    format!(
+                        "up to {points} candidate(s) x scenes {}, {per}",
+                        scenes.join(", ")
+                    )
                 }
+                Stage::Tradeoff {
+                    knobs,
+                    points,
+                    replicates,
+                } => format!(
+                    "{points} point(s) over knobs {} x {replicates} seed(s)",
+                    knobs.join(", ")
+                ),
             };
-            s.push_str(&format!("  {}. {}: {detail}\n", i + 1, stage.name()));
+            let runs = stage.runs();
+            let runs = if runs > 0 {
+                format!(" [up to {} runs]", count(runs))
+            } else {
+                String::new()
+            };
+            s.push_str(&format!("  {}. {}: {detail}{runs}\n", i + 1, stage.name()));
         }
+        s.push_str(&format!("  at most {} runs in all\n", count(self.runs())));
         s
     }
+}
+
+/// The candidates `repose calibrate` verifies by default: 1 for a
+/// noise-aware study (its candidate runs every scene with several seeds), 3
+/// for he2019's classic method.
+pub fn default_candidates(study: &Study) -> usize {
+    if study.noise_aware.is_some() {
+        1
+    } else {
+        3
+    }
+}
+
+/// Design points of a calibration study's design without building it: an
+/// LHS has `size` points, a full factorial `size` levels per factor, a
+/// Box–Behnken 2k(k − 1) edge midpoints and `size` centre points
+/// (saturating).
+fn design_points(design: DesignOf, size: u64, factors: usize) -> u64 {
+    let k = factors as u64;
+    match design {
+        DesignOf::Lhs | DesignOf::OptimisedLhs | DesignOf::OneFactor => size,
+        DesignOf::FullFactorial => (0..factors).fold(1u64, |n, _| n.saturating_mul(size)),
+        DesignOf::BoxBehnken => (2 * k * k.saturating_sub(1)).saturating_add(size),
+    }
+}
+
+/// A count with thousands separated by commas (1,000,000).
+fn count(n: u64) -> String {
+    let digits = n.to_string();
+    let mut s = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            s.push(',');
+        }
+        s.push(c);
+    }
+    s
 }
 
 /// A unit enum variant as serde names it (`optimised_lhs`, `ga_bp`, …).
