@@ -722,7 +722,7 @@ fn screening_markdown(effects: &[MainEffect], noise_sd: f64, screen: bool) -> St
 
 /// What the noise of the validation means allows, in words (see
 /// [`crate::stats::metrics`]): the ceiling, the signal-to-noise ratio, the
-/// seeds per point that would lift the ceiling to 0.9, and which surrogates
+/// seeds per point that would lift the ceiling to 0.9 (when it is below), and which surrogates
 /// do not beat the validation targets' mean.
 fn noise_sentence(n: &NoiseCeiling, sigma2: f64, metrics: &[SurrogateMetrics]) -> String {
     let mut out = format!(
@@ -732,6 +732,7 @@ fn noise_sentence(n: &NoiseCeiling, sigma2: f64, metrics: &[SurrogateMetrics]) -
         n.noise_var, n.signal_var, n.signal_to_noise, n.r2_ceiling, n.rmse_floor
     );
     match seeds_for_ceiling(n.signal_var, sigma2, 0.9) {
+        _ if n.r2_ceiling >= 0.9 => out.push_str("The ceiling is above 0.9 already."),
         Some(k) => out.push_str(&format!(
             "{k} seeds per point would lift the ceiling to 0.9."
         )),
