@@ -331,6 +331,81 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
     expect_code(&repose(&slurm, &store, &again), 1);
     assert_eq!(submissions(&dir), 2);
     assert_eq!(submission(&dir, 2)["ids"].as_array().unwrap().len(), 2);
+
+    // A task that ends before repose runs (here its setup exits) leaves no
+    // result and no error.json: the stage stops before its analysis (exit 1,
+    // naming the task), and the next call submits that run again (issue 40,
+    // item 4: the noise floor used to be computed from the other seeds).
+    let store = tmp.path().join("lost-store");
+    let manifest = "experiments/drum/smoke.json";
+    let lose_task_0 = format!(
+        "export PATH='{}':\"$PATH\"; if [ \"$SLURM_ARRAY_TASK_ID\" = 0 ]; then exit 7; fi",
+        bin.display()
+    );
+    let noise = |extra: &[&str]| {
+        let mut args = vec![
+            "noise",
+            manifest,
+            "--seeds",
+            "2",
+            "--executor",
+            "slurm",
+            "--poll-seconds",
+            "0.5",
+        ];
+        args.extend_from_slice(extra);
+        repose(&slurm, &store, &args)
+    };
+    let out = noise(&["--setup", &lose_task_0]);
+    expect_code(&out, 1);
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("1 Slurm task(s) ended without a result") && err.contains("_0 left the queue"),
+        "{err}"
+    );
+    assert!(text(&out.stdout).is_empty(), "{}", text(&out.stdout));
+    let out = noise(&[]);
+    expect_code(&out, 0);
+    let report = text(&out.stdout);
+    assert!(
+        report.contains("(2 runs, 0 failed)") && report.contains("| 2/2 |"),
+        "{report}"
+    );
+
+    // A request no node of the partition can hold (64 CPUs per task on this
+    // 2-CPU node) pends with reason PartitionConfig: the client stops
+    // waiting with that reason (it used to poll for ever), and `status`
+    // shows it (issue 40, item 6).
+    let store = tmp.path().join("unschedulable-store");
+    expect_code(&repose(&slurm, &store, &["sample", study]), 0);
+    let out = batch_on_slurm(
+        &slurm,
+        &store,
+        study,
+        &["--cpus-per-task", "64", "--poll-seconds", "0.5"],
+    );
+    expect_code(&out, 1);
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("can never start") && err.contains("PartitionConfig"),
+        "{err}"
+    );
+    let s = status(&slurm, &store, study);
+    assert_eq!(count(&s, "queued"), 12, "{s}");
+    assert!(s["runs"][0]["note"]
+        .as_str()
+        .unwrap()
+        .contains("PartitionConfig"));
+    let job = submission(&slurm_dir(&store), 1)["job_id"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let scancel = Command::new("scancel")
+        .arg(&job)
+        .env("SLURM_CONF", &slurm.conf)
+        .output()
+        .unwrap();
+    expect_code(&scancel, 0);
 }
 
 #[test]

@@ -69,6 +69,37 @@ pub enum ExecError {
     /// not be written.
     #[error("slurm: {0}")]
     Slurm(String),
+    /// Slurm tasks ended without a result or an error.json (cancelled, out
+    /// of time or memory, or their job script failed): the stage stops
+    /// before its analysis; the next call submits those runs again.
+    #[error(
+        "{runs} Slurm task(s) ended without a result or an error.json; the stage stops \
+         here and the next call submits them again:\n  {}",
+        list_lost(messages)
+    )]
+    Lost {
+        /// How many runs were lost.
+        runs: usize,
+        /// Why, per run (the task and the end of its log).
+        messages: Vec<String>,
+    },
+    /// A task waits in Slurm's queue for a reason that waiting does not
+    /// clear (e.g. `PartitionConfig`); the job is left queued.
+    #[error(
+        "Slurm task {task} can never start: pending reason {reason} ({why}); it stays queued: \
+         cancel it with `scancel {job}` and run again with a request that fits (--cpus-per-task, \
+         --mem, --time-limit, --partition, --account)"
+    )]
+    NeverStarts {
+        /// The task (`job_task`).
+        task: String,
+        /// Its array job id.
+        job: String,
+        /// Slurm's pending reason.
+        reason: String,
+        /// What the reason means.
+        why: String,
+    },
     /// `--dry-run`: the job script is written, nothing was submitted.
     #[error(
         "wrote the job script {} for {runs} runs (--dry-run: not submitted); submit it with \
@@ -98,6 +129,15 @@ pub enum ExecError {
         /// The study's slurm directory.
         dir: PathBuf,
     },
+}
+
+/// The first five of `messages`, one per line, and how many more.
+fn list_lost(messages: &[String]) -> String {
+    let mut lines: Vec<String> = messages.iter().take(5).cloned().collect();
+    if messages.len() > 5 {
+        lines.push(format!("... and {} more", messages.len() - 5));
+    }
+    lines.join("\n  ")
 }
 
 impl ExecError {

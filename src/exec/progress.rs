@@ -23,6 +23,7 @@ pub struct BatchProgress {
     failed: usize,
     started: Instant,
     last: Option<Instant>,
+    note: Option<String>,
 }
 
 impl BatchProgress {
@@ -38,6 +39,7 @@ impl BatchProgress {
             failed: 0,
             started: Instant::now(),
             last: None,
+            note: None,
         };
         p.draw(true);
         p
@@ -53,6 +55,15 @@ impl BatchProgress {
     /// Redraws (elapsed time and ETA move on between finished runs).
     pub fn tick(&mut self) {
         self.draw(false);
+    }
+
+    /// Sets what the line adds after the ETA (e.g. Slurm's pending reasons)
+    /// and redraws when it changed.
+    pub fn set_note(&mut self, note: Option<String>) {
+        if note != self.note {
+            self.note = note;
+            self.draw(true);
+        }
     }
 
     /// Ends the bar's line.
@@ -95,8 +106,12 @@ impl BatchProgress {
                 clock(per_run * (self.to_run - self.finished) as f64)
             )
         };
+        let note = self
+            .note
+            .as_deref()
+            .map_or_else(String::new, |n| format!("  {n}"));
         format!(
-            "batch [{}{}] {done}/{}  cached {}  failed {}  elapsed {}  {eta}",
+            "batch [{}{}] {done}/{}  cached {}  failed {}  elapsed {}  {eta}{note}",
             "#".repeat(filled),
             "-".repeat(BAR - filled),
             self.total,
@@ -133,5 +148,9 @@ mod tests {
             "batch [############------------------] 4/10  cached 2  failed 1  elapsed 1m00s  ETA 3m00s"
         );
         assert_eq!(clock(3723.0), "1h02m03s");
+        p.set_note(Some("queued: Resources 6".to_string()));
+        assert!(p
+            .line(Duration::from_secs(60))
+            .ends_with("ETA 3m00s  queued: Resources 6"));
     }
 }

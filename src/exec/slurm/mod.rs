@@ -13,11 +13,19 @@
 //!    how to submit it by hand);
 //! 4. polls `squeue` ([`queue`]) every [`SlurmSettings::poll`] until none of
 //!    the study's runs is in the queue (unless `wait` is off: then it returns
-//!    [`ExecError::Queued`] at once); a failed poll is retried, and only
-//!    [`SQUEUE_ATTEMPTS`] failures in a row end the wait, and
+//!    [`ExecError::Queued`] at once), showing Slurm's pending reasons on the
+//!    progress line; a failed poll is retried, and only
+//!    [`SQUEUE_ATTEMPTS`] failures in a row end the wait; a task pending for
+//!    a reason that waiting does not clear ([`queue::NEVER_CLEARS`], e.g.
+//!    `PartitionConfig` for more CPUs than a node has) ends it too, with
+//!    [`ExecError::NeverStarts`] (the job stays queued for the user to
+//!    cancel), and
 //! 5. reads the outcome of each from the store: a sealed result, an
-//!    `error.json`, or neither (the task was cancelled, ran out of time or its
-//!    script failed: the error quotes the end of its log).
+//!    `error.json` (a failed run, reported to the stage like a local
+//!    failure), or neither: the task was cancelled, ran out of time or its
+//!    script failed, and the call ends with [`ExecError::Lost`] quoting the
+//!    end of each such task's log, so no stage analyses a design with runs
+//!    missing that the next call would resubmit.
 //!
 //! Each task is `repose run` on one manifest against the same store, so it
 //! writes that run's files only (atomically, under the run's claim) and the
@@ -40,7 +48,7 @@ use super::{ExecError, Executor};
 use crate::manifest::{canonical_json, ContentId, Experiment};
 use crate::store::{Depth, RunState, Store};
 use ledger::{Ledger, Submission};
-use queue::{Queue, QueueState};
+use queue::{Queue, QueueEntry, QueueState};
 
 /// How many polls in a row `squeue` may fail while the client waits before
 /// the wait gives up with its error.
@@ -151,22 +159,75 @@ pub fn ledger_of(settings: &SlurmSettings, store: &Store) -> Ledger {
     )
 }
 
-/// Which array task each in-flight run is: id → (job, task, state); a later
-/// submission's task wins over an earlier one.
-fn in_flight(
-    submissions: &[Submission],
-    queue: &Queue,
-) -> BTreeMap<ContentId, (String, usize, QueueState)> {
+/// The array task of a run in Slurm's queue.
+#[derive(Debug, Clone)]
+struct Flying {
+    /// The array's job id.
+    job: String,
+    /// The task index.
+    task: usize,
+    /// Its line of `squeue` (state and pending reason).
+    entry: QueueEntry,
+}
+
+/// Which array task each in-flight run is; a later submission's task wins
+/// over an earlier one.
+fn in_flight(submissions: &[Submission], queue: &Queue) -> BTreeMap<ContentId, Flying> {
     let mut out = BTreeMap::new();
     for s in submissions {
         let Some(job) = &s.job_id else { continue };
         for (t, id) in s.ids.iter().enumerate() {
             if let Some(e) = queue.task(job, t) {
-                out.insert(id.clone(), (job.clone(), t, e.state()));
+                out.insert(
+                    id.clone(),
+                    Flying {
+                        job: job.clone(),
+                        task: t,
+                        entry: e.clone(),
+                    },
+                );
             }
         }
     }
     out
+}
+
+/// The first waiting run whose task can never start (see
+/// [`queue::NEVER_CLEARS`]), as the error that ends the wait.
+fn never_starting(
+    waiting: &BTreeSet<ContentId>,
+    flying: &BTreeMap<ContentId, Flying>,
+) -> Option<ExecError> {
+    waiting.iter().find_map(|id| {
+        let f = flying.get(id)?;
+        let why = f.entry.never_starts()?;
+        Some(ExecError::NeverStarts {
+            task: format!("{}_{}", f.job, f.task),
+            job: f.job.clone(),
+            reason: f.entry.reason.clone(),
+            why: why.to_string(),
+        })
+    })
+}
+
+/// What the queued runs among `waiting` wait for, for the progress line:
+/// `queued: Resources 3, Priority 1` (most frequent first), or `None`.
+fn pending_reasons(
+    waiting: &BTreeSet<ContentId>,
+    flying: &BTreeMap<ContentId, Flying>,
+) -> Option<String> {
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    for f in waiting.iter().filter_map(|id| flying.get(id)) {
+        if f.entry.state() == QueueState::Queued {
+            *counts.entry(f.entry.reason.as_str()).or_default() += 1;
+        }
+    }
+    let mut by_count: Vec<(&str, usize)> = counts.into_iter().collect();
+    by_count.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+    (!by_count.is_empty()).then(|| {
+        let parts: Vec<String> = by_count.iter().map(|(r, n)| format!("{r} {n}")).collect();
+        format!("queued: {}", parts.join(", "))
+    })
 }
 
 /// Fills in the job id of submissions recorded before sbatch returned (a
@@ -296,7 +357,7 @@ pub(super) fn run(
     if !settings.wait && !waiting.is_empty() {
         let jobs: BTreeSet<String> = in_flight(&submissions, &queue::snapshot()?)
             .into_values()
-            .map(|(job, _, _)| job)
+            .map(|f| f.job)
             .collect();
         return Err(ExecError::Queued {
             runs: waiting.len(),
@@ -304,6 +365,7 @@ pub(super) fn run(
             dir: ledger.dir().to_path_buf(),
         });
     }
+    let mut lost = Vec::new();
     wait(
         &ledger,
         &submissions,
@@ -311,10 +373,28 @@ pub(super) fn run(
         settings,
         waiting,
         progress,
-        |id, m| failures.extend(positions[id].iter().map(|&i| (i, m.clone()))),
+        |id, left| match left {
+            Left::Failed(m) => failures.extend(positions[id].iter().map(|&i| (i, m.clone()))),
+            Left::Lost(m) => lost.push(m),
+        },
     )?;
+    if !lost.is_empty() {
+        return Err(ExecError::Lost {
+            runs: lost.len(),
+            messages: lost,
+        });
+    }
     failures.sort();
     Ok(failures)
+}
+
+/// How a run without a result left the queue.
+enum Left {
+    /// The run failed: its `error.json` (the message a local run gives).
+    Failed(String),
+    /// The task ended without a result or an error (cancelled, out of time
+    /// or memory, its script failed): the run is resubmitted next time.
+    Lost(String),
 }
 
 /// Writes the manifests, task list, job script and record of a new
@@ -392,8 +472,8 @@ fn submit(ledger: &Ledger, mut s: Submission) -> Result<Submission, ExecError> {
     Ok(s)
 }
 
-/// Polls the queue until none of `waiting` is in it; reports each run's
-/// outcome to `failed` (id, message) as it leaves, counting it on `progress`.
+/// Polls the queue until none of `waiting` is in it; reports each run that
+/// left without a result to `left` as it leaves, counting it on `progress`.
 fn wait(
     ledger: &Ledger,
     submissions: &[Submission],
@@ -401,7 +481,7 @@ fn wait(
     settings: &SlurmSettings,
     mut waiting: BTreeSet<ContentId>,
     progress: &mut BatchProgress,
-    mut failed: impl FnMut(&ContentId, String),
+    mut left: impl FnMut(&ContentId, Left),
 ) -> Result<(), ExecError> {
     let mut next_poll = Instant::now();
     let mut squeue_failures = 0;
@@ -429,21 +509,26 @@ fn wait(
             }
         };
         let flying = in_flight(submissions, &queue);
-        let left: Vec<ContentId> = waiting
+        if let Some(e) = never_starting(&waiting, &flying) {
+            progress.finish();
+            return Err(e);
+        }
+        progress.set_note(pending_reasons(&waiting, &flying));
+        let gone: Vec<ContentId> = waiting
             .iter()
             .filter(|id| !flying.contains_key(*id))
             .cloned()
             .collect();
-        for id in left {
+        for id in gone {
             waiting.remove(&id);
             let outcome = match store.check(&id, Depth::Sizes) {
                 RunState::Complete(_) => None,
-                RunState::Failed => Some(failure_message(store, &id)),
-                _ => Some(lost_message(ledger, submissions, &id)),
+                RunState::Failed => Some(Left::Failed(failure_message(store, &id))),
+                _ => Some(Left::Lost(lost_message(ledger, submissions, &id))),
             };
             progress.finished_one(outcome.is_some());
-            if let Some(m) = outcome {
-                failed(&id, m);
+            if let Some(l) = outcome {
+                left(&id, l);
             }
         }
     }

@@ -34,6 +34,9 @@ pub struct QueueEntry {
     pub name: String,
     /// Slurm's state name (`%T`), e.g. `PENDING`, `RUNNING`.
     pub slurm_state: String,
+    /// Why a pending task waits (`%r`: `Resources`, `Priority`,
+    /// `JobArrayTaskLimit`, `PartitionConfig`, …; `None` when running).
+    pub reason: String,
 }
 
 impl QueueEntry {
@@ -46,10 +49,53 @@ impl QueueEntry {
             _ => QueueState::Running,
         }
     }
+
+    /// Why a queued task can never start, when Slurm's pending reason is
+    /// one that waiting does not clear ([`NEVER_CLEARS`]); `None` otherwise.
+    pub fn never_starts(&self) -> Option<&'static str> {
+        if self.state() != QueueState::Queued {
+            return None;
+        }
+        NEVER_CLEARS
+            .iter()
+            .find(|(reason, _)| self.reason.starts_with(reason))
+            .map(|(_, why)| *why)
+    }
 }
 
-/// The `squeue` output format [`parse_squeue`] reads.
-pub const SQUEUE_FORMAT: &str = "%F|%K|%j|%T";
+/// Pending reasons that waiting does not clear, with what they mean: the
+/// request does not fit the partition or the account as configured, so the
+/// client stops waiting and says so instead of polling for ever (issue 40).
+/// `ReqNodeNotAvail` (the nodes the job needs are down or drained) may clear
+/// when an administrator brings them back; the job is left queued either way.
+pub const NEVER_CLEARS: [(&str, &str); 8] = [
+    (
+        "PartitionConfig",
+        "the request (CPUs, memory or nodes per task) exceeds what the partition's nodes have",
+    ),
+    (
+        "PartitionNodeLimit",
+        "the request needs more nodes than the partition allows",
+    ),
+    (
+        "PartitionTimeLimit",
+        "the time limit exceeds the partition's",
+    ),
+    ("BadConstraints", "no node satisfies the job's constraints"),
+    (
+        "ReqNodeNotAvail",
+        "the nodes the job needs are down, drained or reserved",
+    ),
+    ("InvalidAccount", "the account is not valid"),
+    ("InvalidQOS", "the QOS is not valid"),
+    (
+        "AccountNotAllowed",
+        "the account may not use this partition",
+    ),
+];
+
+/// The `squeue` output format [`Queue::parse`] reads.
+pub const SQUEUE_FORMAT: &str = "%F|%K|%j|%T|%r";
 
 /// A snapshot of this user's jobs in the queue, by (array job id, task).
 #[derive(Debug, Clone, Default)]
@@ -62,8 +108,8 @@ impl Queue {
     pub fn parse(text: &str) -> Result<Queue, String> {
         let mut entries = BTreeMap::new();
         for line in text.lines().filter(|l| !l.trim().is_empty()) {
-            let parts: Vec<&str> = line.trim().splitn(4, '|').collect();
-            let [job, task, name, state] = parts[..] else {
+            let parts: Vec<&str> = line.trim().splitn(5, '|').collect();
+            let [job, task, name, state, reason] = parts[..] else {
                 return Err(format!("unexpected squeue line `{line}`"));
             };
             let task = match task {
@@ -78,6 +124,7 @@ impl Queue {
                 task,
                 name: name.to_string(),
                 slurm_state: state.to_string(),
+                reason: reason.to_string(),
             };
             if let Some(t) = task {
                 entries.insert((entry.job.clone(), t), entry);
@@ -157,8 +204,8 @@ mod tests {
     #[test]
     fn squeue_lines_are_read_per_array_task() {
         let q = Queue::parse(
-            "17|1|repose-ab|PENDING\n17|0|repose-ab|RUNNING\n18|N/A|other|RUNNING\n\n\
-             19|3|repose-cd|COMPLETING\n",
+            "17|1|repose-ab|PENDING|Resources\n17|0|repose-ab|RUNNING|None\n\
+             18|N/A|other|RUNNING|None\n\n19|3|repose-cd|COMPLETING|None\n",
         )
         .unwrap();
         assert_eq!(q.task("17", 0).unwrap().state(), QueueState::Running);
@@ -171,8 +218,31 @@ mod tests {
     }
 
     #[test]
+    fn reasons_that_never_clear_are_told_from_waiting_ones() {
+        let q = Queue::parse(
+            "20|0|r|PENDING|PartitionConfig\n20|1|r|PENDING|Resources\n\
+             20|2|r|PENDING|ReqNodeNotAvail, UnavailableNodes:n1\n20|3|r|RUNNING|None\n",
+        )
+        .unwrap();
+        assert!(q
+            .task("20", 0)
+            .unwrap()
+            .never_starts()
+            .unwrap()
+            .contains("partition"));
+        assert_eq!(q.task("20", 1).unwrap().never_starts(), None);
+        assert!(q.task("20", 2).unwrap().never_starts().is_some());
+        assert_eq!(q.task("20", 3).unwrap().never_starts(), None);
+    }
+
+    #[test]
     fn unexpected_squeue_output_is_an_error() {
-        assert!(Queue::parse("17|x|n|PENDING").unwrap_err().contains("`x`"));
+        assert!(Queue::parse("17|x|n|PENDING|None")
+            .unwrap_err()
+            .contains("`x`"));
+        assert!(Queue::parse("17|1|n|PENDING")
+            .unwrap_err()
+            .contains("PENDING"));
         assert!(Queue::parse("garbage").unwrap_err().contains("garbage"));
     }
 }

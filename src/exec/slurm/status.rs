@@ -7,7 +7,7 @@
 //! |---|---|
 //! | done | the store holds its sealed result |
 //! | running | an array task of it is allocated (running, starting, completing) |
-//! | queued | an array task of it waits in the queue (resources, throttle, hold) |
+//! | queued | an array task of it waits in the queue; the note gives Slurm's pending reason (resources, throttle, hold, or one that never clears, e.g. `PartitionConfig`) |
 //! | failed | not in the queue; its `error.json` says why (resubmitted only when asked) |
 //! | pending | not in the queue and no outcome: never submitted (a `--dry-run` script), or its task was cancelled or lost; the next stage run submits it |
 //!
@@ -21,7 +21,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use super::ledger::Ledger;
-use super::queue::{self, QueueState};
+use super::queue::{self, QueueEntry, QueueState};
 use super::{adopt_named_jobs, in_flight, last_task, ExecError};
 use crate::manifest::{ContentId, Experiment};
 use crate::store::{Depth, RunState, Store};
@@ -79,7 +79,7 @@ pub struct RunRow {
     pub task: Option<usize>,
     /// The submission that holds that task.
     pub submission: u32,
-    /// The error of a failed run; why a pending one is pending.
+    /// The error of a failed run; why a pending or queued one waits.
     pub note: Option<String>,
 }
 
@@ -121,8 +121,10 @@ pub fn status(store: &Store, dir: PathBuf) -> Result<StatusReport, ExecError> {
             let last = last_task(&submissions, id);
             let (state, note) = match (store.check(id, Depth::Sizes), flying.get(id)) {
                 (RunState::Complete(_), _) => (TaskState::Done, None),
-                (_, Some((_, _, QueueState::Queued))) => (TaskState::Queued, None),
-                (_, Some((_, _, QueueState::Running))) => (TaskState::Running, None),
+                (_, Some(f)) if f.entry.state() == QueueState::Queued => {
+                    (TaskState::Queued, Some(queued_note(&f.entry)))
+                }
+                (_, Some(_)) => (TaskState::Running, None),
                 (RunState::Failed, _) => {
                     (TaskState::Failed, Some(super::failure_message(store, id)))
                 }
@@ -137,8 +139,8 @@ pub fn status(store: &Store, dir: PathBuf) -> Result<StatusReport, ExecError> {
             // A queued or running run names the task in the queue; any other
             // the last task that held it.
             let (job, task) = match (state, flying.get(id)) {
-                (TaskState::Queued | TaskState::Running, Some((job, task, _))) => {
-                    (Some(job.clone()), Some(*task))
+                (TaskState::Queued | TaskState::Running, Some(f)) => {
+                    (Some(f.job.clone()), Some(f.task))
                 }
                 _ => last.unzip(),
             };
@@ -168,6 +170,19 @@ pub fn status(store: &Store, dir: PathBuf) -> Result<StatusReport, ExecError> {
         counts,
         runs,
     })
+}
+
+/// Why a queued run waits: Slurm's pending reason, and for one that waiting
+/// does not clear, what it means.
+fn queued_note(entry: &QueueEntry) -> String {
+    match entry.never_starts() {
+        Some(why) => format!(
+            "Slurm: {} — can never start: {why}; `scancel {}` and submit again with a request \
+             that fits",
+            entry.reason, entry.job
+        ),
+        None => format!("Slurm: {}", entry.reason),
+    }
 }
 
 impl StatusReport {
