@@ -1265,12 +1265,18 @@ pub fn stages(
 
 /// `repose status STUDY`: where every run the study handed to Slurm stands
 /// (see [`crate::exec::slurm::status`]); a table, or with `json` one object.
+/// For an experiment manifest, the same for its noise floor (`repose noise
+/// MANIFEST --seeds N`) and its tradeoff sweep (default output directory),
+/// each that has a ledger (JSON: `{"noise": …, "tradeoff": …}`).
 pub fn status(
     store_root: &Path,
     study_path: &Path,
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
+    if let Ok(Document::Experiment(base)) = read_document(study_path, None) {
+        return status_of_manifest(store_root, &base, json, out);
+    }
     let dir = if is_design_study_file(study_path) {
         let (study, _) = open_design_study(store_root, study_path)?;
         study::dir::StudyDir::path_in(store_root, &study)
@@ -1280,17 +1286,63 @@ pub fn status(
     let store = open_store(store_root)?;
     let report = crate::exec::slurm::status::status(&store, dir.join("slurm"))?;
     if json {
-        print_json(&report, out)
-    } else {
-        write!(out, "{}", report.text())?;
-        if report.runs.is_empty() {
-            writeln!(
-                out,
-                "(nothing submitted to Slurm yet: run a stage with --executor slurm)"
-            )?;
-        }
-        Ok(())
+        return print_json(&report, out);
     }
+    write_status(&report, out)
+}
+
+/// `repose status MANIFEST`: the Slurm ledgers of the manifest's noise floor
+/// and tradeoff sweep.
+fn status_of_manifest(
+    store_root: &Path,
+    base: &Experiment,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let store = open_store(store_root)?;
+    let ledgers = [
+        ("noise", store_root.join("noise").join(base.id().short(12))),
+        ("tradeoff", tradeoff_sweep::default_dir(&store, base)),
+    ];
+    let mut reports = serde_json::Map::new();
+    for (what, dir) in ledgers {
+        let slurm = dir.join("slurm");
+        let report = if slurm.is_dir() {
+            Some(crate::exec::slurm::status::status(&store, slurm)?)
+        } else {
+            None
+        };
+        if !json {
+            writeln!(out, "{what} of experiment {}:", base.id().short(12))?;
+            match &report {
+                Some(r) => write_status(r, out)?,
+                None => writeln!(out, "  (nothing submitted to Slurm)")?,
+            }
+        }
+        reports.insert(
+            what.to_string(),
+            serde_json::to_value(&report).map_err(io::Error::from)?,
+        );
+    }
+    if json {
+        print_json(&reports, out)?;
+    }
+    Ok(())
+}
+
+/// A status report as text.
+fn write_status(
+    report: &crate::exec::slurm::status::StatusReport,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    write!(out, "{}", report.text())?;
+    if report.runs.is_empty() {
+        writeln!(
+            out,
+            "(nothing submitted to Slurm yet: run a stage with --executor slurm)"
+        )?;
+    }
+    Ok(())
 }
 
 /// How an executor runs, for stage headings: `N at a time` or `on Slurm`.

@@ -281,11 +281,13 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Where every run a study handed to Slurm stands: pending, queued,
-    /// running, done or failed, with its Slurm job and array task (from
-    /// squeue and the store).
+    /// Where every run a study handed to Slurm stands: pending, queued
+    /// (with Slurm's reason), running, done or failed, with its Slurm job and
+    /// array task (from squeue and the store; from the store alone when
+    /// squeue cannot be asked). For an experiment manifest: its noise floor's
+    /// and tradeoff sweep's runs.
     Status {
-        /// Study manifest (he2019 or design study).
+        /// Study manifest (he2019 or design study), or an experiment manifest.
         study: PathBuf,
         /// Print one JSON object (counts and one entry per run).
         #[arg(long)]
@@ -365,6 +367,11 @@ impl ExecArgs {
         limits: Limits,
         max_runs: u64,
     ) -> Result<Executor, CommandError> {
+        if jobs == 0 {
+            return Err(CommandError::Usage(
+                "--jobs = 0: must be >= 1 (runs at once)".to_string(),
+            ));
+        }
         let slurm_only = [
             ("--partition", self.partition.is_some()),
             ("--time-limit", self.time_limit.is_some()),

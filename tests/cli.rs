@@ -318,3 +318,52 @@ fn a_poll_interval_past_a_day_is_refused() {
         );
     }
 }
+
+/// Issue 40, low items: a knob value NaN or infinite is refused naming it
+/// (the message used to print `null` after a JSON error), a huge one is
+/// printed short (1e308 used to print 309 digits), and `--jobs 0` (or its
+/// old name `--threads 0`) is refused before the sweep is planned.
+#[test]
+fn tradeoff_values_must_be_finite_and_jobs_at_least_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = "experiments/drum/smoke.json";
+    for (values, expected) in [
+        (
+            "rayleigh_fraction=NaN,0.2",
+            "knob `rayleigh_fraction` = NaN: must be a finite number",
+        ),
+        (
+            "rayleigh_fraction=0.1,inf",
+            "knob `rayleigh_fraction` = inf: must be a finite number",
+        ),
+        (
+            "rayleigh_fraction=0.1,1e308",
+            "knob `rayleigh_fraction` = 1e308: time_step.rayleigh_fraction",
+        ),
+    ] {
+        let out = repose(
+            tmp.path(),
+            &[
+                "tradeoff",
+                m,
+                "--knobs",
+                "rayleigh_fraction",
+                "--values",
+                values,
+            ],
+        );
+        assert_eq!(out.status.code(), Some(2), "{values}: {}", stderr(&out));
+        assert!(stderr(&out).contains(expected), "{}", stderr(&out));
+        assert!(stderr(&out).len() < 400, "{}", stderr(&out));
+    }
+    for flag in ["--jobs", "--threads"] {
+        let out = repose(tmp.path(), &["tradeoff", m, flag, "0"]);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        assert!(
+            stderr(&out).contains("--jobs = 0: must be >= 1"),
+            "{}",
+            stderr(&out)
+        );
+        assert!(stdout(&out).is_empty(), "{}", stdout(&out));
+    }
+}

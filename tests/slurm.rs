@@ -371,6 +371,85 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
         report.contains("(2 runs, 0 failed)") && report.contains("| 2/2 |"),
         "{report}"
     );
+    // `status MANIFEST` reads the noise floor's ledger (its exit-3 message
+    // points there).
+    let out = repose(&slurm, &store, &["status", manifest, "--json"]);
+    expect_code(&out, 0);
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["noise"]["counts"]["done"], 2, "{v}");
+    assert!(v["tradeoff"].is_null(), "{v}");
+
+    // Without squeue, `status` and a batch with nothing to run answer from
+    // the store; a damaged run reads as such, not as lost.
+    let no_slurm = |args: &[&str]| {
+        repose_command(&cluster, args)
+            .env("SLURM_CONF", tmp.path().join("no-such-slurm.conf"))
+            .output()
+            .unwrap()
+    };
+    expect_code(&no_slurm(&["batch", study, "--executor", "slurm"]), 0);
+    let out = no_slurm(&["status", study, "--json"]);
+    expect_code(&out, 0);
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["counts"]["done"], 12, "{v}");
+    assert!(v["squeue_error"].as_str().is_some(), "{v}");
+    let damaged = v["runs"][0]["id"].as_str().unwrap().to_string();
+    let result = cluster.join(&damaged).join("result.json");
+    let mut bytes = std::fs::read(&result).unwrap();
+    bytes.push(b' ');
+    std::fs::write(&result, bytes).unwrap();
+    let v = status(&slurm, &cluster, study);
+    let row = v["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["id"] == damaged.as_str())
+        .unwrap();
+    assert_eq!(row["state"], "pending", "{row}");
+    assert!(
+        row["note"].as_str().unwrap().starts_with("damaged"),
+        "{row}"
+    );
+
+    // sbatch refusing the options (a partition that does not exist) is an
+    // error in the options (exit 2) and leaves no submission without a job.
+    let store = tmp.path().join("refused-store");
+    expect_code(&repose(&slurm, &store, &["sample", study]), 0);
+    let out = batch_on_slurm(&slurm, &store, study, &["--partition", "nosuch"]);
+    expect_code(&out, 2);
+    assert!(
+        text(&out.stderr).contains("sbatch refused"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert_eq!(submissions(&slurm_dir(&store)), 0);
+
+    // Two clients at once submit each run once: the second waits for the
+    // first's submission and then waits for its tasks.
+    let store = tmp.path().join("two-clients-store");
+    expect_code(&repose(&slurm, &store, &["sample", study]), 0);
+    let client = || {
+        repose_command(
+            &store,
+            &[
+                "batch",
+                study,
+                "--executor",
+                "slurm",
+                "--poll-seconds",
+                "0.5",
+            ],
+        )
+        .env("SLURM_CONF", &slurm.conf)
+        .spawn()
+        .unwrap()
+    };
+    let (a, b) = (client(), client());
+    for c in [a, b] {
+        expect_code(&c.wait_with_output().unwrap(), 0);
+    }
+    let dir = slurm_dir(&store);
+    assert_eq!(submissions(&dir), 1, "the second client submitted again");
 
     // A request no node of the partition can hold (64 CPUs per task on this
     // 2-CPU node) pends with reason PartitionConfig: the client stops
@@ -424,6 +503,14 @@ fn slurm_options_need_the_slurm_executor() {
         (
             vec!["--executor", "slurm", "--max-running", "0"],
             "--max-running = 0: must be >= 1",
+        ),
+        (
+            vec!["--executor", "slurm", "--time-limit", "banana", "--dry-run"],
+            "--time-limit `banana`: not a Slurm time",
+        ),
+        (
+            vec!["--executor", "slurm", "--mem", "4.5G", "--dry-run"],
+            "--mem `4.5G`: not a Slurm memory size",
         ),
     ] {
         let mut all = vec!["batch", study];

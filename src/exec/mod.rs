@@ -255,6 +255,9 @@ where
     let cached = experiments.len() - pending.len();
     let mut progress = BatchProgress::new(settings.progress, experiments.len(), cached);
     let failures = match &settings.slurm {
+        // Nothing to run: no executor is asked (a batch whose runs are all
+        // stored answers from the store even when squeue is unreachable).
+        _ if pending.is_empty() => Vec::new(),
         Some(slurm) => slurm::run(&pending, experiments, store, settings, slurm, &mut progress)?,
         None => run_pending(
             &pending,

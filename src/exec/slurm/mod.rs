@@ -7,7 +7,8 @@
 //!    earlier submission of this study ([`ledger`]) and leaves those alone;
 //! 2. leaves a run that failed (its `error.json`) alone too, unless
 //!    [`SlurmSettings::resubmit_failed`], and reports its error;
-//! 3. writes the rest — their manifests, a task list and a job script
+//! 3. holding the ledger's claim (a second client waits, then finds these
+//!    tasks queued), writes the rest — their manifests, a task list and a job script
 //!    ([`script`]) — into the study's `slurm/` directory and submits one
 //!    `sbatch --array=0-(K-1)%M` (or, with `dry_run`, stops there and says
 //!    how to submit it by hand);
@@ -131,6 +132,23 @@ impl SlurmSettings {
         if self.program.trim().is_empty() {
             return bad("--program is empty: name the repose binary tasks run".to_string());
         }
+        if let Some(t) = &self.time_limit {
+            if !valid_time_limit(t) {
+                return bad(format!(
+                    "--time-limit `{t}`: not a Slurm time (MINUTES, MINUTES:SECONDS, \
+                     HOURS:MINUTES:SECONDS, DAYS-HOURS, DAYS-HOURS:MINUTES, \
+                     DAYS-HOURS:MINUTES:SECONDS or UNLIMITED)"
+                ));
+            }
+        }
+        if let Some(m) = &self.mem {
+            if !valid_memory(m) {
+                return bad(format!(
+                    "--mem `{m}`: not a Slurm memory size (a whole number with an optional \
+                     unit K, M, G or T, e.g. 4G)"
+                ));
+            }
+        }
         for line in &self.extra {
             if line.contains('\n') {
                 return bad(format!("--sbatch `{line}`: one #SBATCH line per flag"));
@@ -147,6 +165,28 @@ impl SlurmSettings {
             Some(format!("export PATH={}:\"$PATH\"", script::quote(&dir)))
         })
     }
+}
+
+/// Whether `t` is one of sbatch's `--time` formats: `M`, `M:S`, `H:M:S`,
+/// `D-H`, `D-H:M`, `D-H:M:S` (whole numbers), or `UNLIMITED`/`INFINITE`.
+fn valid_time_limit(t: &str) -> bool {
+    let number = |p: &str| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit());
+    if t.eq_ignore_ascii_case("unlimited") || t.eq_ignore_ascii_case("infinite") {
+        return true;
+    }
+    let (days, rest) = match t.split_once('-') {
+        Some((d, r)) => (Some(d), r),
+        None => (None, t),
+    };
+    let parts: Vec<&str> = rest.split(':').collect();
+    days.is_none_or(number) && parts.len() <= 3 && parts.iter().all(|p| number(p))
+}
+
+/// Whether `m` is a `--mem` size: a whole number with an optional unit
+/// `K`, `M`, `G` or `T` (either case).
+fn valid_memory(m: &str) -> bool {
+    let digits = m.trim_end_matches(|c: char| "KMGTkmgt".contains(c));
+    m.len() - digits.len() <= 1 && !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit())
 }
 
 /// The ledger of `settings` for a store.
@@ -312,6 +352,10 @@ pub(super) fn run(
 ) -> Result<Vec<(usize, String)>, ExecError> {
     settings.check()?;
     let ledger = ledger_of(settings, store);
+    // One client at a time decides and submits for this ledger: a second
+    // client waits here, then finds the first one's tasks in the queue (or
+    // done) instead of submitting them again. The claim ends before the wait.
+    let claim = claim_ledger(&ledger)?;
     let mut submissions = ledger.submissions()?;
     let queue = match queue::snapshot() {
         Ok(q) => q,
@@ -332,14 +376,17 @@ pub(super) fn run(
     for (id, at) in &positions {
         if flying.contains_key(id) {
             waiting.insert(id.clone());
-        } else if matches!(store.check(id, Depth::Sizes), RunState::Failed)
-            && !settings.resubmit_failed
-        {
-            progress.finished_one(true);
-            let m = failure_message(store, id);
-            failures.extend(at.iter().map(|&i| (i, m.clone())));
-        } else {
-            to_submit.push(at[0]);
+            continue;
+        }
+        match store.check(id, Depth::Sizes) {
+            // Finished since the caller looked (another client's task).
+            RunState::Complete(_) => progress.finished_one(false),
+            RunState::Failed if !settings.resubmit_failed => {
+                progress.finished_one(true);
+                let m = failure_message(store, id);
+                failures.extend(at.iter().map(|&i| (i, m.clone())));
+            }
+            _ => to_submit.push(at[0]),
         }
     }
     for chunk in to_submit.chunks(MAX_ARRAY_TASKS) {
@@ -354,6 +401,7 @@ pub(super) fn run(
         waiting.extend(submitted.ids.iter().cloned());
         submissions.push(submitted);
     }
+    drop(claim);
     if !settings.wait && !waiting.is_empty() {
         let jobs: BTreeSet<String> = in_flight(&submissions, &queue::snapshot()?)
             .into_values()
@@ -395,6 +443,21 @@ enum Left {
     /// The task ended without a result or an error (cancelled, out of time
     /// or memory, its script failed): the run is resubmitted next time.
     Lost(String),
+}
+
+/// Claims the ledger's directory (creating it) for the submission phase
+/// of [`run`], saying on stderr when another client holds it.
+fn claim_ledger(ledger: &Ledger) -> Result<crate::store::claim::Claim, ExecError> {
+    let dir = ledger.dir();
+    std::fs::create_dir_all(dir)
+        .map_err(|e| ExecError::Slurm(format!("{}: {e}", dir.display())))?;
+    crate::store::claim::claim(dir, || {
+        eprintln!(
+            "note: another repose is submitting from {}; waiting for it",
+            dir.display()
+        )
+    })
+    .map_err(|e| ExecError::Slurm(format!("{}: {e}", dir.display())))
 }
 
 /// Writes the manifests, task list, job script and record of a new
@@ -464,9 +527,24 @@ fn job_name(dir: &Path, number: u32) -> String {
     format!("repose-{}-{number}", id.short(12))
 }
 
-/// Submits a prepared submission and records its job id.
+/// Submits a prepared submission and records its job id. When sbatch
+/// refuses it (no job exists), the submission's directory is removed, so
+/// no record without a job is left behind, and the refusal is an error in
+/// the options (exit 2) quoting sbatch.
 fn submit(ledger: &Ledger, mut s: Submission) -> Result<Submission, ExecError> {
-    let job = queue::submit(&ledger.submission_dir(s.number).join("job.sh"))?;
+    let dir = ledger.submission_dir(s.number);
+    let job = match queue::submit(&dir.join("job.sh")) {
+        Ok(job) => job,
+        Err(queue::Submitted::Failed(e)) => return Err(e),
+        Err(queue::Submitted::Refused(message)) => {
+            std::fs::remove_dir_all(&dir)
+                .map_err(|e| ExecError::Slurm(format!("{}: {e}", dir.display())))?;
+            return Err(ExecError::Settings(format!(
+                "sbatch refused the job (check --partition, --mem, --time-limit, --account, \
+                 --cpus-per-task, --sbatch): {message}"
+            )));
+        }
+    };
     s.job_id = Some(job);
     ledger.record(&s)?;
     Ok(s)
@@ -540,6 +618,48 @@ mod tests {
     use super::*;
     use crate::manifest::parse_experiment;
     use crate::store::{RunDir, RunResult};
+
+    #[test]
+    fn time_limits_and_memory_sizes_are_read_as_sbatch_reads_them() {
+        for t in [
+            "30",
+            "30:00",
+            "2:00:00",
+            "2-0",
+            "2-12:30",
+            "2-12:30:00",
+            "UNLIMITED",
+        ] {
+            assert!(valid_time_limit(t), "{t}");
+        }
+        for t in [
+            "banana",
+            "",
+            "1:2:3:4",
+            "2-",
+            "-5",
+            "1.5",
+            "2-1:2:3:4",
+            "1h",
+        ] {
+            assert!(!valid_time_limit(t), "{t}");
+        }
+        for m in ["4000", "4G", "512m", "1T"] {
+            assert!(valid_memory(m), "{m}");
+        }
+        for m in ["", "G", "4GB", "4.5G", "lots", "-1G"] {
+            assert!(!valid_memory(m), "{m}");
+        }
+        let bad = SlurmSettings {
+            time_limit: Some("banana".to_string()),
+            ..SlurmSettings::default()
+        };
+        assert!(bad
+            .check()
+            .unwrap_err()
+            .to_string()
+            .contains("--time-limit `banana`"));
+    }
 
     #[derive(Debug, thiserror::Error)]
     #[error("pile angle: not measurable")]

@@ -156,12 +156,26 @@ pub fn snapshot() -> Result<Queue, ExecError> {
     Queue::parse(&text).map_err(ExecError::Slurm)
 }
 
-/// Submits `script` with `sbatch --parsable`; returns the job id.
-pub fn submit(script: &Path) -> Result<String, ExecError> {
-    let text = command_output(
-        "sbatch",
-        Command::new("sbatch").arg("--parsable").arg(script),
-    )?;
+/// Submits `script` with `sbatch --parsable`; returns the job id. sbatch
+/// exiting non-zero is [`Submitted::Refused`] with its message: no job
+/// exists then, so the caller may forget the submission.
+pub fn submit(script: &Path) -> Result<String, Submitted> {
+    let output = Command::new("sbatch")
+        .arg("--parsable")
+        .arg(script)
+        .output()
+        .map_err(|e| {
+            Submitted::Failed(ExecError::Slurm(format!(
+                "cannot run `sbatch` ({e}): is Slurm's client installed and on PATH? \
+                 (scripts/slurm-local.sh up starts a one-node Slurm here)"
+            )))
+        })?;
+    if !output.status.success() {
+        return Err(Submitted::Refused(
+            String::from_utf8_lossy(&output.stderr).trim().to_string(),
+        ));
+    }
+    let text = String::from_utf8_lossy(&output.stdout).into_owned();
     // `--parsable` prints `<job id>` or `<job id>;<cluster>`.
     let id = text
         .trim()
@@ -170,12 +184,22 @@ pub fn submit(script: &Path) -> Result<String, ExecError> {
         .unwrap_or_default()
         .to_string();
     if id.is_empty() || !id.bytes().all(|b| b.is_ascii_digit()) {
-        return Err(ExecError::Slurm(format!(
+        return Err(Submitted::Failed(ExecError::Slurm(format!(
             "sbatch printed `{}`, not a job id",
             text.trim()
-        )));
+        ))));
     }
     Ok(id)
+}
+
+/// Why [`submit`] has no job id.
+#[derive(Debug)]
+pub enum Submitted {
+    /// sbatch exited non-zero (bad options, a partition that does not
+    /// exist, more memory than a node has): no job was made. Its stderr.
+    Refused(String),
+    /// sbatch could not be run, or printed no job id (a job may exist).
+    Failed(ExecError),
 }
 
 /// Runs `command` and returns its stdout; an error names the program and

@@ -9,7 +9,10 @@
 //! | running | an array task of it is allocated (running, starting, completing) |
 //! | queued | an array task of it waits in the queue; the note gives Slurm's pending reason (resources, throttle, hold, or one that never clears, e.g. `PartitionConfig`) |
 //! | failed | not in the queue; its `error.json` says why (resubmitted only when asked) |
-//! | pending | not in the queue and no outcome: never submitted (a `--dry-run` script), or its task was cancelled or lost; the next stage run submits it |
+//! | pending | not in the queue and no sound outcome: never submitted (a `--dry-run` script), its task was cancelled or lost, or its files no longer match their seal (damaged); the next stage run submits it |
+//!
+//! When `squeue` cannot be asked, the report comes from the store alone and
+//! says so (`squeue_error`): runs with no outcome read as pending.
 //!
 //! Nothing is written: a submission recorded without a job id (a killed
 //! client, a script submitted by hand) is matched to the queue by its job
@@ -90,6 +93,10 @@ pub struct StatusReport {
     pub dir: PathBuf,
     /// How many sbatch submissions it made.
     pub submissions: usize,
+    /// Why squeue could not be asked, when it could not (the states then
+    /// come from the store alone).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub squeue_error: Option<String>,
     /// Runs per state (every state present, zeros included).
     pub counts: BTreeMap<&'static str, usize>,
     /// One row per run.
@@ -100,10 +107,16 @@ pub struct StatusReport {
 pub fn status(store: &Store, dir: PathBuf) -> Result<StatusReport, ExecError> {
     let ledger = Ledger::new(&dir);
     let mut submissions = ledger.submissions()?;
-    let queue = if submissions.is_empty() {
-        Default::default()
+    // Without squeue (the controller down, or a machine without Slurm's
+    // client) the store still answers: runs not done or failed read as
+    // pending, and the report says why.
+    let (queue, squeue) = if submissions.is_empty() {
+        (Default::default(), None)
     } else {
-        queue::snapshot()?
+        match queue::snapshot() {
+            Ok(q) => (q, None),
+            Err(e) => (Default::default(), Some(e.to_string())),
+        }
     };
     adopt_named_jobs(&ledger, &mut submissions, &queue, false)?;
     let flying = in_flight(&submissions, &queue);
@@ -128,10 +141,19 @@ pub fn status(store: &Store, dir: PathBuf) -> Result<StatusReport, ExecError> {
                 (RunState::Failed, _) => {
                     (TaskState::Failed, Some(super::failure_message(store, id)))
                 }
+                (RunState::Damaged(how), None) => (
+                    TaskState::Pending,
+                    Some(format!(
+                        "damaged: {how}; the next stage run computes it again"
+                    )),
+                ),
                 (_, None) => {
-                    let note = match &last {
-                        None => "never submitted (a --dry-run script not yet submitted?)",
-                        Some(_) => "left the queue without a result (cancelled or lost)",
+                    let note = match (&last, &squeue) {
+                        (None, _) => "never submitted (a --dry-run script not yet submitted?)",
+                        (Some(_), Some(_)) => {
+                            "no result yet (squeue unreachable: queued, running or lost)"
+                        }
+                        (Some(_), None) => "left the queue without a result (cancelled or lost)",
                     };
                     (TaskState::Pending, Some(note.to_string()))
                 }
@@ -167,6 +189,7 @@ pub fn status(store: &Store, dir: PathBuf) -> Result<StatusReport, ExecError> {
     Ok(StatusReport {
         dir,
         submissions: submissions.len(),
+        squeue_error: squeue,
         counts,
         runs,
     })
@@ -198,6 +221,9 @@ impl StatusReport {
             out.push_str(&format!(" {} {}", s.name(), self.counts[s.name()]));
         }
         out.push('\n');
+        if let Some(e) = &self.squeue_error {
+            out.push_str(&format!("  (from the store only: {e})\n"));
+        }
         if !self.runs.is_empty() {
             out.push_str(&format!(
                 "\n{:<8} {:<12} {:<12} {:<14} {}\n",

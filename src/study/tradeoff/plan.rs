@@ -129,7 +129,7 @@ pub enum PlanError {
     },
     /// A knob value makes an invalid experiment (e.g. a step fraction above the
     /// stable limit): refused up front, never run.
-    #[error("knob `{knob}` = {value}: {errors}")]
+    #[error("knob `{knob}` = {value:?}: {errors}")]
     Invalid {
         /// The knob.
         knob: &'static str,
@@ -137,6 +137,15 @@ pub enum PlanError {
         value: f64,
         /// What validation said.
         errors: ValidationErrors,
+    },
+    /// A knob value is NaN or infinite (refused before any experiment is
+    /// built from it; written as Rust's `{:?}` prints it, `NaN`, `inf`).
+    #[error("knob `{knob}` = {value:?}: must be a finite number")]
+    NotFinite {
+        /// The knob.
+        knob: &'static str,
+        /// The value.
+        value: f64,
     },
     /// Replicates must be at least 2 for a confidence interval.
     #[error("replicates = {0}: must be at least 2 (a confidence interval needs two runs)")]
@@ -147,6 +156,14 @@ pub enum PlanError {
 pub fn plan(base: &Experiment, knobs: &[Knob], replicates: usize) -> Result<Vec<Point>, PlanError> {
     if replicates < 2 {
         return Err(PlanError::Replicates(replicates));
+    }
+    for knob in knobs {
+        if let Some(&value) = knob.values.iter().find(|v| !v.is_finite()) {
+            return Err(PlanError::NotFinite {
+                knob: knob.name,
+                value,
+            });
+        }
     }
     let mut reference = base.clone();
     for knob in knobs {
