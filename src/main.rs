@@ -668,9 +668,11 @@ impl RsmArgs {
                         hi.trim().parse::<f64>().ok()?,
                     ))
                 });
-                let Some((name, low, high)) = parsed.filter(|(_, lo, hi)| lo < hi) else {
+                let Some((name, low, high)) =
+                    parsed.filter(|(_, lo, hi)| lo.is_finite() && hi.is_finite() && lo < hi)
+                else {
                     return Err(format!(
-                        "--ranges `{spec}`: expected NAME=LOW:HIGH with LOW < HIGH"
+                        "--ranges `{spec}`: expected NAME=LOW:HIGH with finite LOW < HIGH"
                     ));
                 };
                 by_name.insert(name, repose::doe::Range { low, high });

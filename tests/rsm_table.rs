@@ -180,6 +180,53 @@ fn bad_table_options_name_what_is_wrong() {
     std::fs::write(&coded, text.replacen("A,B,C,D,y", "A,B,C,D,A", 1)).unwrap();
     let e = run(&["--factors", "A,B,C,D"]);
     assert!(e.contains(":1: column 5 repeats the header `A`"), "{e}");
+
+    // Issue 40 (low): ranges must be finite; a header-only, one-row or
+    // constant table is the input's fault (exit 2, naming the file or
+    // column), as `sensitivity --table` says; so is a missing file or a
+    // directory (they were exit 1).
+    std::fs::write(&coded, &text).unwrap();
+    let e = run(&["--factors", "A,B,C,D", "--ranges", "A=-inf:inf"]);
+    assert!(e.contains("--ranges `A=-inf:inf`"), "{e}");
+    let header = text.lines().next().unwrap().to_string();
+    std::fs::write(&coded, format!("{header}\n")).unwrap();
+    let e = run(&["--factors", "A,B,C,D"]);
+    assert!(e.contains("no data rows"), "{e}");
+    let first_row = text.lines().nth(1).unwrap();
+    std::fs::write(&coded, format!("{header}\n{first_row}\n")).unwrap();
+    let e = run(&["--factors", "A,B,C,D"]);
+    assert!(e.contains("1 observations are too few"), "{e}");
+    let constant: Vec<String> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match i {
+            0 => l.to_string(),
+            _ => format!("{},7.5", &l[..l.rfind(',').unwrap()]),
+        })
+        .collect();
+    std::fs::write(&coded, constant.join("\n")).unwrap();
+    let e = run(&["--factors", "A,B,C,D"]);
+    assert!(e.contains("column `y` is 7.5 in every one of its"), "{e}");
+    for missing in [tmp.path().join("nope.csv"), tmp.path().to_path_buf()] {
+        let o = common::repose(
+            tmp.path(),
+            &[
+                "rsm",
+                "--table",
+                missing.to_str().unwrap(),
+                "--response",
+                "y",
+                "--factors",
+                "A",
+            ],
+        );
+        assert_eq!(o.status.code(), Some(2), "{}", common::stderr(&o));
+        assert!(
+            common::stderr(&o).contains("cannot read"),
+            "{}",
+            common::stderr(&o)
+        );
+    }
 }
 
 #[test]

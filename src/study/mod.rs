@@ -127,7 +127,15 @@ impl StudyError {
             StudyError::Inconsistent { .. } | StudyError::NothingKept(_) => false,
             StudyError::Exec(e) => e.is_invalid_input(),
             StudyError::Analysis { .. } | StudyError::Plot(_) => false,
-            StudyError::Table(e) => !matches!(e, crate::report::table::TableError::Io { .. }),
+            // A file that is not there, a directory or not text is the
+            // caller's (`--table FILE`); other read failures are the machine's.
+            StudyError::Table(crate::report::table::TableError::Io { source, .. }) => matches!(
+                source.kind(),
+                std::io::ErrorKind::NotFound
+                    | std::io::ErrorKind::IsADirectory
+                    | std::io::ErrorKind::InvalidData
+            ),
+            StudyError::Table(_) => true,
             StudyError::Store(e) => e.is_invalid_input(),
         }
     }

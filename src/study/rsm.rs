@@ -783,8 +783,18 @@ pub struct TableSpec {
 
 /// `repose rsm --table`: the same analysis on any CSV table (rows with an
 /// empty response are skipped and counted as missing).
+///
+/// The table is the user's input, so what makes it unanalysable — no data
+/// rows, a constant response, too few rows for the model — is an error in
+/// the input ([`StudyError::Settings`], exit 2) naming the file and column.
 pub fn analyse_table(path: &Path, spec: &TableSpec) -> Result<ResponseAnalysis, StudyError> {
     let table = Table::read(path)?;
+    if table.rows.is_empty() {
+        return Err(StudyError::Settings(format!(
+            "{}: no data rows (only a header)",
+            path.display()
+        )));
+    }
     let columns = spec
         .factors
         .iter()
@@ -823,7 +833,22 @@ pub fn analyse_table(path: &Path, spec: &TableSpec) -> Result<ResponseAnalysis, 
             None => missing += 1,
         }
     }
-    analyse(&spec.response, &x, &y, &spec.factors, &ranges, missing)
+    if let Some(first) = y
+        .first()
+        .filter(|&&f| y.len() > 1 && y.iter().all(|&v| v == f))
+    {
+        return Err(StudyError::Settings(format!(
+            "{}: column `{}` is {first} in every one of its {} measured rows: a constant \
+             response has nothing for a model to fit",
+            path.display(),
+            spec.response,
+            y.len()
+        )));
+    }
+    analyse(&spec.response, &x, &y, &spec.factors, &ranges, missing).map_err(|e| match e {
+        StudyError::Analysis { .. } => StudyError::Settings(format!("{}: {e}", path.display())),
+        other => other,
+    })
 }
 
 /// Markdown of a table analysis (the ANOVA, fit statistics and model).
