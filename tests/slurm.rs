@@ -274,6 +274,27 @@ fn a_study_on_slurm_matches_the_local_pool_and_status_follows_every_state() {
     }
     let table = |store: &Path| std::fs::read(slurm_dir(store).with_file_name("batch/angles.csv"));
     assert_eq!(table(&local).unwrap(), table(&cluster).unwrap());
+    // The whole study tree (every stage output and lineage record) is the
+    // same whichever executor ran it; only the Slurm ledger is extra
+    // (issue 40, item 5).
+    let tree = |store: &Path| -> Vec<(PathBuf, Vec<u8>)> {
+        common::snapshot(slurm_dir(store).parent().unwrap())
+            .into_iter()
+            .filter(|(p, _)| !p.starts_with("slurm"))
+            .collect()
+    };
+    let (a, b) = (tree(&local), tree(&cluster));
+    assert_eq!(
+        a.iter().map(|(p, _)| p).collect::<Vec<_>>(),
+        b.iter().map(|(p, _)| p).collect::<Vec<_>>()
+    );
+    for ((path, x), (_, y)) in a.iter().zip(&b) {
+        assert!(
+            x == y,
+            "{} differs between the local pool and Slurm",
+            path.display()
+        );
+    }
     eprintln!(
         "smoke study: local pool + Slurm scenario in {:.1} s",
         started.elapsed().as_secs_f64()
