@@ -508,8 +508,11 @@ impl Store {
                     .into());
                 }
                 if let Some(defect) = result.defect() {
-                    self.record_error(&id, &defect, Vec::new())?;
-                    return Err(RunError::BadResult(defect));
+                    // error.json holds the message a local caller sees, so a
+                    // Slurm client reading it back reports the same words.
+                    let error = RunError::BadResult(defect);
+                    self.record_error(&id, &error.to_string(), Vec::new())?;
+                    return Err(error);
                 }
                 self.write_json(&dir.timing_path(), &TimingRecord { wall_time_s })?;
                 self.write_json(&dir.result_path(), &result)?;

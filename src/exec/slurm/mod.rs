@@ -691,4 +691,27 @@ mod tests {
         );
         assert!(!read_back.contains(&tmp.path().display().to_string()));
     }
+
+    /// A result the store cannot keep (a non-finite measurement) reads back
+    /// from error.json as the local run reports it (issue 40, item 5).
+    #[test]
+    fn an_unusable_result_reads_back_as_the_local_message() {
+        let text = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/drum/smoke.json"),
+        )
+        .unwrap();
+        let e = parse_experiment(&text).unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let store = Store::open(tmp.path()).unwrap();
+        let runner = |e: &Experiment, _: &RunDir| -> Result<RunResult, Outer> {
+            let mut r = RunResult::new(e, "fake");
+            r.measurements.insert("peak_force_n".into(), f64::NAN);
+            Ok(r)
+        };
+        let local = crate::errors::chain(&store.run_cached(&e, runner).unwrap_err());
+        assert_eq!(failure_message(&store, &e.id()), local);
+        assert!(
+            local.starts_with("the run produced an unusable result: measurement `peak_force_n`")
+        );
+    }
 }
