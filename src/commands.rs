@@ -747,11 +747,28 @@ fn open_sized_study(
     Ok((study, dir))
 }
 
-/// The study and its output directory in the store.
+/// The study and its output directory in the store (its killed writers'
+/// leftover temp files removed, [`sweep_old_temps`]).
 fn open_study(store_root: &Path, path: &Path) -> Result<(Study, StudyDir), CommandError> {
     let study = read_study(path)?;
     let dir = StudyDir::new(store_root, &study, path);
+    sweep_old_temps(dir.path())?;
     Ok((study, dir))
+}
+
+/// Removes the temp files a killed process left in a study's tree (older
+/// than [`crate::store::STALE_TEMP_AGE`]: a fresh one may be another
+/// client's write in progress), saying how many on stderr.
+fn sweep_old_temps(dir: &Path) -> Result<(), CommandError> {
+    let removed = crate::store::remove_old_temps(dir, crate::store::STALE_TEMP_AGE)
+        .map_err(StoreError::io(dir))?;
+    if removed > 0 {
+        eprintln!(
+            "note: removed {removed} temp file(s) a killed run left in {}",
+            dir.display()
+        );
+    }
+    Ok(())
 }
 
 /// Prints design diagnostics to `out` and their warnings to `err`.
@@ -1389,6 +1406,7 @@ fn open_design_study(store_root: &Path, path: &Path) -> Result<(DesignStudy, Sto
     }
     let study = parse_design_study(&text).map_err(manifest_error(path))?;
     let store = open_store(store_root)?;
+    sweep_old_temps(&study::dir::StudyDir::path_in(store_root, &study))?;
     set_quiet(true);
     Ok((study, store))
 }

@@ -282,3 +282,52 @@ fn a_full_disk_names_its_cause_once_and_leaves_nothing_complete() {
     assert!(!files.iter().any(|f| f.starts_with(".tmp-")), "{files:?}");
     assert!(files.contains(&"error.json") && text.contains("No space left on device"));
 }
+
+/// Issue 40, low item: temp files a killed process left in a study's
+/// directories were never removed. The next command that opens the study
+/// removes those older than ten minutes (an atomic write lives for
+/// milliseconds) and leaves a fresh one, which may be another client's
+/// write in progress.
+#[test]
+fn a_killed_writers_old_temp_files_in_a_study_are_removed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = "experiments/calibrate-smoke/study.json";
+    let out = common::repose(tmp.path(), &["sample", study]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let studies = tmp.path().join("studies");
+    let dir = std::fs::read_dir(&studies)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let stage = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.is_dir())
+        .unwrap();
+    let old = stage.join(".tmp-design.csv-4242-0");
+    let fresh = stage.join(".tmp-design.csv-4242-1");
+    for p in [&old, &fresh] {
+        std::fs::write(p, b"half a table").unwrap();
+    }
+    let hour_ago = std::time::SystemTime::now() - std::time::Duration::from_secs(3600);
+    std::fs::File::options()
+        .write(true)
+        .open(&old)
+        .unwrap()
+        .set_modified(hour_ago)
+        .unwrap();
+    let out = common::repose(tmp.path(), &["sample", study]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    assert!(
+        !old.exists(),
+        "the killed writer's temp file is still there"
+    );
+    assert!(fresh.exists(), "a fresh temp file was removed");
+    assert!(
+        common::stderr(&out).contains("removed 1 temp file(s)"),
+        "{}",
+        common::stderr(&out)
+    );
+}

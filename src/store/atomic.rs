@@ -114,6 +114,49 @@ pub fn remove_stale_temps(dir: &Path) -> io::Result<usize> {
     Ok(removed)
 }
 
+/// How old a temp file must be before [`remove_old_temps`] takes it for a
+/// killed writer's leftover: an atomic write of a stage output lives for
+/// milliseconds (write, fsync, rename), so ten minutes is far beyond any
+/// live one, on this machine or another sharing the file system.
+pub const STALE_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(600);
+
+/// Removes every temp file ([`TEMP_PREFIX`]) in the tree under `dir` last
+/// modified at least `min_age` ago, and returns how many it removed. For
+/// directories without a claim (a study's stage outputs), where a fresh temp
+/// may be another client's write in progress; a missing `dir` removes
+/// nothing.
+pub fn remove_old_temps(dir: &Path, min_age: std::time::Duration) -> io::Result<usize> {
+    let mut removed = 0;
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let entries = match fs::read_dir(&d) {
+            Ok(e) => e,
+            Err(e) if e.kind() == io::ErrorKind::NotFound => continue,
+            Err(e) => return Err(e),
+        };
+        for entry in entries {
+            let entry = entry?;
+            let kind = entry.file_type()?;
+            if kind.is_dir() {
+                stack.push(entry.path());
+                continue;
+            }
+            let is_temp = entry
+                .file_name()
+                .to_str()
+                .is_some_and(|n| n.starts_with(TEMP_PREFIX));
+            let age = entry.metadata()?.modified()?.elapsed().unwrap_or_default();
+            if is_temp && kind.is_file() && age >= min_age {
+                match fs::remove_file(entry.path()) {
+                    Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
+                    _ => removed += 1,
+                }
+            }
+        }
+    }
+    Ok(removed)
+}
+
 /// A file written in place of `path` through a temp file in the same directory,
 /// for outputs streamed in pieces (the run log). [`AtomicFile::commit`] fsyncs
 /// it and renames it over `path`; dropping it uncommitted removes the temp file,

@@ -35,7 +35,9 @@ use std::time::Instant;
 
 use serde::de::DeserializeOwned;
 
-pub use atomic::{remove_stale_temps, write_atomic, AtomicFile, TEMP_PREFIX};
+pub use atomic::{
+    remove_old_temps, remove_stale_temps, write_atomic, AtomicFile, STALE_TEMP_AGE, TEMP_PREFIX,
+};
 pub use lineage::{InputRef, Lineage};
 pub use lookup::RunSummary;
 pub use result::{
