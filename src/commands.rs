@@ -9,20 +9,6 @@ use std::sync::Arc;
 
 use crate::audit::{self, AuditError};
 use crate::bench::{self, BenchError, BenchOptions};
-use crate::calibrate::batch::batch as run_batch;
-use crate::calibrate::curve;
-use crate::calibrate::gp_search::gp_search;
-use crate::calibrate::gp_train::train_gp;
-use crate::calibrate::noise::noise as run_noise;
-use crate::calibrate::pipeline::{
-    calibrate_noise_aware as calibrate_noise_aware_stages, NoiseAwareOptions,
-};
-use crate::calibrate::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
-use crate::calibrate::search::load_model;
-use crate::calibrate::search::{search as run_search, SearchSettings};
-use crate::calibrate::train::{train_study, train_table, TableSpec, TrainOptions, TrainOutcome};
-use crate::calibrate::verify::verify as run_verify;
-use crate::calibrate::Stage;
 use crate::doe::diagnostics::Diagnostics;
 use crate::exec::Executor;
 use crate::log::{inspect, InspectError};
@@ -37,13 +23,27 @@ use crate::scenes::run_logged;
 use crate::store::{
     write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, RunSummary, Store, StoreError,
 };
+use crate::study::batch::batch as run_batch;
+use crate::study::calibration::Stage;
 use crate::study::dir::StudyDir;
+use crate::study::gp_train::train_gp;
+use crate::study::learning_curve;
+use crate::study::noise::noise as run_noise;
+use crate::study::pipeline::{
+    calibrate_noise_aware as calibrate_noise_aware_stages, NoiseAwareOptions,
+};
+use crate::study::probability_search::gp_search;
+use crate::study::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
 use crate::study::spec::{is_design_study, parse_design_study, read_design_study, DesignStudy};
 use crate::study::stages::{
     default_candidates, Analysis, Method, Stage as ClassicStage, StudyFile, StudySpec,
 };
+use crate::study::tolerance_search::load_model;
+use crate::study::tolerance_search::{search as run_search, SearchSettings};
 use crate::study::tradeoff as tradeoff_sweep;
 use crate::study::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
+use crate::study::train::{train_study, train_table, TableSpec, TrainOptions, TrainOutcome};
+use crate::study::verify_clusters::verify as run_verify;
 use crate::study::{self, StudyError};
 use crate::surrogate::ga_bp::Selection;
 
@@ -698,7 +698,7 @@ pub fn tradeoff(
 /// `repose learning-curve STUDY`: samples the study if it has no design yet,
 /// runs the batch (cached, resumable; failed runs are left out), then trains
 /// and searches on nested prefixes of the design (see
-/// [`crate::calibrate::curve`]); prints the table.
+/// [`crate::study::learning_curve`]); prints the table.
 pub fn learning_curve(
     store_root: &Path,
     study_path: &Path,
@@ -719,7 +719,7 @@ pub fn learning_curve(
     }
     batch_leaving_out_failures(store_root, study_path, exec, out)?;
     let store = open_store(store_root)?;
-    let outcome = curve::learning_curve(&dir, &study, &store, sizes)?;
+    let outcome = learning_curve::learning_curve(&dir, &study, &store, sizes)?;
     write!(out, "\n{}", outcome.markdown)?;
     writeln!(out, "\noutputs: {}", outcome.out_dir.display())?;
     Ok(())
@@ -877,7 +877,7 @@ pub struct CalibrateFlags {
 }
 
 /// `repose calibrate` on a noise-aware study
-/// ([`crate::calibrate::pipeline`]): stage reports on `out` (stderr with
+/// ([`crate::study::pipeline`]): stage reports on `out` (stderr with
 /// `--json`, which then prints the outcome as JSON on `out`).
 fn calibrate_noise_aware(
     store_root: &Path,
@@ -929,7 +929,7 @@ fn calibrate_noise_aware(
 }
 
 /// `repose noise STUDY`: the noise floor of a noise-aware study's
-/// calibration response ([`crate::calibrate::noise`]).
+/// calibration response ([`crate::study::noise`]).
 pub fn noise(
     store_root: &Path,
     study_path: &Path,

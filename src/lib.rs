@@ -3,14 +3,13 @@
 //!
 //! Module map (dependencies point downward only):
 //! - [`commands`]: one function per CLI subcommand (the binary only parses arguments).
-//! - [`study`]: studies as data — the design-study manifest and its stages
-//!   (screen, rsm, verify), each run through [`exec`] into a response table.
-//! - [`calibrate`]: the he2019 stages (sample, batch, train, search, verify).
+//! - [`study`]: studies as data — one study model whose methods are stage
+//!   lists (he2019's sample, batch, train, search, verify; the design
+//!   studies' screen, rsm, sensitivity, verify; the noise floor; the
+//!   tradeoff sweep), each run through [`exec`] into a response table.
 //! - [`exec`]: the one executor seam: runs experiments through the store, on
 //!   this machine's worker pool or as Slurm job arrays (`--executor slurm`).
 //! - [`mod@bench`]: the engine throughput benchmark (`repose bench`).
-//! - [`calibrate`]: the he2019 calibration stages (sample, batch, train,
-//!   search, verify) over a study's runs.
 //! - [`doe`]: designs of experiments as pure functions (Latin hypercubes,
 //!   Box–Behnken, full factorial, one-factor-at-a-time) and their diagnostics.
 //! - [`scenes`]: runs an experiment's scene and produces its result; its
@@ -33,7 +32,6 @@
 
 pub mod audit;
 pub mod bench;
-pub mod calibrate;
 pub mod commands;
 pub mod dem;
 pub mod doe;

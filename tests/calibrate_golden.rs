@@ -17,11 +17,11 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use repose::calibrate::Stage;
 use repose::commands::{calibrate, CalibrateFlags};
 use repose::exec::Executor;
 use repose::manifest::parse_study;
 use repose::scenes::plan::Limits;
+use repose::study::calibration::Stage;
 use repose::study::dir::StudyDir;
 
 const STUDY: &str = "experiments/calibrate-smoke/study.json";

@@ -9,21 +9,21 @@ mod common;
 
 use std::path::Path;
 
-use repose::calibrate::adaptive::{Stop, ADAPTIVE_INDEX, ROUND_STRIDE};
-use repose::calibrate::gp_train::adaptive_path;
-use repose::calibrate::noise::{noise, NOISE_INDEX};
-use repose::calibrate::pipeline::{calibrate_noise_aware, CalibrationOutcome, NoiseAwareOptions};
-use repose::calibrate::replicates::read_replicates_csv;
-use repose::calibrate::sample::SampleSettings;
-use repose::calibrate::search::SearchSettings;
-use repose::calibrate::train::TrainOptions;
-use repose::calibrate::verify::{acceptance, VERIFY_INDEX};
-use repose::calibrate::Stage;
 use repose::exec::Executor;
 use repose::manifest::{parse_study, validate_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
+use repose::study::adaptive::{Stop, ADAPTIVE_INDEX, ROUND_STRIDE};
+use repose::study::calibration::Stage;
 use repose::study::dir::StudyDir;
+use repose::study::gp_train::adaptive_path;
+use repose::study::noise::{noise, NOISE_INDEX};
+use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome, NoiseAwareOptions};
+use repose::study::replicates::read_replicates_csv;
+use repose::study::sample::SampleSettings;
+use repose::study::tolerance_search::SearchSettings;
+use repose::study::train::TrainOptions;
+use repose::study::verify_clusters::{acceptance, VERIFY_INDEX};
 use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use serde_json::{json, Value};
 
@@ -453,8 +453,8 @@ fn study_with_response(dir: &Path) -> (Study, std::path::PathBuf) {
 /// nothing.
 #[test]
 fn a_replicated_batch_counts_what_it_simulated() {
-    use repose::calibrate::batch::batch;
-    use repose::calibrate::sample::sample;
+    use repose::study::batch::batch;
+    use repose::study::sample::sample;
     let tmp = tempfile::tempdir().unwrap();
     let (study, path) = study(tmp.path(), &[]);
     let root = tmp.path().join("store");
@@ -581,7 +581,7 @@ fn screening_fixes_a_parameter_below_the_noise_at_its_centre() {
         let e = effect(name);
         assert!(e.range > 5.0 && e.active, "{e:?}");
     }
-    let k = repose::calibrate::parameter_names(&study)
+    let k = repose::study::calibration::parameter_names(&study)
         .iter()
         .position(|n| n == "particle_particle.restitution")
         .unwrap();
@@ -626,9 +626,9 @@ fn screening_fixes_a_parameter_below_the_noise_at_its_centre() {
 /// freedom per point says little, see `stats::homogeneity`.)
 #[test]
 fn a_noisier_half_of_the_design_gives_the_gp_per_point_noise() {
-    use repose::calibrate::batch::{batch, replicates_path};
-    use repose::calibrate::gp_train::{train_gp, NoiseModel, PRIOR_DF};
-    use repose::calibrate::sample::sample;
+    use repose::study::batch::{batch, replicates_path};
+    use repose::study::gp_train::{train_gp, NoiseModel, PRIOR_DF};
+    use repose::study::sample::sample;
     let tmp = tempfile::tempdir().unwrap();
     let (study, path) = study(tmp.path(), &[]);
     let root = tmp.path().join("store");

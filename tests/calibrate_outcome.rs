@@ -19,13 +19,14 @@ mod common;
 
 use std::collections::BTreeMap;
 
-use repose::calibrate::adaptive::ADAPTIVE_INDEX;
-use repose::calibrate::noise::NOISE_INDEX;
-use repose::calibrate::sample::{sample, SampleSettings};
-use repose::calibrate::verify::VERIFY_INDEX;
-use repose::calibrate::{parameter_names, to_physical};
 use repose::manifest::{parse_study, PHYSICS_VERSION};
+use repose::study::adaptive::ADAPTIVE_INDEX;
+use repose::study::calibration::parameter_names;
+use repose::study::calibration::to_physical;
 use repose::study::dir::StudyDir;
+use repose::study::noise::NOISE_INDEX;
+use repose::study::sample::{sample, SampleSettings};
+use repose::study::verify_clusters::VERIFY_INDEX;
 use serde_json::Value;
 
 const OUTCOME: &str = "experiments/he2019-quick/measured/outcome.json";

@@ -8,14 +8,15 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use repose::calibrate::batch::{batch, read_design};
-use repose::calibrate::curve::{csv_header, learning_curve};
-use repose::calibrate::sample::{sample, SampleSettings};
-use repose::calibrate::{parameter_names, Stage};
 use repose::exec::Executor;
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
+use repose::study::batch::{batch, read_design};
+use repose::study::calibration::parameter_names;
+use repose::study::calibration::Stage;
 use repose::study::dir::StudyDir;
+use repose::study::learning_curve::{csv_header, learning_curve};
+use repose::study::sample::{sample, SampleSettings};
 use repose::study::StudyError;
 use serde_json::json;
 
@@ -137,7 +138,7 @@ fn nested_prefixes_with_fixed_validation_rows() {
     // A rerun (nothing new to simulate) reproduces every column but the
     // wall times byte for byte.
     let again = learning_curve(&dir, &s, &store, Some(&[6, 12, 24])).unwrap();
-    let strip = |rows: &[repose::calibrate::curve::CurveRow]| {
+    let strip = |rows: &[repose::study::learning_curve::CurveRow]| {
         rows.iter()
             .map(|r| {
                 let mut r = r.clone();

@@ -10,14 +10,14 @@ use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use common::{edit, example, repose, stderr, stdout};
-use repose::calibrate::batch::batch;
-use repose::calibrate::sample::{sample, SampleSettings};
 use repose::exec::{ExecError, Executor};
 use repose::manifest::{parse_experiment, parse_study, Experiment};
 use repose::scenes::plan::{plan, Limits, ENGINE_MAX_PARTICLES};
 use repose::scenes::run_experiment;
 use repose::store::{RunDir, RunResult, Store};
+use repose::study::batch::batch;
 use repose::study::dir::StudyDir;
+use repose::study::sample::{sample, SampleSettings};
 use repose::study::StudyError;
 use serde_json::{json, Value};
 

@@ -105,7 +105,7 @@ pub struct NoiseAware {
     /// acceptance record's power calculation on the noise floor's σ picks
     /// the seeds (TOST power 0.8 at the band's centre) between
     /// `verification_seeds` and this cap (absent: `verification_seeds`, no
-    /// power calculation raises it). See `calibrate::verify`.
+    /// power calculation raises it). See `crate::study::verify_clusters`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_verification_seeds: Option<u32>,
     /// Active learning after the initial design (`repose calibrate

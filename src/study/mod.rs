@@ -9,8 +9,15 @@
 //!   and the experiments it generates.
 //! - [`crate::exec`]: the one seam through which every stage runs experiments.
 //! - [`runs`]: points × replicates × scenes → executor → response table.
-//! - [`screen`], [`rsm`], [`verify`]: the stages (the joint desirability
-//!   optimum is [`crate::search::desirability`]).
+//! - [`screen`], [`rsm`], [`verify`]: the design studies' stages (the joint
+//!   desirability optimum is [`crate::search::desirability`]).
+//! - he2019's calibration study ([`calibration`]: its stage directories and
+//!   parameter scaling) and its stages: [`sample`], [`noise`] (the noise
+//!   floor), [`batch`] and [`replicates`] (the design's runs), [`train`]
+//!   (GA-BP) and [`gp_train`] (Gaussian process, screening),
+//!   [`tolerance_search`] and [`probability_search`], [`adaptive`],
+//!   [`verify_clusters`]; [`pipeline`] chains the noise-aware stages, and
+//!   [`learning_curve`] re-trains on nested prefixes of a design.
 //! - [`sensitivity`]: yan2015's three levels of parameter sensitivity.
 //! - [`seed_noise`]: one experiment over packing seeds: each response's
 //!   spread and its precision per cost (`repose noise MANIFEST`).
@@ -23,18 +30,31 @@
 //! stages or studies is simulated once, and a killed stage resumes.
 
 pub mod acceptance;
+pub mod adaptive;
+pub mod batch;
+pub mod calibration;
 pub mod dir;
 pub mod gp_surface;
+pub mod gp_train;
+pub mod learning_curve;
+pub mod noise;
+pub mod pipeline;
+pub mod probability_search;
+pub mod replicates;
 pub mod rsm;
 pub mod runs;
+pub mod sample;
 pub mod screen;
 pub mod seed_noise;
 pub mod sensitivity;
 pub mod spec;
 pub mod stages;
+pub mod tolerance_search;
 pub mod tradeoff;
+pub mod train;
 pub mod verdict_table;
 pub mod verify;
+pub mod verify_clusters;
 
 use std::path::Path;
 

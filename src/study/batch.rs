@@ -11,9 +11,13 @@ use std::path::PathBuf;
 
 use serde_json::json;
 
+use super::calibration::parameter_names;
+use super::calibration::Stage;
+use super::dir::write_output;
+use super::dir::StudyDir;
 use super::replicates::{replicates_csv, run_replicated};
 use super::sample::{design_path, experiment_path};
-use super::{parameter_names, write_output, Stage, StudyDir, StudyError};
+use super::StudyError;
 use crate::exec::{run_incomplete, Executor, Ran};
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
 use crate::report::table::{parse_number, Cell, CsvWriter, Table};
@@ -214,7 +218,7 @@ fn write_angles(
         csv.row(&cells);
     }
     let path = angles_path(dir);
-    super::create_dir(&dir.stage(Stage::Batch))?;
+    super::calibration::create_dir(&dir.stage(Stage::Batch))?;
     write_output(&path, csv.finish().as_bytes(), &lineage)?;
     Ok(path)
 }
@@ -358,7 +362,7 @@ where
         cells.push(p.summary().map_or(Cell::Empty, |s| Cell::Number(s.std)));
         csv.row(&cells);
     }
-    super::create_dir(&dir.stage(Stage::Batch))?;
+    super::calibration::create_dir(&dir.stage(Stage::Batch))?;
     write_output(
         &replicates_path(dir),
         replicates_csv(study, &[(&study.calibration.name, &runs)]).as_bytes(),

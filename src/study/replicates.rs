@@ -125,7 +125,7 @@ where
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
     check_response(target)?;
-    let names = super::parameter_names(study);
+    let names = super::calibration::parameter_names(study);
     let mut experiments = Vec::new();
     for (index, point) in points {
         let values = names.iter().cloned().zip(point.iter().copied()).collect();
@@ -205,7 +205,7 @@ fn value_in_store(
 /// unmeasurable seed has an empty value and its reason, so
 /// `repose verdict --table` reads it as a missing replicate.
 pub fn replicates_csv(study: &Study, scenes: &[(&str, &[Replicated])]) -> String {
-    let names = super::parameter_names(study);
+    let names = super::calibration::parameter_names(study);
     let mut header = vec!["scene".to_string(), "index".to_string()];
     header.extend(names.iter().cloned());
     header.extend(
@@ -235,7 +235,7 @@ pub fn replicates_csv(study: &Study, scenes: &[(&str, &[Replicated])]) -> String
                 r.value
                     .as_ref()
                     .err()
-                    .map_or(String::new(), |m| super::verify::csv_word(m)),
+                    .map_or(String::new(), |m| super::verify_clusters::csv_word(m)),
             ));
             csv.row(&cells);
         }
@@ -250,7 +250,7 @@ pub fn read_replicates_csv(
     study: &Study,
 ) -> Result<Vec<Replicated>, StudyError> {
     let table = Table::read(path)?;
-    let names = super::parameter_names(study);
+    let names = super::calibration::parameter_names(study);
     let index = table.numbers(path, "index")?;
     let columns = names
         .iter()

@@ -36,11 +36,17 @@ use std::fmt::Write as _;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
+use super::calibration::parameter_names;
+use super::calibration::to_physical;
+use super::calibration::Stage;
+use super::dir::json_bytes;
+use super::dir::write_output;
+use super::dir::StudyDir;
 use super::gp_train::{gp_path, read_gp};
 use super::noise::noise_aware;
-use super::search::SearchSettings;
-use super::verify::clusters_path;
-use super::{json_bytes, parameter_names, to_physical, write_output, Stage, StudyDir, StudyError};
+use super::tolerance_search::SearchSettings;
+use super::verify_clusters::clusters_path;
+use super::StudyError;
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::scatter_matrix;
@@ -155,7 +161,7 @@ pub fn gp_search(
             }
         })
         .collect();
-    let ranges = super::ranges(study);
+    let ranges = super::calibration::ranges(study);
     let family = family(&names, &ranges, &kept_unit, samples);
 
     let label = cluster_column(unit.len(), &kept, &clustering.labels);

@@ -29,9 +29,14 @@ use serde::Serialize;
 use serde_json::json;
 
 use super::batch::read_angles;
-use super::{
-    create_dir, json_bytes, parameter_names, serde_name, write_output, Stage, StudyDir, StudyError,
-};
+use super::calibration::create_dir;
+use super::calibration::parameter_names;
+use super::calibration::serde_name;
+use super::calibration::Stage;
+use super::dir::json_bytes;
+use super::dir::write_output;
+use super::dir::StudyDir;
+use super::StudyError;
 use crate::manifest::Study;
 use crate::report::svg::{parity_plot, ParityPoint};
 use crate::report::table::{parse_number, Cell, CsvWriter, Table};

@@ -1,4 +1,6 @@
-//! The he2019 §3 calibration stages: `sample`, `batch`, `train`, `search`, `verify`.
+//! he2019's calibration study (§3): its stages `sample`, `batch`, `train`,
+//! `search`, `verify` are the sibling modules named below; this module holds
+//! what they share (the stage directories, parameter names and scaling).
 //!
 //! ```text
 //! study.json ── sample ──▶ design.csv + one experiment manifest per sample
@@ -32,32 +34,32 @@
 //!   verify/acceptance.json          the acceptance rule, written before the runs
 //!   verify/verification.csv, .md,   each candidate in every scene: simulated mean
 //!   verify/runs.csv                 (one run, or the noise-aware seeds), measured
-//!                                   angle, TOST p, verdict ([`verify`])
+//!                                   angle, TOST p, verdict ([`super::verify_clusters`])
 //!   learning-curve/curve.csv, .md   validation R², parameter spread and DEM time
 //!   learning-curve/curve.svg        against the number of training runs
-//!                                   (see [`curve`])
+//!                                   (see [`super::learning_curve`])
 //! ```
 //!
 //! A noise-aware study (`noise_aware` block, [`crate::manifest::NoiseAware`])
-//! runs each point with several packing seeds and adds ([`pipeline`]):
+//! runs each point with several packing seeds and adds ([`super::pipeline`]):
 //!
 //! ```text
 //!   noise/noise.csv, .md, .json     the centre of the ranges x noise seeds: σ,
-//!                                   95 % CI, cost per run, σ² x CPU s ([`noise`])
+//!                                   95 % CI, cost per run, σ² x CPU s ([`super::noise`])
 //!   batch/replicates.csv            every replicate run; angles.csv holds the
-//!                                   replicate means ([`replicates`])
+//!                                   replicate means ([`super::replicates`])
 //!   train/gp.json, surrogates.*     the Gaussian process beside the network,
 //!                                   validation R², RMSE and 95 % interval
-//!                                   coverage of both ([`gp_train`])
+//!                                   coverage of both ([`super::gp_train`])
 //!   train/screening.csv             each parameter's main effect under the GP
 //!                                   against one run's σ; searched or fixed
 //!   adaptive/acceptance.json        the rule, its seeds and α, before round 1
-//!   adaptive/replicates.csv         points the GP chose (`--adaptive`, [`adaptive`])
+//!   adaptive/replicates.csv         points the GP chose (`--adaptive`, [`super::adaptive`])
 //!   search/points.csv, clusters.*,  kept by the probability of the target band;
 //!   search/family.json              the family of consistent parameter sets
-//!                                   ([`gp_search`])
+//!                                   ([`super::probability_search`])
 //!   verify/verification.*, runs.csv every candidate x scene x its pre-registered
-//!                                   seeds: mean ± CI, verdict ([`verify`])
+//!                                   seeds: mean ± CI, verdict ([`super::verify_clusters`])
 //!   outcome.json                    the whole outcome (`calibrate --json`)
 //! ```
 //!
@@ -87,24 +89,11 @@
 //! Randomness comes from ChaCha8 streams of the study's design seed (or a seed
 //! given on the command line), one stream per purpose ([`crate::streams::Stream`]).
 
-pub mod adaptive;
-pub mod batch;
-pub mod curve;
-pub mod gp_search;
-pub mod gp_train;
-pub mod noise;
-pub mod pipeline;
-pub mod replicates;
-pub mod sample;
-pub mod search;
-pub mod train;
-pub mod verify;
-
 use std::path::{Path, PathBuf};
 
 use crate::manifest::Study;
 use crate::store::{write_atomic, StoreError};
-use crate::study::dir::{json_bytes, write_output, StageName};
+use crate::study::dir::StageName;
 
 /// The stages, in pipeline order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -143,8 +132,8 @@ impl Stage {
     }
 }
 
-pub(crate) use crate::study::dir::StudyDir;
-pub(crate) use crate::study::StudyError;
+use crate::study::dir::StudyDir;
+use crate::study::StudyError;
 
 impl StageName for Stage {
     fn stage_name(&self) -> &str {
@@ -156,7 +145,7 @@ impl StudyDir {
     /// `path` if it exists with the bytes its stage wrote (the sha256 in its
     /// lineage record, when the record has one), else the error telling which
     /// stage to run: an output edited since its stage ran is never read.
-    fn require(&self, path: PathBuf, stage: Stage) -> Result<PathBuf, StudyError> {
+    pub(super) fn require(&self, path: PathBuf, stage: Stage) -> Result<PathBuf, StudyError> {
         if path.is_file() {
             let bytes = std::fs::read(&path).map_err(StoreError::io(&path))?;
             if let Ok(lineage) = crate::store::Lineage::read_beside(&path) {
@@ -182,7 +171,7 @@ impl StudyDir {
     }
 }
 
-fn create_dir(path: &Path) -> Result<(), StudyError> {
+pub(super) fn create_dir(path: &Path) -> Result<(), StudyError> {
     std::fs::create_dir_all(path).map_err(|source| {
         StoreError::Io {
             path: path.to_path_buf(),
@@ -192,7 +181,7 @@ fn create_dir(path: &Path) -> Result<(), StudyError> {
     })
 }
 
-fn write_file(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
+pub(super) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
     write_atomic(path, bytes).map_err(|source| {
         StoreError::Io {
             path: path.to_path_buf(),
@@ -204,7 +193,7 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
 
 /// The name serde gives a unit enum variant (e.g. `full_factorial`), as
 /// manifests and the command line spell it.
-fn serde_name<T: serde::Serialize>(value: T) -> String {
+pub(super) fn serde_name<T: serde::Serialize>(value: T) -> String {
     match serde_json::to_value(value) {
         Ok(serde_json::Value::String(s)) => s,
         other => format!("{other:?}"),

@@ -18,7 +18,13 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::{parameter_names, serde_name, to_physical, write_output, Stage, StudyDir, StudyError};
+use super::calibration::parameter_names;
+use super::calibration::serde_name;
+use super::calibration::to_physical;
+use super::calibration::Stage;
+use super::dir::write_output;
+use super::dir::StudyDir;
+use super::StudyError;
 use crate::doe::lhs::Placement;
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
@@ -154,7 +160,7 @@ pub fn search(
         )
         .with_input(dir.input("model", &model_file)?);
     let markdown = markdown(study, settings, &names, &clusters, kept.len(), bandwidth);
-    let ranges = super::ranges(study);
+    let ranges = super::calibration::ranges(study);
     let svg = scatter_matrix(
         &names,
         &ranges,
@@ -195,7 +201,7 @@ pub fn search(
 
 /// The search without its outputs: the resampled points, their predicted
 /// angles, the kept ones and their mean-shift clusters. `search` writes these;
-/// the learning curve ([`super::curve`]) calls it once per training size.
+/// the learning curve ([`super::learning_curve`]) calls it once per training size.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Found {
     /// The same points, physical units.

@@ -21,8 +21,13 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
+use super::calibration::to_physical;
+use super::calibration::Stage;
+use super::dir::json_bytes;
+use super::dir::write_output;
+use super::dir::StudyDir;
 use super::replicates::{replicates_csv, run_replicated, Replicated};
-use super::{json_bytes, to_physical, write_output, Stage, StudyDir, StudyError};
+use super::StudyError;
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::report::markdown::MarkdownTable;

@@ -38,9 +38,13 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::batch::{read_angles, read_design, AngleRow};
-use super::search::{find, SearchSettings};
+use super::calibration::parameter_names;
+use super::calibration::Stage;
+use super::dir::write_output;
+use super::dir::StudyDir;
+use super::tolerance_search::{find, SearchSettings};
 use super::train::input_scales;
-use super::{parameter_names, write_output, Stage, StudyDir, StudyError};
+use super::StudyError;
 use crate::manifest::{ContentId, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::{learning_curve_plot, CurvePoint};

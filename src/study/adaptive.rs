@@ -20,14 +20,14 @@
 //! its acceptance record (`adaptive/acceptance.json`, the rule, the seeds
 //! and α) before its first round, with α = 0.05 divided by every round the
 //! budget allows plus the search candidates verification will judge
-//! ([`max_rounds`], [`super::verify::comparisons`]; Bonferroni), the same
+//! ([`max_rounds`], [`super::verify_clusters::comparisons`]; Bonferroni), the same
 //! record verification then writes: stopping at the first pass keeps the
 //! chance of any wrong pass ≤ 0.05.
 //!
 //! A design point or the noise floor's centre whose mean happens to fall in
 //! the band does not end the stage: a 2-seed mean is one draw of a noisy
 //! pile and lands in the band from well outside it often enough to matter
-//! (the measured chance: docs/performance.md, "src/calibrate/adaptive.rs"), so
+//! (the measured chance: docs/performance.md, "src/study/adaptive.rs"), so
 //! only a point run with the verification's seeds counts, and a failed
 //! candidate's seeds become data for the next fit. Round k's points are indexed from [`ADAPTIVE_INDEX`] +
 //! [`ROUND_STRIDE`] × k, the candidate first; they are written to
@@ -38,11 +38,17 @@
 use serde::Serialize;
 use serde_json::json;
 
+use super::calibration::parameter_names;
+use super::calibration::to_physical;
+use super::calibration::Stage;
+use super::dir::json_bytes;
+use super::dir::write_output;
+use super::dir::StudyDir;
 use super::gp_train::{adaptive_path, fit_model};
 use super::noise::read_noise;
 use super::replicates::{read_replicates_csv, replicates_csv, run_replicated, Replicated};
-use super::verify::{acceptance, comparisons};
-use super::{json_bytes, parameter_names, to_physical, write_output, Stage, StudyDir, StudyError};
+use super::verify_clusters::{acceptance, comparisons};
+use super::StudyError;
 use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, NoiseAware, Study};

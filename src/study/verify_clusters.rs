@@ -59,10 +59,15 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use super::adaptive::passing_candidate;
+use super::calibration::parameter_names;
+use super::calibration::Stage;
+use super::dir::json_bytes;
+use super::dir::write_output;
+use super::dir::StudyDir;
 use super::gp_train::adaptive_path;
 use super::noise::read_noise;
 use super::replicates::{replicates_csv, run_replicated, Replicated};
-use super::{json_bytes, parameter_names, write_output, Stage, StudyDir, StudyError};
+use super::StudyError;
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::report::markdown::MarkdownTable;

@@ -87,7 +87,7 @@
 //! ([`crate::search::screen`]); `gp.json` keeps the result and
 //! `screening.csv` and `surrogates.md` report it. With `noise_aware.screen`
 //! the parameters below σ are fixed at their centre by the search
-//! ([`super::gp_search`]), and the validation is repeated with those inputs
+//! ([`super::probability_search`]), and the validation is repeated with those inputs
 //! dropped from the GP (`gp_screened`: the same training and validation
 //! rows), so the R² before and after screening is read at equal run counts.
 
@@ -98,9 +98,14 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use super::batch::replicates_path;
+use super::calibration::to_unit;
+use super::calibration::Stage;
+use super::dir::json_bytes;
+use super::dir::write_output;
+use super::dir::StudyDir;
 use super::noise::noise_runs_path;
 use super::replicates::{pooled_variance, read_replicates_csv, Replicated};
-use super::{json_bytes, to_unit, write_output, Stage, StudyDir, StudyError};
+use super::StudyError;
 use crate::doe::lhs::Placement;
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
@@ -617,7 +622,7 @@ pub const SCREEN_POINTS: usize = 256;
 /// The main effects of `gp`'s mean against one run's σ `noise_sd` (deg),
 /// screening when the study asks ([`crate::search::screen`]).
 fn screen(study: &Study, gp: &GaussianProcess, noise_sd: f64, seed: u64) -> Vec<MainEffect> {
-    let names = super::parameter_names(study);
+    let names = super::calibration::parameter_names(study);
     let others = resample(SCREEN_POINTS, names.len(), Placement::Random, seed, 2);
     let on = study.noise_aware.as_ref().is_some_and(|n| n.screen);
     main_effects(&names, |u| gp.predict(u).mean, &others, noise_sd, on)
@@ -794,7 +799,7 @@ fn markdown(study: &Study, m: &GpModel, metrics: &[SurrogateMetrics]) -> String 
     if let Some(n) = metrics.first().and_then(|s| s.noise) {
         out.push_str(&noise_sentence(&n, m.noise.pooled_variance_deg2, metrics));
     }
-    let names = super::parameter_names(study);
+    let names = super::calibration::parameter_names(study);
     let _ = writeln!(
         out,
         "\nGP (Matérn 5/2, fitted to all {} rows, no nugget): mean {:.2}°, signal σ {:.2}°; \
@@ -883,9 +888,9 @@ fn row_table(data: &GpData) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calibrate::replicates::SeedRun;
     use crate::manifest::ContentId;
     use crate::stats::assert_rel_within;
+    use crate::study::replicates::SeedRun;
 
     /// A point whose seeds measured `values` (`None`: the seed failed).
     fn point(index: u64, values: &[Option<f64>]) -> Replicated {

@@ -16,10 +16,16 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::{
-    create_dir, json_bytes, parameter_names, serde_name, to_physical, write_file, write_output,
-    Stage, StudyDir, StudyError,
-};
+use super::calibration::create_dir;
+use super::calibration::parameter_names;
+use super::calibration::serde_name;
+use super::calibration::to_physical;
+use super::calibration::write_file;
+use super::calibration::Stage;
+use super::dir::json_bytes;
+use super::dir::write_output;
+use super::dir::StudyDir;
+use super::StudyError;
 use crate::doe::diagnostics::{diagnose, unit_scaled, Diagnostics};
 use crate::doe::lhs::{latin_hypercube, optimise, Optimisation, Placement};
 use crate::manifest::{canonical_json, DesignKind, Study};
