@@ -21,7 +21,8 @@ use crate::scenes::protocol::set_quiet;
 use crate::scenes::responses::listing;
 use crate::scenes::run_logged;
 use crate::store::{
-    write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, RunSummary, Store, StoreError,
+    runs_line, write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, RunSummary, Store,
+    StoreError,
 };
 use crate::study::batch::batch as run_batch;
 use crate::study::calibration::Stage;
@@ -42,7 +43,7 @@ use crate::study::tolerance_search::load_model;
 use crate::study::tolerance_search::{search as run_search, SearchSettings};
 use crate::study::tradeoff as tradeoff_sweep;
 use crate::study::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
-use crate::study::train::{train_study, train_table, TableSpec, TrainOptions, TrainOutcome};
+use crate::study::train::{train_study, train_table, TableSpec, TrainOptions};
 use crate::study::verify_clusters::verify as run_verify;
 use crate::study::{self, StudyError};
 use crate::surrogate::ga_bp::Selection;
@@ -457,11 +458,6 @@ pub fn bench(
     Ok(())
 }
 
-/// Formats an optional number for the runs table.
-fn cell(v: Option<f64>) -> String {
-    v.map_or_else(|| "-".to_string(), |v| format!("{v:.4}"))
-}
-
 /// `repose responses [SCENE] [--json]`: the named responses of one scene kind
 /// (or of all) from [`crate::scenes::responses::listing`], as text (name,
 /// unit, description per line under each kind) or JSON (a list of
@@ -499,42 +495,13 @@ pub fn runs_list(store_root: &Path, out: &mut dyn Write) -> Result<(), CommandEr
         writeln!(out, "no runs in {}", store.root().display())?;
         return Ok(());
     }
-    writeln!(
-        out,
-        "{:<12}  {:<11}  {:<7}  {:>7}  {:>7}  {:>9}  {:<10}  {:>9}",
-        "ID", "SCENE", "PROFILE", "e_pp", "mu_pp", "Γ_pp J/m²", "STATUS", "ANGLE deg"
-    )?;
+    writeln!(out, "{}", runs_line(&RunSummary::HEADER))?;
     let mut damaged = Vec::new();
-    for RunSummary {
-        id,
-        status,
-        problem,
-        experiment,
-        result,
-    } in &runs
-    {
-        if let Some(p) = problem {
-            damaged.push(format!("{}: {p}", id.short(12)));
+    for run in &runs {
+        if let Some(p) = &run.problem {
+            damaged.push(format!("{}: {p}", run.id.short(12)));
         }
-        let pp = experiment.as_ref().map(|e| e.contact.particle_particle);
-        let scene = experiment.as_ref().map_or("?", |e| e.scene.kind());
-        let profile = experiment.as_ref().map_or("?", |e| e.profile.as_str());
-        let angle = result
-            .as_ref()
-            .and_then(|r| r.headline_angle_deg)
-            .map(|a| format!("{a:.2}"));
-        writeln!(
-            out,
-            "{:<12}  {:<11}  {:<7}  {:>7}  {:>7}  {:>9}  {:<10}  {:>9}",
-            id.short(12),
-            scene,
-            profile,
-            cell(pp.map(|p| p.restitution)),
-            cell(pp.map(|p| p.static_friction)),
-            cell(pp.map(|p| p.surface_energy_j_m2)),
-            status.to_string(),
-            angle.unwrap_or_else(|| "-".to_string()),
-        )?;
+        writeln!(out, "{}", runs_line(&run.row()))?;
     }
     if !damaged.is_empty() {
         writeln!(out, "damaged (run them again to recompute):")?;
@@ -1061,96 +1028,6 @@ fn run_batch_and_report(
     Ok((outcome.failures.len(), outcome.total))
 }
 
-/// Prints a training sweep (the Fig. 12 table) and where it was written.
-fn write_sweep(outcome: &TrainOutcome, out: &mut dyn Write) -> Result<(), CommandError> {
-    writeln!(
-        out,
-        "{} training rows, {} validation rows{}",
-        outcome.train_rows,
-        outcome.validation_rows,
-        if outcome.skipped > 0 {
-            format!(", {} without an angle left out", outcome.skipped)
-        } else {
-            String::new()
-        }
-    )?;
-    let cv = outcome.sweep.rows.iter().any(|r| r.cv_rmse_deg.is_some());
-    writeln!(
-        out,
-        "{:>6}  {:>7}  {:>6}  {:>9}  {:>9}  {:>11}  {:>9}{}",
-        "hidden",
-        "weights",
-        "edf",
-        "train R2",
-        "valid R2",
-        "valid RMSE",
-        "LM steps",
-        if cv {
-            format!("  {:>9}", "CV RMSE")
-        } else {
-            String::new()
-        }
-    )?;
-    for (i, r) in outcome.sweep.rows.iter().enumerate() {
-        writeln!(
-            out,
-            "{:>6}  {:>6}{}  {:>6.2}  {:>9.4}  {:>9.4}  {:>11.3}  {:>9}{}{}",
-            r.hidden,
-            r.parameters,
-            if r.over_parameterised() { "!" } else { " " },
-            r.effective_dof,
-            r.train_r2,
-            r.validation_r2,
-            r.validation_rmse_deg,
-            r.lm_epochs,
-            r.cv_rmse_deg
-                .map_or(String::new(), |v| format!("  {v:>9.3}")),
-            if i == outcome.sweep.best {
-                "  <- kept"
-            } else {
-                ""
-            }
-        )?;
-    }
-    if outcome.sweep.rows.iter().any(|r| r.over_parameterised()) {
-        writeln!(
-            out,
-            "!: more weights than the {} training rows (edf: effective degrees of freedom, at most the rows)",
-            outcome.train_rows
-        )?;
-    }
-    let best = &outcome.sweep.rows[outcome.sweep.best];
-    match outcome.sweep.selection {
-        Selection::Validation => writeln!(
-            out,
-            "kept: {} hidden neurons, validation R2 {:.4} (Eq. 7; the validation rows chose the size)",
-            best.hidden, best.validation_r2
-        )?,
-        Selection::CrossValidation { folds } => writeln!(
-            out,
-            "kept: {} hidden neurons by {}-fold cross-validation within the training rows (CV RMSE {:.3} deg); held-out validation R2 {:.4} (Eq. 7)",
-            best.hidden,
-            folds.min(outcome.train_rows),
-            best.cv_rmse_deg.unwrap_or(f64::NAN),
-            best.validation_r2
-        )?,
-    }
-    if best.validation_r2 < 0.9 {
-        writeln!(
-            out,
-            "note: below the R2 >= 0.9 that he2019 (§3.4) requires before using the network"
-        )?;
-    }
-    if let Some(r) = outcome.reference_r2 {
-        writeln!(
-            out,
-            "reference predictions on the validation rows: R2 {r:.4} (Eq. 7)"
-        )?;
-    }
-    writeln!(out, "outputs: {}", outcome.out_dir.display())?;
-    Ok(())
-}
-
 /// `repose train STUDY`: the GA-BP hidden-size sweep on the batch's angles;
 /// without `seed`, the genetic algorithm is seeded by the study's design seed,
 /// and without `selection` the hidden size is chosen by the study's rule
@@ -1168,7 +1045,7 @@ pub fn train(
     options.settings.seed = seed.unwrap_or(study.design.seed);
     options.settings.selection = selection.unwrap_or_else(|| TrainOptions::selection(&study));
     let outcome = train_study(&dir, &study, &options)?;
-    write_sweep(&outcome, out)?;
+    write!(out, "{}", outcome.text())?;
     if Method::of_calibration(&study) == Method::He2019NoiseAware {
         let model = load_model(&dir.stage(Stage::Train).join("model.json"))?;
         let net = |x: &[f64]| model.predict(x);
@@ -1192,7 +1069,8 @@ pub fn train_on_table(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let outcome = train_table(spec, out_dir, options)?;
-    write_sweep(&outcome, out)
+    write!(out, "{}", outcome.text())?;
+    Ok(())
 }
 
 /// `repose search STUDY`: tolerance search over the trained network and

@@ -20,6 +20,60 @@ pub struct RunSummary {
     pub result: Option<RunResult>,
 }
 
+impl RunSummary {
+    /// The header of [`RunSummary::row`]'s table (`repose runs list`).
+    pub const HEADER: [&'static str; 8] = [
+        "ID",
+        "SCENE",
+        "PROFILE",
+        "e_pp",
+        "mu_pp",
+        "Γ_pp J/m²",
+        "STATUS",
+        "ANGLE deg",
+    ];
+
+    /// One line of `repose runs list`: id prefix, scene, profile, the
+    /// particle–particle restitution, friction and surface energy (J/m²), the
+    /// status and the headline angle (degrees); `-` where unknown.
+    pub fn row(&self) -> [String; 8] {
+        let cell = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{v:.4}"));
+        let pp = self
+            .experiment
+            .as_ref()
+            .map(|e| e.contact.particle_particle);
+        [
+            self.id.short(12).to_string(),
+            self.experiment
+                .as_ref()
+                .map_or("?", |e| e.scene.kind())
+                .to_string(),
+            self.experiment
+                .as_ref()
+                .map_or("?", |e| e.profile.as_str())
+                .to_string(),
+            cell(pp.map(|p| p.restitution)),
+            cell(pp.map(|p| p.static_friction)),
+            cell(pp.map(|p| p.surface_energy_j_m2)),
+            self.status.to_string(),
+            self.result
+                .as_ref()
+                .and_then(|r| r.headline_angle_deg)
+                .map_or_else(|| "-".to_string(), |a| format!("{a:.2}")),
+        ]
+    }
+}
+
+/// `cells` aligned as `repose runs list` prints them (widths 12, 11, 7, 7,
+/// 7, 9, 10, 9; the numbers right-aligned).
+pub fn runs_line(cells: &[impl AsRef<str>; 8]) -> String {
+    let c: Vec<&str> = cells.iter().map(AsRef::as_ref).collect();
+    format!(
+        "{:<12}  {:<11}  {:<7}  {:>7}  {:>7}  {:>9}  {:<10}  {:>9}",
+        c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]
+    )
+}
+
 impl Store {
     /// The ids of every run directory, sorted (other entries are ignored).
     pub fn ids(&self) -> Result<Vec<ContentId>, StoreError> {

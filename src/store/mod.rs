@@ -39,7 +39,7 @@ pub use atomic::{
     remove_old_temps, remove_stale_temps, write_atomic, AtomicFile, STALE_TEMP_AGE, TEMP_PREFIX,
 };
 pub use lineage::{InputRef, Lineage};
-pub use lookup::RunSummary;
+pub use lookup::{runs_line, RunSummary};
 pub use result::{
     CoarseGrainingReport, ErrorRecord, ResolutionFigure, RunResult, TimingRecord, Trace,
     HEADLINE_KEY,

@@ -87,6 +87,97 @@ pub struct TrainOutcome {
     pub out_dir: PathBuf,
 }
 
+impl TrainOutcome {
+    /// The sweep as text (the Fig. 12 table: per hidden size the weights,
+    /// effective degrees of freedom, R², RMSE and LM steps), the kept size
+    /// and why, and where the outputs were written — what `repose train`
+    /// prints.
+    pub fn text(&self) -> String {
+        let mut out = format!(
+            "{} training rows, {} validation rows{}\n",
+            self.train_rows,
+            self.validation_rows,
+            if self.skipped > 0 {
+                format!(", {} without an angle left out", self.skipped)
+            } else {
+                String::new()
+            }
+        );
+        let rows = &self.sweep.rows;
+        let cv = rows.iter().any(|r| r.cv_rmse_deg.is_some());
+        out.push_str(&format!(
+            "{:>6}  {:>7}  {:>6}  {:>9}  {:>9}  {:>11}  {:>9}{}\n",
+            "hidden",
+            "weights",
+            "edf",
+            "train R2",
+            "valid R2",
+            "valid RMSE",
+            "LM steps",
+            if cv {
+                format!("  {:>9}", "CV RMSE")
+            } else {
+                String::new()
+            }
+        ));
+        for (i, r) in rows.iter().enumerate() {
+            out.push_str(&format!(
+                "{:>6}  {:>6}{}  {:>6.2}  {:>9.4}  {:>9.4}  {:>11.3}  {:>9}{}{}\n",
+                r.hidden,
+                r.parameters,
+                if r.over_parameterised() { "!" } else { " " },
+                r.effective_dof,
+                r.train_r2,
+                r.validation_r2,
+                r.validation_rmse_deg,
+                r.lm_epochs,
+                r.cv_rmse_deg
+                    .map_or(String::new(), |v| format!("  {v:>9.3}")),
+                if i == self.sweep.best {
+                    "  <- kept"
+                } else {
+                    ""
+                }
+            ));
+        }
+        if rows.iter().any(|r| r.over_parameterised()) {
+            out.push_str(&format!(
+                "!: more weights than the {} training rows (edf: effective degrees of freedom, \
+                 at most the rows)\n",
+                self.train_rows
+            ));
+        }
+        let best = &rows[self.sweep.best];
+        out.push_str(&match self.sweep.selection {
+            Selection::Validation => format!(
+                "kept: {} hidden neurons, validation R2 {:.4} (Eq. 7; the validation rows chose \
+                 the size)\n",
+                best.hidden, best.validation_r2
+            ),
+            Selection::CrossValidation { folds } => format!(
+                "kept: {} hidden neurons by {}-fold cross-validation within the training rows \
+                 (CV RMSE {:.3} deg); held-out validation R2 {:.4} (Eq. 7)\n",
+                best.hidden,
+                folds.min(self.train_rows),
+                best.cv_rmse_deg.unwrap_or(f64::NAN),
+                best.validation_r2
+            ),
+        });
+        if best.validation_r2 < 0.9 {
+            out.push_str(
+                "note: below the R2 >= 0.9 that he2019 (§3.4) requires before using the network\n",
+            );
+        }
+        if let Some(r) = self.reference_r2 {
+            out.push_str(&format!(
+                "reference predictions on the validation rows: R2 {r:.4} (Eq. 7)\n"
+            ));
+        }
+        out.push_str(&format!("outputs: {}\n", self.out_dir.display()));
+        out
+    }
+}
+
 /// Contents of summary.json.
 #[derive(Debug, Serialize)]
 struct Summary {
