@@ -42,7 +42,7 @@ use crate::study::stages::{
 use crate::study::tolerance_search::load_model;
 use crate::study::tolerance_search::{search as run_search, SearchSettings};
 use crate::study::tradeoff as tradeoff_sweep;
-use crate::study::tradeoff::plan::{plan as plan_sweep, Knob, PlanError};
+use crate::study::tradeoff::plan::{plan as plan_sweep, study_spec, Knob, PlanError};
 use crate::study::train::{train_study, train_table, TableSpec, TrainOptions};
 use crate::study::verify_clusters::verify as run_verify;
 use crate::study::{self, StudyError};
@@ -627,20 +627,10 @@ pub fn tradeoff(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
-    let points = 1 + options
-        .knobs
-        .iter()
-        .map(|k| k.values.len().saturating_sub(1) as u64)
-        .sum::<u64>();
-    StudySpec::tradeoff(
-        &manifest.display().to_string(),
-        base.id(),
-        options.knobs.iter().map(|k| k.name.to_string()).collect(),
-        points,
-        options.replicates as u64,
-    )
-    .check_runs(exec.max_runs)
-    .map_err(CommandError::Usage)?;
+    let name = manifest.display().to_string();
+    study_spec(&name, &base, &options.knobs, options.replicates)
+        .check_runs(exec.max_runs)
+        .map_err(CommandError::Usage)?;
     let points = plan_sweep(&base, &options.knobs, options.replicates)?;
     let store = open_store(store_root)?;
     let out_dir = options
@@ -1462,18 +1452,7 @@ pub fn calibrate(
 ) -> Result<(), CommandError> {
     let path = match study_path {
         Some(p) => p.to_path_buf(),
-        None => {
-            std::fs::create_dir_all(store_root).map_err(StoreError::io(store_root))?;
-            let p = store_root.join("default-study.json");
-            write_atomic(&p, DEFAULT_STUDY.as_bytes()).map_err(StoreError::io(&p))?;
-            let note = format!("calibrating the embedded default study ({})", p.display());
-            if flags.json {
-                eprintln!("{note}");
-            } else {
-                writeln!(out, "{note}")?;
-            }
-            p
-        }
+        None => write_default_study(store_root, flags.json, out)?,
     };
     let study = read_study(&path)?;
     let candidates_or_default = candidates.unwrap_or_else(|| default_candidates(&study));
@@ -1503,6 +1482,25 @@ pub fn calibrate(
         run_classic_stage(store_root, &path, &study, stage, exec, candidates, out)?;
     }
     Ok(())
+}
+
+/// Writes the embedded default study to `<store>/default-study.json` and
+/// says so (on stderr with `--json`, whose stdout is the outcome).
+fn write_default_study(
+    store_root: &Path,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<PathBuf, CommandError> {
+    std::fs::create_dir_all(store_root).map_err(StoreError::io(store_root))?;
+    let p = store_root.join("default-study.json");
+    write_atomic(&p, DEFAULT_STUDY.as_bytes()).map_err(StoreError::io(&p))?;
+    let note = format!("calibrating the embedded default study ({})", p.display());
+    if json {
+        eprintln!("{note}");
+    } else {
+        writeln!(out, "{note}")?;
+    }
+    Ok(p)
 }
 
 /// One stage of he2019's classic stage list, run by its subcommand with the

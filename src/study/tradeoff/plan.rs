@@ -10,6 +10,7 @@
 //! validated, hashed, cached and resumable.
 
 use crate::streams::SeedRule;
+use crate::study::stages::StudySpec;
 use serde_json::json;
 
 use crate::manifest::{Experiment, ValidationErrors};
@@ -150,6 +151,23 @@ pub enum PlanError {
     /// Replicates must be at least 2 for a confidence interval.
     #[error("replicates = {0}: must be at least 2 (a confidence interval needs two runs)")]
     Replicates(usize),
+}
+
+/// The sweep as a one-stage study ([`StudySpec::tradeoff`]) named `name`:
+/// the reference and every coarser value of each knob, × `replicates` runs,
+/// so its size is known before anything is built.
+pub fn study_spec(name: &str, base: &Experiment, knobs: &[Knob], replicates: usize) -> StudySpec {
+    let points = 1 + knobs
+        .iter()
+        .map(|k| k.values.len().saturating_sub(1) as u64)
+        .sum::<u64>();
+    StudySpec::tradeoff(
+        name,
+        base.id(),
+        knobs.iter().map(|k| k.name.to_string()).collect(),
+        points,
+        replicates as u64,
+    )
 }
 
 /// Builds the reference and the one-knob-away points for `base`.
