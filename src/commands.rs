@@ -1241,20 +1241,22 @@ fn exec_label(exec: &Executor) -> String {
 /// The design study at `path` and the store; a readable JSON file without a
 /// `factors` object is refused with what the stage needs (an unreadable or
 /// malformed one gets the reader's error).
-/// [`open_design_study`] for a command that starts runs: a study whose
-/// `analysis` stages may start more than `max_runs` runs is refused before
+/// [`open_design_study`] for a command that starts runs, with `exec` set to
+/// keep its Slurm files in the study's directory: a study whose `analysis`
+/// stages may start more than `exec.max_runs` runs is refused before
 /// anything is built ([`StudySpec::check_runs`]).
-fn open_sized_design_study(
+fn open_design_run(
     store_root: &Path,
     path: &Path,
     analysis: Analysis,
-    max_runs: u64,
-) -> Result<(DesignStudy, Store), CommandError> {
+    exec: &Executor,
+) -> Result<(DesignStudy, Store, Executor), CommandError> {
     let (study, store) = open_design_study(store_root, path)?;
     StudySpec::design(&study, analysis)
-        .check_runs(max_runs)
+        .check_runs(exec.max_runs)
         .map_err(CommandError::Usage)?;
-    Ok((study, store))
+    let exec = exec.in_study(&study::dir::StudyDir::path_in(store_root, &study));
+    Ok((study, store, exec))
 }
 
 fn open_design_study(store_root: &Path, path: &Path) -> Result<(DesignStudy, Store), CommandError> {
@@ -1296,13 +1298,8 @@ pub fn rsm(
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, store) = open_sized_design_study(
-        store_root,
-        study_path,
-        Analysis::ResponseSurface,
-        pool.max_runs,
-    )?;
-    let pool = pool.in_study(&study::dir::StudyDir::path_in(store_root, &study));
+    let (study, store, pool) =
+        open_design_run(store_root, study_path, Analysis::ResponseSurface, pool)?;
     let report = study::run_rsm(store_root, &study, &store, &pool, &run_logged)?;
     if json {
         print_json(&report, out)?;
@@ -1367,9 +1364,8 @@ pub fn sensitivity(
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, store) =
-        open_sized_design_study(store_root, study_path, Analysis::Sensitivity, pool.max_runs)?;
-    let pool = pool.in_study(&study::dir::StudyDir::path_in(store_root, &study));
+    let (study, store, pool) =
+        open_design_run(store_root, study_path, Analysis::Sensitivity, pool)?;
     let outcome = study::run_sensitivity(store_root, &study, &store, &pool, &run_logged, levels)?;
     if json {
         print_json(&outcome, out)?;
@@ -1412,13 +1408,8 @@ pub fn screen(
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, store) = open_sized_design_study(
-        store_root,
-        study_path,
-        Analysis::ResponseSurface,
-        pool.max_runs,
-    )?;
-    let pool = pool.in_study(&study::dir::StudyDir::path_in(store_root, &study));
+    let (study, store, pool) =
+        open_design_run(store_root, study_path, Analysis::ResponseSurface, pool)?;
     let outcome = study::run_screen(store_root, &study, &store, &pool, &run_logged)?;
     if json {
         print_json(&outcome, out)

@@ -661,6 +661,17 @@ mod tests {
             .contains("--time-limit `banana`"));
     }
 
+    /// The drum smoke experiment and an empty store in a temp directory.
+    fn drum_in_a_fresh_store() -> (Experiment, tempfile::TempDir, Store) {
+        let text = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/drum/smoke.json"),
+        )
+        .unwrap();
+        let tmp = tempfile::tempdir().unwrap();
+        let store = Store::open(tmp.path()).unwrap();
+        (parse_experiment(&text).unwrap(), tmp, store)
+    }
+
     #[derive(Debug, thiserror::Error)]
     #[error("pile angle: not measurable")]
     struct Outer(#[source] std::io::Error);
@@ -670,13 +681,7 @@ mod tests {
     /// (issue 40, item 5).
     #[test]
     fn a_failure_reads_back_as_the_local_message_without_a_path() {
-        let text = std::fs::read_to_string(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/drum/smoke.json"),
-        )
-        .unwrap();
-        let e = parse_experiment(&text).unwrap();
-        let tmp = tempfile::tempdir().unwrap();
-        let store = Store::open(tmp.path()).unwrap();
+        let (e, tmp, store) = drum_in_a_fresh_store();
         let runner = |_: &Experiment, _: &RunDir| -> Result<RunResult, Outer> {
             Err(Outer(std::io::Error::other(
                 "left flank has 2 surface points",
@@ -696,13 +701,7 @@ mod tests {
     /// from error.json as the local run reports it (issue 40, item 5).
     #[test]
     fn an_unusable_result_reads_back_as_the_local_message() {
-        let text = std::fs::read_to_string(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/drum/smoke.json"),
-        )
-        .unwrap();
-        let e = parse_experiment(&text).unwrap();
-        let tmp = tempfile::tempdir().unwrap();
-        let store = Store::open(tmp.path()).unwrap();
+        let (e, _tmp, store) = drum_in_a_fresh_store();
         let runner = |e: &Experiment, _: &RunDir| -> Result<RunResult, Outer> {
             let mut r = RunResult::new(e, "fake");
             r.measurements.insert("peak_force_n".into(), f64::NAN);
