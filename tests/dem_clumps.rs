@@ -1,5 +1,6 @@
-//! Rigid clumps in the engine: free rotation, rest on a plane, impacts, and
-//! bit-identical results on any thread count.
+//! Rigid clumps in the engine: free rotation, rest on a plane, impacts,
+//! bit-identical results on any thread count, and health failures that name
+//! their clump and, for clumps placed overlapping, the placement.
 
 mod dem_support;
 
@@ -8,7 +9,8 @@ use nalgebra::UnitQuaternion;
 use repose::dem::clump::bodies::ClumpInit;
 use repose::dem::clump::template::{ClumpShape, ClumpTemplate, Member};
 use repose::dem::domain::Domain;
-use repose::dem::simulation::{NormalChoice, RollingChoice, Simulation, World};
+use repose::dem::health::HealthCause;
+use repose::dem::simulation::{NormalChoice, RollingChoice, SetupError, Simulation, World};
 use repose::dem::vec3::Vec3;
 use repose::dem::walls::Wall;
 
@@ -304,6 +306,45 @@ fn a_health_failure_names_the_member_sphere_and_its_clump() {
     assert!(
         text.contains(&format!("member sphere of clump {body}"))
             && text.contains("left the domain"),
+        "{text}"
+    );
+}
+
+#[test]
+fn an_overlap_found_at_step_0_blames_the_placement_not_the_time_step() {
+    // End to end along x, 1.8 mm apart: the facing members (radius 0.89 mm,
+    // 0.27 mm off the centres) overlap by 0.57 of a radius, beyond the 0.3
+    // bound, before anything moved.
+    let mut world = clump_world(
+        vec![paired()],
+        Vec::new(),
+        Vec3::from_element(-0.005),
+        Vec3::from_element(0.005),
+    );
+    for x in [-0.0009, 0.0009] {
+        push(
+            &mut world,
+            Vec3::new(x, 0.0, 0.0),
+            UnitQuaternion::identity(),
+            Vec3::zeros(),
+            Vec3::zeros(),
+        );
+    }
+    let c = contact_setup(RollingChoice::None, 0.0);
+    let dt = auto_dt(&c, R, RHO, 1.0);
+    let err = Simulation::new(world, &setup(c, RHO, false, dt, 1e-4)).unwrap_err();
+    let SetupError::Health(e) = &err else {
+        panic!("{err}")
+    };
+    assert_eq!(e.step, 0);
+    assert!(
+        matches!(e.cause, HealthCause::Overlap { ratio, .. } if ratio > 0.5),
+        "{e}"
+    );
+    let text = err.to_string();
+    assert!(
+        text.contains("the initial placement put them overlapping")
+            && !text.contains("time step too large"),
         "{text}"
     );
 }

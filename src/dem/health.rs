@@ -12,6 +12,11 @@
 //! [`HealthLimits::energy_growth`]. A cohesive system is excluded because
 //! adhesion legitimately converts surface energy into kinetic energy.
 //!
+//! An overlap beyond the bound at step 0 — found by the force evaluation of
+//! [`Simulation::new`](crate::dem::simulation::Simulation::new), before any
+//! step moved a particle — was placed, not reached: no time step caused it,
+//! so its message names the initial placement instead.
+//!
 //! Tunnelling: a particle that moves farther in one step than the overlap
 //! bound times its radius ([`HealthLimits::max_overlap_ratio`], the same
 //! bound) stops the run. At that speed the step no longer resolves a contact:
@@ -65,7 +70,8 @@ pub enum HealthCause {
     /// Position, velocity or angular velocity became NaN or infinite.
     NonFinite,
     /// An overlap exceeded the bound; `partner` names the other particle id or
-    /// wall index.
+    /// wall index. At step 0 the particles were placed overlapping (see the
+    /// module docs), which the message says.
     Overlap {
         /// Overlap / smaller radius.
         ratio: f64,
@@ -105,7 +111,7 @@ pub enum HealthCause {
 
 /// A run stopped by a health check.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("unhealthy simulation at step {step} (t = {time_s:.6e} s), particle {particle_id}{}: {}", member_of(.body_id), describe(.cause))]
+#[error("unhealthy simulation at step {step} (t = {time_s:.6e} s), particle {particle_id}{}: {}", member_of(.body_id), describe(.cause, *.step))]
 pub struct HealthError {
     /// Stable id of the (first) offending particle (lowest index for ties).
     pub particle_id: u32,
@@ -126,7 +132,9 @@ fn member_of(body: &Option<u32>) -> String {
         .unwrap_or_default()
 }
 
-fn describe(c: &HealthCause) -> String {
+/// The cause's message; `step` is the step the check failed at (at step 0
+/// nothing has moved yet).
+fn describe(c: &HealthCause, step: u64) -> String {
     match c {
         HealthCause::NonFinite => "position or velocity is not finite".into(),
         HealthCause::Overlap {
@@ -135,8 +143,17 @@ fn describe(c: &HealthCause) -> String {
             partner,
             position,
         } => format!(
-            "overlap {ratio:.3} of the radius with {partner} at ({:.6}, {:.6}, {:.6}) m exceeds the bound {limit} (time step too large for the impact speed, or stiffness too low)",
-            position.x, position.y, position.z
+            "overlap {ratio:.3} of the radius with {partner} at ({:.6}, {:.6}, {:.6}) m exceeds the bound {limit} ({})",
+            position.x,
+            position.y,
+            position.z,
+            if step == 0 {
+                "before any step moved a particle: the initial placement put them \
+                 overlapping, not the time step (a layout too dense for the particles' \
+                 shape or size)"
+            } else {
+                "time step too large for the impact speed, or stiffness too low"
+            }
         ),
         HealthCause::LeftDomain { position } => format!(
             "left the domain at ({:.6}, {:.6}, {:.6}) m",
