@@ -73,14 +73,13 @@ pub enum ExecError {
     /// of time or memory, or their job script failed): the stage stops
     /// before its analysis; the next call submits those runs again.
     #[error(
-        "{runs} Slurm task(s) ended without a result or an error.json; the stage stops \
+        "{} Slurm task(s) ended without a result or an error.json; the stage stops \
          here and the next call submits them again:\n  {}",
+        messages.len(),
         list_lost(messages)
     )]
     Lost {
-        /// How many runs were lost.
-        runs: usize,
-        /// Why, per run (the task and the end of its log).
+        /// Why, per lost run (the task and the end of its log).
         messages: Vec<String>,
     },
     /// A task waits in Slurm's queue for a reason that waiting does not

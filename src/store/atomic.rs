@@ -99,19 +99,28 @@ fn create_temp(dir: &Path, name: &OsStr) -> io::Result<(File, PathBuf)> {
 pub fn remove_stale_temps(dir: &Path) -> io::Result<usize> {
     let mut removed = 0;
     for entry in fs::read_dir(dir)? {
-        let entry = entry?;
-        let is_temp = entry
-            .file_name()
-            .to_str()
-            .is_some_and(|n| n.starts_with(TEMP_PREFIX));
-        if is_temp && entry.file_type()?.is_file() {
-            match fs::remove_file(entry.path()) {
-                Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
-                _ => removed += 1,
-            }
-        }
+        removed += usize::from(remove_if_temp(&entry?, |_| Ok(true))?);
     }
     Ok(removed)
+}
+
+/// Removes `entry` when it is a temp file ([`TEMP_PREFIX`]) that `remove`
+/// accepts; whether it did (one another process removed first counts).
+fn remove_if_temp(
+    entry: &fs::DirEntry,
+    remove: impl FnOnce(&fs::DirEntry) -> io::Result<bool>,
+) -> io::Result<bool> {
+    let is_temp = entry
+        .file_name()
+        .to_str()
+        .is_some_and(|n| n.starts_with(TEMP_PREFIX));
+    if !(is_temp && entry.file_type()?.is_file() && remove(entry)?) {
+        return Ok(false);
+    }
+    match fs::remove_file(entry.path()) {
+        Err(e) if e.kind() != io::ErrorKind::NotFound => Err(e),
+        _ => Ok(true),
+    }
 }
 
 /// How old a temp file must be before [`remove_old_temps`] takes it for a
@@ -136,22 +145,15 @@ pub fn remove_old_temps(dir: &Path, min_age: std::time::Duration) -> io::Result<
         };
         for entry in entries {
             let entry = entry?;
-            let kind = entry.file_type()?;
-            if kind.is_dir() {
+            if entry.file_type()?.is_dir() {
                 stack.push(entry.path());
                 continue;
             }
-            let is_temp = entry
-                .file_name()
-                .to_str()
-                .is_some_and(|n| n.starts_with(TEMP_PREFIX));
-            let age = entry.metadata()?.modified()?.elapsed().unwrap_or_default();
-            if is_temp && kind.is_file() && age >= min_age {
-                match fs::remove_file(entry.path()) {
-                    Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
-                    _ => removed += 1,
-                }
-            }
+            let old = |e: &fs::DirEntry| -> io::Result<bool> {
+                let age = e.metadata()?.modified()?.elapsed().unwrap_or_default();
+                Ok(age >= min_age)
+            };
+            removed += usize::from(remove_if_temp(&entry, old)?);
         }
     }
     Ok(removed)

@@ -736,15 +736,18 @@ fn noise_sentence(n: &NoiseCeiling, sigma2: f64, metrics: &[SurrogateMetrics]) -
          against them. ",
         n.noise_var, n.signal_var, n.signal_to_noise, n.r2_ceiling, n.rmse_floor
     );
-    match seeds_for_ceiling(n.signal_var, sigma2, 0.9) {
-        _ if n.r2_ceiling >= 0.9 => out.push_str("The ceiling is above 0.9 already."),
-        Some(k) => out.push_str(&format!(
-            "{k} seeds per point would lift the ceiling to 0.9."
-        )),
-        None => out.push_str(
-            "No signal stands above the noise across these points: no seed count lifts \
-             the ceiling; the parameters' effects here are below the noise.",
-        ),
+    if n.r2_ceiling >= 0.9 {
+        out.push_str("The ceiling is above 0.9 already.");
+    } else {
+        match seeds_for_ceiling(n.signal_var, sigma2, 0.9) {
+            Some(k) => out.push_str(&format!(
+                "{k} seeds per point would lift the ceiling to 0.9."
+            )),
+            None => out.push_str(
+                "No signal stands above the noise across these points: no seed count lifts \
+                 the ceiling; the parameters' effects here are below the noise.",
+            ),
+        }
     }
     let below: Vec<&str> = metrics
         .iter()

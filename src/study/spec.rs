@@ -622,6 +622,23 @@ impl DesignStudy {
         }
     }
 
+    /// Points of the design, counted without building it (saturating): an
+    /// LHS's `points`, the product of a full factorial's level counts (a
+    /// factor without levels counts 0), a Box–Behnken's 2k(k − 1) edge
+    /// midpoints and its centre points.
+    pub fn points(&self) -> u64 {
+        let k = self.factors.len() as u64;
+        match &self.design {
+            DesignSpec::BoxBehnken { centre_points } => {
+                (2 * k * k.saturating_sub(1)).saturating_add(u64::from(*centre_points))
+            }
+            DesignSpec::FullFactorial { levels } => self.factors.keys().fold(1u64, |n, f| {
+                n.saturating_mul(levels.get(f).map_or(0, Vec::len) as u64)
+            }),
+            DesignSpec::Lhs { points } => u64::from(*points),
+        }
+    }
+
     /// Whether the design can carry a full quadratic fit: three levels of
     /// each factor and more runs than the (k + 1)(k + 2)/2 terms. `repose
     /// rsm` asks this before any run (a sensitivity study needs neither, so
@@ -639,14 +656,10 @@ impl DesignStudy {
                 ));
             }
         }
+        // A Box–Behnken always has more points than the quadratic has terms.
         let points = match &self.design {
-            DesignSpec::FullFactorial { levels } => self
-                .factors
-                .keys()
-                .map(|f| levels.get(f).map_or(0, Vec::len))
-                .product(),
-            DesignSpec::Lhs { points } => *points as usize,
             DesignSpec::BoxBehnken { .. } => usize::MAX,
+            _ => usize::try_from(self.points()).unwrap_or(usize::MAX),
         };
         let runs = points.saturating_mul(self.replicates as usize);
         if runs <= terms {

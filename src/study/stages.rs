@@ -377,20 +377,12 @@ impl StudySpec {
 
     /// A design study's stage list for `analysis`.
     pub fn design(study: &DesignStudy, analysis: Analysis) -> StudySpec {
-        let k = study.factors.len() as u64;
-        let (design, points) = match &study.design {
-            DesignSpec::BoxBehnken { centre_points } => (
-                DesignOf::BoxBehnken,
-                (2 * k * k.saturating_sub(1)).saturating_add(u64::from(*centre_points)),
-            ),
-            DesignSpec::FullFactorial { levels } => (
-                DesignOf::FullFactorial,
-                levels
-                    .values()
-                    .fold(1u64, |n, l| n.saturating_mul(l.len() as u64)),
-            ),
-            DesignSpec::Lhs { points } => (DesignOf::Lhs, u64::from(*points)),
+        let design = match study.design {
+            DesignSpec::BoxBehnken { .. } => DesignOf::BoxBehnken,
+            DesignSpec::FullFactorial { .. } => DesignOf::FullFactorial,
+            DesignSpec::Lhs { .. } => DesignOf::Lhs,
         };
+        let points = study.points();
         let scenes: Vec<String> = study.scenes.keys().cloned().collect();
         let mut stages = Vec::new();
         if let (Analysis::ResponseSurface, Some(s)) = (analysis, &study.screening) {

@@ -427,10 +427,7 @@ pub(super) fn run(
         },
     )?;
     if !lost.is_empty() {
-        return Err(ExecError::Lost {
-            runs: lost.len(),
-            messages: lost,
-        });
+        return Err(ExecError::Lost { messages: lost });
     }
     failures.sort();
     Ok(failures)
