@@ -52,7 +52,7 @@ use crate::exec::Executor;
 use crate::manifest::Experiment;
 use crate::scenes::responses::{flow_rate_curve, observations};
 use crate::stats::nlls::{Model, PowerLaw};
-use crate::store::{Depth, Lineage, RunDir, RunResult, RunState, Store};
+use crate::store::{Depth, Lineage, RunDir, RunResult, RunState, Store, StoreError, TEMP_PREFIX};
 use level1::{CurveInput, Level1, Observation};
 use level2::Level2;
 use level3::Level3;
@@ -113,21 +113,59 @@ pub struct SensitivityOutcome {
     pub stages: Vec<StageState>,
 }
 
-/// A stage's JSON outcome if it lies beside `lineage` (the same stage, the
-/// same inputs) with the bytes that stage wrote: an output edited since, or
-/// one whose record predates output hashes, is recomputed, never served.
+/// A stage's JSON outcome `json` if its stage directory holds exactly what
+/// the stage described by `lineage` (the same stage, the same inputs) wrote:
+/// every file there has a lineage record equal to `lineage` and the bytes
+/// that record hashed, and every record its file. A stage with an output
+/// edited, deleted or added since, or a record deleted or predating output
+/// hashes, is recomputed (rewriting every output), never served.
 fn cached<T: DeserializeOwned>(json: &Path, lineage: &Lineage) -> Option<T> {
-    let stored = Lineage::read_beside(json).ok()?;
-    let bytes = std::fs::read(json).ok()?;
-    let written = stored.output_sha256.is_some() && stored.describes(&bytes);
-    let same_stage = Lineage {
-        output_sha256: None,
-        ..stored
-    } == *lineage;
-    if !(written && same_stage) {
-        return None;
+    let dir = json.parent()?;
+    for entry in std::fs::read_dir(dir).ok()? {
+        let path = entry.ok()?.path();
+        let name = path.file_name()?.to_str()?;
+        if name.starts_with(TEMP_PREFIX) {
+            continue;
+        }
+        let output = name
+            .strip_suffix(".lineage.json")
+            .map_or(path.clone(), |o| dir.join(o));
+        if !written_by(&output, lineage) {
+            return None;
+        }
     }
-    serde_json::from_slice(&bytes).ok()
+    serde_json::from_slice(&std::fs::read(json).ok()?).ok()
+}
+
+/// Whether `output` holds the bytes its lineage record hashed and that
+/// record describes the stage of `lineage`.
+fn written_by(output: &Path, lineage: &Lineage) -> bool {
+    let (Ok(stored), Ok(bytes)) = (Lineage::read_beside(output), std::fs::read(output)) else {
+        return false;
+    };
+    let written = stored.output_sha256.is_some() && stored.describes(&bytes);
+    written
+        && Lineage {
+            output_sha256: None,
+            ..stored
+        } == *lineage
+}
+
+/// Removes the files of the stage directory `stage` (not another client's
+/// temporary files) before the stage is computed again, so that it then
+/// holds only what this computation writes, which [`cached`] can serve.
+fn clear_stage(stage: &Path) -> Result<(), StoreError> {
+    for entry in std::fs::read_dir(stage).map_err(StoreError::io(stage))? {
+        let path = entry.map_err(StoreError::io(stage))?.path();
+        let temp = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| n.starts_with(TEMP_PREFIX));
+        if path.is_file() && !temp {
+            std::fs::remove_file(&path).map_err(StoreError::io(&path))?;
+        }
+    }
+    Ok(())
 }
 
 /// Runs the levels asked for (see the module docs) and writes the reports.
@@ -188,6 +226,7 @@ where
         let (outcome, was_cached) = match cached::<Result<Level3, String>>(&json, &lineage) {
             Some(l) => (l, true),
             None => {
+                clear_stage(&stage)?;
                 let base = experiment_at(&[], 0)?;
                 let experiments = points
                     .iter()
@@ -260,6 +299,7 @@ where
             let (l, was_cached) = match cached::<Level1>(&json, &lineage) {
                 Some(l) => (l, true),
                 None => {
+                    clear_stage(&stage)?;
                     let l = level1::level1(&factors, &missing, &obs, &curves_in);
                     write_level1(&stage, &l, &obs, &curves_in, &factors, &lineage)?;
                     write_output(
@@ -291,6 +331,7 @@ where
             let (l, was_cached) = match cached::<Level2>(&json, &lineage) {
                 Some(l) => (l, true),
                 None => {
+                    clear_stage(&stage)?;
                     let l = compute_level2(study, &runs, &points, &experiment_at)?;
                     write_output(
                         &stage.join("pca.csv"),
