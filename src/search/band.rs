@@ -21,7 +21,7 @@ use nalgebra::{DMatrix, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 
 use super::acquisition::probability_in_band;
-use super::meanshift::estimate_bandwidth;
+use super::meanshift::{estimate_bandwidth, mean_shift, Clustering, Kernel};
 use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::streams::{rng, Stream};
 use crate::surrogate::Prediction;
@@ -108,6 +108,53 @@ pub fn cluster_column(points: usize, kept: &[usize], labels: &[usize]) -> Vec<Op
 /// `quantile` of their pairwise distances (0 when they are all one point).
 pub fn bandwidth(kept_unit: &[Vec<f64>], given: Option<f64>, quantile: f64) -> f64 {
     given.unwrap_or_else(|| estimate_bandwidth(kept_unit, quantile))
+}
+
+/// The points a search kept and their mean-shift clusters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Selection {
+    /// Indices of the kept points, ascending.
+    pub kept: Vec<usize>,
+    /// The kept points, unit-scaled.
+    pub kept_unit: Vec<Vec<f64>>,
+    /// The bandwidth (unit-scaled): given, or estimated (0 when the kept
+    /// points are all one point).
+    pub bandwidth: f64,
+    /// The mean-shift result on the kept points.
+    pub clustering: Clustering,
+}
+
+/// Keeps the points of `unit` whose `scores` the `criterion` accepts and
+/// clusters them by mean shift with `kernel` at the bandwidth `given`, or
+/// estimated at `quantile`; `None` when no point is kept. A bandwidth of 0
+/// (the kept points are one point) clusters them with bandwidth 1, which
+/// holds the whole unit cube: one cluster; [`Selection::bandwidth`] still
+/// says 0, for a caller that refuses it.
+pub fn select(
+    unit: &[Vec<f64>],
+    scores: &[f64],
+    criterion: &Criterion,
+    kernel: Kernel,
+    given: Option<f64>,
+    quantile: f64,
+) -> Option<Selection> {
+    let kept = kept(criterion, scores);
+    if kept.is_empty() {
+        return None;
+    }
+    let kept_unit: Vec<Vec<f64>> = kept.iter().map(|&i| unit[i].clone()).collect();
+    let bandwidth = bandwidth(&kept_unit, given, quantile);
+    let clustering = mean_shift(
+        &kept_unit,
+        kernel,
+        if bandwidth > 0.0 { bandwidth } else { 1.0 },
+    );
+    Some(Selection {
+        kept,
+        kept_unit,
+        bandwidth,
+        clustering,
+    })
 }
 
 /// One parameter's spread over the kept points.

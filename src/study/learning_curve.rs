@@ -269,10 +269,15 @@ fn one_size(
         Err(StudyError::NothingKept(_) | StudyError::Settings(_)) => return Ok(row),
         Err(other) => return Err(other),
     };
-    row.kept = found.kept.len();
+    row.kept = found.selection.kept.len();
     row.clusters = found.clusters.len();
     row.centre = found.clusters.first().map(|c| c.centre.clone());
-    let kept: Vec<&Vec<f64>> = found.kept.iter().map(|&i| &found.physical[i]).collect();
+    let kept: Vec<&Vec<f64>> = found
+        .selection
+        .kept
+        .iter()
+        .map(|&i| &found.physical[i])
+        .collect();
     let spread: Vec<f64> = (0..study.parameters.len())
         .map(|j| standard_deviation(kept.iter().map(|p| p[j])))
         .collect();

@@ -52,8 +52,7 @@ use crate::report::markdown::MarkdownTable;
 use crate::report::svg::scatter_matrix;
 use crate::report::table::{Cell, CsvWriter};
 use crate::search::acquisition::probability_in_band;
-use crate::search::band::{bandwidth, cluster_column, family, kept, resample, Criterion, Family};
-use crate::search::meanshift::mean_shift;
+use crate::search::band::{cluster_column, family, resample, select, Criterion, Family, Selection};
 use crate::search::screen::{fix_inactive, MainEffect};
 use crate::surrogate::Prediction;
 
@@ -124,8 +123,20 @@ pub fn gp_search(
             })
         })
         .collect();
-    let kept = kept(&criterion, &probability);
-    if kept.is_empty() {
+    let Some(Selection {
+        kept,
+        kept_unit,
+        bandwidth,
+        clustering,
+    }) = select(
+        &unit,
+        &probability,
+        &criterion,
+        settings.kernel,
+        settings.bandwidth,
+        settings.quantile,
+    )
+    else {
         let best = (0..unit.len())
             .max_by(|&a, &b| probability[a].total_cmp(&probability[b]))
             .unwrap_or(0);
@@ -135,14 +146,6 @@ pub fn gp_search(
              more runs near the target (`--adaptive`) or a lower min_probability",
             spec.min_probability, probability[best], predictions[best].mean, predictions[best].sd
         )));
-    }
-    let kept_unit: Vec<Vec<f64>> = kept.iter().map(|&i| unit[i].clone()).collect();
-    let bandwidth = bandwidth(&kept_unit, settings.bandwidth, settings.quantile);
-    let clustering = if bandwidth > 0.0 {
-        mean_shift(&kept_unit, settings.kernel, bandwidth)
-    } else {
-        // One kept point (or identical ones): one cluster.
-        mean_shift(&kept_unit, settings.kernel, 1.0)
     };
     let candidates: Vec<Candidate> = clustering
         .centres

@@ -30,8 +30,8 @@ use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::scatter_matrix;
 use crate::report::table::{Cell, CsvWriter};
-use crate::search::band::{bandwidth, cluster_column, kept, resample, Criterion};
-use crate::search::meanshift::{mean_shift, Kernel};
+use crate::search::band::{cluster_column, resample, select, Criterion, Selection};
+use crate::search::meanshift::Kernel;
 use crate::surrogate::ga_bp::Model;
 use crate::surrogate::Prediction;
 
@@ -141,10 +141,13 @@ pub fn search(
     let Found {
         physical,
         predicted,
-        kept,
-        kept_unit,
-        bandwidth,
-        clustering,
+        selection:
+            Selection {
+                kept,
+                kept_unit,
+                bandwidth,
+                clustering,
+            },
         clusters,
     } = find(study, &model, settings)?;
     let label = cluster_column(predicted.len(), &kept, &clustering.labels);
@@ -208,14 +211,8 @@ pub struct Found {
     pub physical: Vec<Vec<f64>>,
     /// Predicted angle of every point, degrees.
     pub predicted: Vec<f64>,
-    /// Indices of the kept points.
-    pub kept: Vec<usize>,
-    /// The kept points, unit-scaled.
-    pub kept_unit: Vec<Vec<f64>>,
-    /// Bandwidth used (unit-scaled).
-    pub bandwidth: f64,
-    /// The mean-shift result on the kept points.
-    pub clustering: crate::search::meanshift::Clustering,
+    /// The kept points and their mean-shift clusters.
+    pub selection: Selection,
     /// The clusters, largest first.
     pub clusters: Vec<ClusterRow>,
 }
@@ -243,8 +240,14 @@ pub fn find(study: &Study, model: &Model, settings: &SearchSettings) -> Result<F
         .iter()
         .map(|&mean| criterion.score(&Prediction { mean, sd: None }))
         .collect();
-    let kept = kept(&criterion, &deviation);
-    if kept.is_empty() {
+    let Some(selection) = select(
+        &unit,
+        &deviation,
+        &criterion,
+        settings.kernel,
+        settings.bandwidth,
+        settings.quantile,
+    ) else {
         let lo = predicted.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = predicted.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         return Err(StudyError::NothingKept(format!(
@@ -255,21 +258,19 @@ pub fn find(study: &Study, model: &Model, settings: &SearchSettings) -> Result<F
             target.target_angle_deg,
             target.name
         )));
-    }
-    let kept_unit: Vec<Vec<f64>> = kept.iter().map(|&i| unit[i].clone()).collect();
-    let bandwidth = bandwidth(&kept_unit, settings.bandwidth, settings.quantile);
-    if bandwidth <= 0.0 {
+    };
+    if selection.bandwidth <= 0.0 {
         return Err(StudyError::Settings(format!(
             "the estimated bandwidth is 0 ({} kept point(s), quantile {}): raise --quantile or give --bandwidth",
-            kept.len(),
+            selection.kept.len(),
             settings.quantile
         )));
     }
-    let clustering = mean_shift(&kept_unit, settings.kernel, bandwidth);
-    let clusters: Vec<ClusterRow> = clustering
+    let clusters: Vec<ClusterRow> = selection
+        .clustering
         .centres
         .iter()
-        .zip(&clustering.sizes)
+        .zip(&selection.clustering.sizes)
         .enumerate()
         .map(|(k, (c, &size))| {
             let centre = to_physical(study, c);
@@ -285,10 +286,7 @@ pub fn find(study: &Study, model: &Model, settings: &SearchSettings) -> Result<F
     Ok(Found {
         physical,
         predicted,
-        kept,
-        kept_unit,
-        bandwidth,
-        clustering,
+        selection,
         clusters,
     })
 }
