@@ -61,6 +61,30 @@ impl AuditReport {
     pub fn is_clean(&self) -> bool {
         self.broken.is_empty() && self.reruns.iter().all(RerunCheck::identical)
     }
+
+    /// The report as `repose audit` prints it: the counts, a `BROKEN` line
+    /// per broken link, a `rerun` line per re-run, and `audit clean` when
+    /// nothing is wrong.
+    pub fn text(&self) -> String {
+        let mut out = format!(
+            "audited {} lineage record(s): {} file input(s) re-hashed, {} run(s) checked\n",
+            self.records, self.files_checked, self.runs_checked
+        );
+        for link in &self.broken {
+            out.push_str(&format!(
+                "BROKEN {}: {}\n",
+                link.record.display(),
+                link.problem
+            ));
+        }
+        for r in &self.reruns {
+            out.push_str(&format!("rerun {}: {}\n", r.id.short(12), r.verdict()));
+        }
+        if self.is_clean() {
+            out.push_str("audit clean\n");
+        }
+        out
+    }
 }
 
 /// One broken link: which record, and what is wrong.
@@ -90,6 +114,20 @@ impl RerunCheck {
     /// True when the re-run succeeded and reproduced both files.
     pub fn identical(&self) -> bool {
         self.failure.is_none() && self.result_identical && self.mcap_identical
+    }
+
+    /// What the re-run showed, in words.
+    pub fn verdict(&self) -> String {
+        let same = |b: bool| if b { "same" } else { "differs" };
+        match (&self.failure, self.identical()) {
+            (Some(f), _) => format!("re-run FAILED: {f}"),
+            (None, true) => "result.json and run.mcap byte-identical".to_string(),
+            (None, false) => format!(
+                "DIFFERS (result.json {}, run.mcap {})",
+                same(self.result_identical),
+                same(self.mcap_identical)
+            ),
+        }
     }
 }
 

@@ -10,6 +10,7 @@ use std::sync::Arc;
 use crate::audit::{self, AuditError};
 use crate::bench::{self, BenchError, BenchOptions};
 use crate::doe::diagnostics::Diagnostics;
+use crate::exec::slurm::status::StatusReport;
 use crate::exec::Executor;
 use crate::log::{inspect, InspectError};
 use crate::manifest::{
@@ -276,27 +277,11 @@ pub fn validate(
 ) -> Result<(), CommandError> {
     let mut failed = 0;
     for path in paths {
-        if kind != KindArg::Experiment && is_design_study_file(path) {
-            match read_design_study(path) {
-                Ok(study) => writeln!(out, "ok design-study {} {}", study.id(), path.display())?,
-                Err(error) => {
-                    failed += 1;
-                    writeln!(err, "{}", describe(path, &error))?;
-                }
-            }
-            continue;
-        }
-        match read_checked(path, kind) {
-            Ok(doc) => {
-                let kind = match doc.kind() {
-                    DocumentKind::Experiment => "experiment",
-                    DocumentKind::Study => "study",
-                };
-                writeln!(out, "ok {kind} {} {}", doc.id(), path.display())?;
-            }
-            Err(error) => {
+        match validate_one(path, kind) {
+            Ok(line) => writeln!(out, "{line}")?,
+            Err(why) => {
                 failed += 1;
-                writeln!(err, "{}", describe(path, &error))?;
+                writeln!(err, "{why}")?;
             }
         }
     }
@@ -307,6 +292,22 @@ pub fn validate(
         });
     }
     Ok(())
+}
+
+/// One file of `repose validate`: its `ok <kind> <id> <file>` line, or why
+/// it is invalid.
+fn validate_one(path: &Path, kind: KindArg) -> Result<String, String> {
+    let ok = |kind: &str, id: ContentId| format!("ok {kind} {id} {}", path.display());
+    if kind != KindArg::Experiment && is_design_study_file(path) {
+        return read_design_study(path)
+            .map(|study| ok("design-study", study.id()))
+            .map_err(|error| describe(path, &error));
+    }
+    let doc = read_checked(path, kind).map_err(|error| describe(path, &error))?;
+    Ok(match doc.kind() {
+        DocumentKind::Experiment => ok("experiment", doc.id()),
+        DocumentKind::Study => ok("study", doc.id()),
+    })
 }
 
 /// `repose plan MANIFEST` (and `repose run --dry-run`): validates the
@@ -321,32 +322,11 @@ pub fn plan(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (experiment, plan) = read_planned(manifest)?;
-    let verdict = plan.check(limits);
+    let (id, name) = (experiment.id(), manifest.display().to_string());
     if json {
-        let excess = verdict.as_ref().err().map_or(&[][..], |e| &e.0[..]);
-        let report = serde_json::json!({
-            "manifest": manifest.display().to_string(),
-            "id": experiment.id().to_string(),
-            "plan": plan,
-            "limits": limits,
-            "within_limits": verdict.is_ok(),
-            "excess": excess,
-        });
-        writeln!(out, "{}", pretty(&report))?;
-        return Ok(());
-    }
-    writeln!(out, "plan {} ({})", experiment.id(), manifest.display())?;
-    for line in plan.to_string().lines() {
-        writeln!(out, "  {line}")?;
-    }
-    writeln!(
-        out,
-        "  limits: particles {}, particle_steps {}, log_bytes {}",
-        limits.max_particles, limits.max_particle_steps, limits.max_log_bytes
-    )?;
-    match verdict {
-        Ok(()) => writeln!(out, "  within limits: yes")?,
-        Err(e) => writeln!(out, "  within limits: no: {e}")?,
+        writeln!(out, "{}", pretty(&plan.json(&id, &name, limits)))?;
+    } else {
+        write!(out, "{}", plan.text(&id, &name, limits))?;
     }
     Ok(())
 }
@@ -410,31 +390,10 @@ pub fn run(
     let (result, outcome) = store
         .run_cached(&experiment, run_logged)
         .map_err(|e| run_error(e, manifest, &id, &dir.error_path()))?;
-    let how = match outcome {
-        CacheOutcome::Hit => "cache hit",
-        CacheOutcome::Computed => "computed",
-    };
-    writeln!(out, "run {id} ({how})")?;
-    writeln!(out, "  directory: {}", dir.path().display())?;
-    if outcome == CacheOutcome::Computed {
-        // The engine's pool: RAYON_NUM_THREADS (a Slurm task sets it from
-        // SLURM_CPUS_PER_TASK), else the machine's CPUs.
-        writeln!(out, "  threads: {}", rayon::current_num_threads())?;
-    }
-    writeln!(
-        out,
-        "  scene: {}  profile: {}  kernel: {}",
-        result.scene, result.profile, result.kernel
-    )?;
-    if let Some(angle) = result.headline_angle_deg {
-        writeln!(out, "  angle of repose: {angle:.2} deg")?;
-    }
-    for (name, value) in &result.measurements {
-        writeln!(out, "  {name} = {value}")?;
-    }
-    for (name, why) in &result.unmeasured {
-        writeln!(out, "  {name}: {why}")?;
-    }
+    // The engine's pool: RAYON_NUM_THREADS (a Slurm task sets it from
+    // SLURM_CPUS_PER_TASK), else the machine's CPUs.
+    let threads = (outcome == CacheOutcome::Computed).then(rayon::current_num_threads);
+    write!(out, "{}", result.summary(&id, dir.path(), threads))?;
     for warning in &result.warnings {
         writeln!(err, "warning: run {id}: {warning}")?;
     }
@@ -570,32 +529,8 @@ pub fn audit(
 ) -> Result<(), CommandError> {
     let store = open_store(store_root)?;
     let report = audit::audit(&store, path, rerun, seed)?;
-    writeln!(
-        out,
-        "audited {} lineage record(s): {} file input(s) re-hashed, {} run(s) checked",
-        report.records, report.files_checked, report.runs_checked
-    )?;
-    for link in &report.broken {
-        writeln!(out, "BROKEN {}: {}", link.record.display(), link.problem)?;
-    }
-    for r in &report.reruns {
-        let verdict = match (&r.failure, r.identical()) {
-            (Some(f), _) => format!("re-run FAILED: {f}"),
-            (None, true) => "result.json and run.mcap byte-identical".to_string(),
-            (None, false) => format!(
-                "DIFFERS (result.json {}, run.mcap {})",
-                if r.result_identical {
-                    "same"
-                } else {
-                    "differs"
-                },
-                if r.mcap_identical { "same" } else { "differs" }
-            ),
-        };
-        writeln!(out, "rerun {}: {verdict}", r.id.short(12))?;
-    }
+    write!(out, "{}", report.text())?;
     if report.is_clean() {
-        writeln!(out, "audit clean")?;
         Ok(())
     } else {
         Err(CommandError::AuditFailed {
@@ -734,35 +669,7 @@ fn write_diagnostics(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    writeln!(
-        out,
-        "  points: {}  columns: {}",
-        d.points,
-        d.columns.join(", ")
-    )?;
-    writeln!(
-        out,
-        "  centred L2 discrepancy (squared, Hickernell 1998): {:.6}",
-        d.centred_l2_discrepancy_squared
-    )?;
-    writeln!(
-        out,
-        "  minimum pairwise distance (unit cube): {:.6}",
-        d.min_pairwise_distance
-    )?;
-    for (label, pair) in [
-        ("Pearson", &d.max_abs_pearson),
-        ("Spearman", &d.max_abs_spearman),
-    ] {
-        match pair {
-            Some(p) => writeln!(
-                out,
-                "  max |{label}| correlation: {:.4} ({} vs {})",
-                p.r, p.a, p.b
-            )?,
-            None => writeln!(out, "  max |{label}| correlation: undefined")?,
-        }
-    }
+    write!(out, "{}", d.text())?;
     for w in &d.warnings {
         writeln!(err, "warning: {w}")?;
     }
@@ -849,38 +756,22 @@ fn calibrate_noise_aware(
     let pool = exec.in_study(dir.path());
     set_quiet(true);
     let options = NoiseAwareOptions::defaults(&study, candidates, flags.adaptive);
-    let mut lines: Vec<String> = Vec::new();
-    let mut err = io::stderr();
+    // Stage reports as they come: on `out`, or on stderr with `--json`.
     let outcome = {
+        let mut err = io::stderr();
+        let sink: &mut dyn Write = if flags.json { &mut err } else { &mut *out };
         let mut log = |line: &str| {
-            if flags.json {
-                let _ = writeln!(err, "{line}");
-            } else {
-                lines.push(line.to_string());
-            }
+            let _ = writeln!(sink, "{line}");
         };
-        let result = calibrate_noise_aware_stages(
-            &dir, &study, &store, &pool, &options, run_logged, &mut log,
-        );
-        result?
+        calibrate_noise_aware_stages(&dir, &study, &store, &pool, &options, run_logged, &mut log)?
     };
-    for l in &lines {
-        writeln!(out, "{l}")?;
-    }
     if flags.json {
         return print_json(&outcome, out);
     }
     writeln!(
         out,
-        "\n{}: {} noise + {} design + {} adaptive + {} verification runs; calibrated: {}, verified in every scene: {}\n  outcome: {}",
-        outcome.study,
-        outcome.runs.noise,
-        outcome.runs.design,
-        outcome.runs.adaptive,
-        outcome.runs.verification,
-        if outcome.calibrated { "yes" } else { "no" },
-        if outcome.verified { "yes" } else { "no" },
-        dir.path().join("outcome.json").display()
+        "\n{}",
+        outcome.summary(&dir.path().join("outcome.json"))
     )?;
     Ok(())
 }
@@ -991,30 +882,7 @@ fn run_batch_and_report(
     let settings = exec.in_study(dir.path());
     set_quiet(true);
     let outcome = run_batch(&dir, &study, &store, &settings, run_logged)?;
-    writeln!(
-        out,
-        "{} samples: {} complete before, {} computed, {} failed",
-        outcome.total,
-        outcome.cached,
-        outcome.computed,
-        outcome.failures.len()
-    )?;
-    for f in &outcome.failures {
-        writeln!(
-            out,
-            "  sample {} ({}) failed: {}",
-            f.index,
-            f.id.short(12),
-            f.message
-        )?;
-    }
-    if !outcome.failures.is_empty() {
-        writeln!(
-            out,
-            "  each failed run's error.json holds its whole error (`repose runs show ID`)"
-        )?;
-    }
-    writeln!(out, "  angles: {}", outcome.table.display())?;
+    write!(out, "{}", outcome.text())?;
     Ok((outcome.failures.len(), outcome.total))
 }
 
@@ -1184,42 +1052,50 @@ fn status_of_manifest(
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
+    let reports = manifest_ledgers(store_root, base)?;
+    if json {
+        let map: serde_json::Map<String, serde_json::Value> = reports
+            .iter()
+            .map(|(what, r)| Ok((what.to_string(), serde_json::to_value(r)?)))
+            .collect::<Result<_, serde_json::Error>>()
+            .map_err(io::Error::from)?;
+        return print_json(&map, out);
+    }
+    for (what, report) in &reports {
+        writeln!(out, "{what} of experiment {}:", base.id().short(12))?;
+        match report {
+            Some(r) => write_status(r, out)?,
+            None => writeln!(out, "  (nothing submitted to Slurm)")?,
+        }
+    }
+    Ok(())
+}
+
+/// The Slurm status of `base`'s noise floor and tradeoff sweep, each `None`
+/// when nothing of it was submitted to Slurm.
+fn manifest_ledgers(
+    store_root: &Path,
+    base: &Experiment,
+) -> Result<Vec<(&'static str, Option<StatusReport>)>, CommandError> {
     let store = open_store(store_root)?;
     let ledgers = [
         ("noise", store_root.join("noise").join(base.id().short(12))),
         ("tradeoff", tradeoff_sweep::default_dir(&store, base)),
     ];
-    let mut reports = serde_json::Map::new();
+    let mut reports = Vec::new();
     for (what, dir) in ledgers {
         let slurm = dir.join("slurm");
-        let report = if slurm.is_dir() {
-            Some(crate::exec::slurm::status::status(&store, slurm)?)
-        } else {
-            None
-        };
-        if !json {
-            writeln!(out, "{what} of experiment {}:", base.id().short(12))?;
-            match &report {
-                Some(r) => write_status(r, out)?,
-                None => writeln!(out, "  (nothing submitted to Slurm)")?,
-            }
-        }
-        reports.insert(
-            what.to_string(),
-            serde_json::to_value(&report).map_err(io::Error::from)?,
-        );
+        let report = slurm
+            .is_dir()
+            .then(|| crate::exec::slurm::status::status(&store, slurm))
+            .transpose()?;
+        reports.push((what, report));
     }
-    if json {
-        print_json(&reports, out)?;
-    }
-    Ok(())
+    Ok(reports)
 }
 
 /// A status report as text.
-fn write_status(
-    report: &crate::exec::slurm::status::StatusReport,
-    out: &mut dyn Write,
-) -> Result<(), CommandError> {
+fn write_status(report: &StatusReport, out: &mut dyn Write) -> Result<(), CommandError> {
     write!(out, "{}", report.text())?;
     if report.runs.is_empty() {
         writeln!(
@@ -1460,8 +1336,28 @@ pub fn calibrate(
             path.display()
         )));
     }
-    let candidates = candidates.unwrap_or(3);
-    let spec = StudySpec::calibration(&study, false, candidates);
+    calibrate_classic(
+        store_root,
+        &path,
+        &study,
+        exec,
+        candidates.unwrap_or(3),
+        out,
+    )
+}
+
+/// `repose calibrate` on a classic he2019 study: its stage list, each stage
+/// run by its subcommand ([`run_classic_stage`]) under a `== i/n stage`
+/// heading.
+fn calibrate_classic(
+    store_root: &Path,
+    path: &Path,
+    study: &Study,
+    exec: &Executor,
+    candidates: usize,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let spec = StudySpec::calibration(study, false, candidates);
     let total = spec.stages.len();
     for (i, stage) in spec.stages.iter().enumerate() {
         let how = match stage {
@@ -1470,7 +1366,7 @@ pub fn calibrate(
             _ => String::new(),
         };
         writeln!(out, "\n== {}/{total} {}{how}", i + 1, stage.name())?;
-        run_classic_stage(store_root, &path, &study, stage, exec, candidates, out)?;
+        run_classic_stage(store_root, path, study, stage, exec, candidates, out)?;
     }
     Ok(())
 }

@@ -71,6 +71,34 @@ pub struct Diagnostics {
     pub warnings: Vec<String>,
 }
 
+impl Diagnostics {
+    /// The figures as `repose sample` prints them, one indented line each
+    /// (the warnings are not included: they go to stderr).
+    pub fn text(&self) -> String {
+        let mut out = format!(
+            "  points: {}  columns: {}\n  centred L2 discrepancy (squared, Hickernell 1998): \
+             {:.6}\n  minimum pairwise distance (unit cube): {:.6}\n",
+            self.points,
+            self.columns.join(", "),
+            self.centred_l2_discrepancy_squared,
+            self.min_pairwise_distance
+        );
+        for (label, pair) in [
+            ("Pearson", &self.max_abs_pearson),
+            ("Spearman", &self.max_abs_spearman),
+        ] {
+            out.push_str(&match pair {
+                Some(p) => format!(
+                    "  max |{label}| correlation: {:.4} ({} vs {})\n",
+                    p.r, p.a, p.b
+                ),
+                None => format!("  max |{label}| correlation: undefined\n"),
+            });
+        }
+        out
+    }
+}
+
 /// Computes the diagnostics of `points` (rows in `[0, 1]^d`, one column per
 /// name), flagging correlations with |r| ≥ `strong_correlation`.
 pub fn diagnose(columns: &[String], points: &[Vec<f64>], strong_correlation: f64) -> Diagnostics {

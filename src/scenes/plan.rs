@@ -80,7 +80,8 @@ use crate::manifest::scene::{
 };
 use crate::manifest::validate::number;
 use crate::manifest::{
-    validate_experiment, Experiment, FieldError, Scene, SizeDistribution, ValidationErrors,
+    validate_experiment, ContentId, Experiment, FieldError, Scene, SizeDistribution,
+    ValidationErrors,
 };
 
 /// Most particles a run can have: the engine numbers particles with `u32` ids.
@@ -267,6 +268,43 @@ impl RunPlan {
         } else {
             Err(OverLimit(excess))
         }
+    }
+}
+
+impl RunPlan {
+    /// The plan of experiment `id` (from `manifest`) against `limits` as
+    /// `repose plan` prints it: a header line, the estimates, the limits and
+    /// whether the estimates are within them (above a limit is a finding
+    /// here, not an error).
+    pub fn text(&self, id: &ContentId, manifest: &str, limits: &Limits) -> String {
+        let mut out = format!("plan {id} ({manifest})\n");
+        for line in self.to_string().lines() {
+            out.push_str(&format!("  {line}\n"));
+        }
+        out.push_str(&format!(
+            "  limits: particles {}, particle_steps {}, log_bytes {}\n",
+            limits.max_particles, limits.max_particle_steps, limits.max_log_bytes
+        ));
+        match self.check(limits) {
+            Ok(()) => out.push_str("  within limits: yes\n"),
+            Err(e) => out.push_str(&format!("  within limits: no: {e}\n")),
+        }
+        out
+    }
+
+    /// [`RunPlan::text`] as one JSON object: `manifest`, `id`, `plan`,
+    /// `limits`, `within_limits` and the `excess` estimates.
+    pub fn json(&self, id: &ContentId, manifest: &str, limits: &Limits) -> serde_json::Value {
+        let verdict = self.check(limits);
+        let excess = verdict.as_ref().err().map_or(&[][..], |e| &e.0[..]);
+        serde_json::json!({
+            "manifest": manifest,
+            "id": id.to_string(),
+            "plan": self,
+            "limits": limits,
+            "within_limits": verdict.is_ok(),
+            "excess": excess,
+        })
     }
 }
 

@@ -130,6 +130,41 @@ pub struct Trace {
 }
 
 impl RunResult {
+    /// The run as `repose run` prints it: id and how it was obtained (`cache
+    /// hit`, or `computed` with the engine's `threads` when this call ran
+    /// it), `directory`, scene, profile and kernel, the headline angle, every
+    /// measurement and why any response was not measured.
+    pub fn summary(
+        &self,
+        id: &ContentId,
+        directory: &std::path::Path,
+        threads: Option<usize>,
+    ) -> String {
+        let how = if threads.is_some() {
+            "computed"
+        } else {
+            "cache hit"
+        };
+        let mut out = format!("run {id} ({how})\n  directory: {}\n", directory.display());
+        if let Some(threads) = threads {
+            out.push_str(&format!("  threads: {threads}\n"));
+        }
+        out.push_str(&format!(
+            "  scene: {}  profile: {}  kernel: {}\n",
+            self.scene, self.profile, self.kernel
+        ));
+        if let Some(angle) = self.headline_angle_deg {
+            out.push_str(&format!("  angle of repose: {angle:.2} deg\n"));
+        }
+        for (name, value) in &self.measurements {
+            out.push_str(&format!("  {name} = {value}\n"));
+        }
+        for (name, why) in &self.unmeasured {
+            out.push_str(&format!("  {name}: {why}\n"));
+        }
+        out
+    }
+
     /// An empty result for `experiment` (id, scene kind and profile filled in).
     pub fn new(experiment: &Experiment, kernel: impl Into<String>) -> RunResult {
         RunResult {

@@ -62,6 +62,35 @@ pub struct BatchOutcome {
     pub table: PathBuf,
 }
 
+impl BatchOutcome {
+    /// The report as `repose batch` prints it: the counts, each failure, and
+    /// the table's path.
+    pub fn text(&self) -> String {
+        let mut out = format!(
+            "{} samples: {} complete before, {} computed, {} failed\n",
+            self.total,
+            self.cached,
+            self.computed,
+            self.failures.len()
+        );
+        for f in &self.failures {
+            out.push_str(&format!(
+                "  sample {} ({}) failed: {}\n",
+                f.index,
+                f.id.short(12),
+                f.message
+            ));
+        }
+        if !self.failures.is_empty() {
+            out.push_str(
+                "  each failed run's error.json holds its whole error (`repose runs show ID`)\n",
+            );
+        }
+        out.push_str(&format!("  angles: {}\n", self.table.display()));
+        out
+    }
+}
+
 /// `batch/angles.csv`.
 pub fn angles_path(dir: &StudyDir) -> PathBuf {
     dir.stage(Stage::Batch).join("angles.csv")

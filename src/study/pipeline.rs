@@ -122,6 +122,26 @@ pub struct CalibrationOutcome {
     pub verified: bool,
 }
 
+impl CalibrationOutcome {
+    /// Two lines for the end of `repose calibrate`: the runs per stage, the
+    /// verdicts, and where `outcome_json` (the whole outcome) is.
+    pub fn summary(&self, outcome_json: &std::path::Path) -> String {
+        let yes = |b: bool| if b { "yes" } else { "no" };
+        format!(
+            "{}: {} noise + {} design + {} adaptive + {} verification runs; calibrated: {}, \
+             verified in every scene: {}\n  outcome: {}",
+            self.study,
+            self.runs.noise,
+            self.runs.design,
+            self.runs.adaptive,
+            self.runs.verification,
+            yes(self.calibrated),
+            yes(self.verified),
+            outcome_json.display()
+        )
+    }
+}
+
 /// Runs every stage (see the module docs); `log` gets one line per stage.
 pub fn calibrate_noise_aware<E, F>(
     dir: &StudyDir,
