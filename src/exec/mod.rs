@@ -1,7 +1,8 @@
 //! The one executor seam: every stage that runs experiments (the he2019
 //! batch and verify stages, the design studies' screen, rsm and verify
-//! stages, `repose tradeoff`) hands them to [`run_incomplete`], which runs
-//! what the store does not hold complete and leaves the results in the store.
+//! stages, `repose tradeoff`) hands them to [`outcomes::run_collect`], which
+//! runs what the store does not hold complete through [`run_incomplete`] and
+//! reads one typed outcome per experiment back from the store.
 //!
 //! Without Slurm settings, [`Executor`] runs on this machine: `jobs` worker threads take
 //! runs from a shared queue; each runs its experiment inside its own
@@ -26,6 +27,7 @@
 //! store, so ids, results and the stages above are unchanged (the runner is
 //! then not called).
 
+pub mod outcomes;
 pub mod progress;
 pub mod slurm;
 
@@ -209,7 +211,7 @@ impl Executor {
 pub const DEFAULT_MAX_RUNS: u64 = 10_000;
 
 /// What [`run_incomplete`] did.
-pub struct Ran {
+pub(crate) struct Ran {
     /// Experiments the store already held complete (not run again).
     pub cached: usize,
     /// The runs that failed: (position in the experiments, message), sorted.
@@ -219,7 +221,7 @@ pub struct Ran {
 /// Runs every one of `experiments` the store does not hold complete, on
 /// `settings.jobs` workers with the progress bar (when `settings.progress`)
 /// counting the cached ones as done. Callers then read the results from the store.
-pub fn run_incomplete<E, F>(
+pub(crate) fn run_incomplete<E, F>(
     experiments: &[Experiment],
     store: &Store,
     settings: &Executor,

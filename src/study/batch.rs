@@ -18,10 +18,11 @@ use super::dir::StudyDir;
 use super::replicates::{replicates_csv, run_replicated};
 use super::sample::{design_path, experiment_path};
 use super::StudyError;
-use crate::exec::{run_incomplete, Executor, Ran};
+use crate::exec::outcomes::{run_collect, Retry, RunOutcome};
+use crate::exec::Executor;
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
 use crate::report::table::{parse_number, Cell, CsvWriter, Table};
-use crate::store::{Depth, RunDir, RunResult, RunState, RunStatus, Store};
+use crate::store::{RunDir, RunResult, RunStatus, Store};
 
 /// One row of design.csv.
 #[derive(Debug, Clone, PartialEq)]
@@ -187,32 +188,36 @@ where
         .iter()
         .map(|row| load_experiment(dir, row))
         .collect::<Result<Vec<_>, _>>()?;
-    let Ran { cached, failures } = run_incomplete(&experiments, store, settings, &runner)?;
-    let failures: Vec<Failure> = failures
-        .into_iter()
-        .map(|(i, message)| Failure {
-            index: design[i].index,
-            id: design[i].id.clone(),
-            message,
+    let collected = run_collect(&experiments, store, settings, &runner, Retry::Failed)?;
+    let failures: Vec<Failure> = design
+        .iter()
+        .zip(&collected.outcomes)
+        .filter_map(|(row, o)| match o {
+            RunOutcome::FailedNow(message) => Some(Failure {
+                index: row.index,
+                id: row.id.clone(),
+                message: message.clone(),
+            }),
+            _ => None,
         })
         .collect();
-    let table = write_angles(dir, study, store, &design, &failures)?;
+    let table = write_angles(dir, study, store, &design, &collected.outcomes)?;
     Ok(BatchOutcome {
         total: design.len(),
-        cached,
-        computed: design.len() - cached - failures.len(),
+        cached: collected.cached,
+        computed: design.len() - collected.cached - failures.len(),
         failures,
         table,
     })
 }
 
-/// Writes angles.csv from the store's state of every design row.
+/// Writes angles.csv from the outcome of every design row's run.
 fn write_angles(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
     design: &[DesignRow],
-    failures: &[Failure],
+    outcomes: &[RunOutcome],
 ) -> Result<PathBuf, StudyError> {
     let names = parameter_names(study);
     let mut header = vec!["index".to_string()];
@@ -222,28 +227,20 @@ fn write_angles(
     let mut lineage = dir
         .lineage(Stage::Batch, json!({ "angle": "headline_angle_deg" }))
         .with_input(dir.input("design", &design_path(dir))?);
-    for row in design {
-        let failed_now = failures.iter().any(|f| f.index == row.index);
-        // One check per run (it hashes the run's files, the log included).
-        let state = store.check(&row.id, Depth::Full);
-        let status = if failed_now {
-            RunStatus::Failed
-        } else {
-            state.status()
-        };
-        let angle = match state {
-            RunState::Complete(result) if !failed_now => {
+    for (row, outcome) in design.iter().zip(outcomes) {
+        let angle = match outcome.result() {
+            Some(result) => {
                 let result_file = store.run_dir(&row.id).result_path();
                 lineage = lineage.with_input(dir.input("result", &result_file)?);
                 result.headline_angle_deg
             }
-            _ => None,
+            None => None,
         };
         let mut cells = vec![Cell::Integer(row.index as u64)];
         cells.extend(row.point.iter().map(|v| Cell::Number(*v)));
         cells.push(Cell::Text(row.id.to_string()));
         cells.push(angle.map_or(Cell::Empty, Cell::Number));
-        cells.push(Cell::Text(status.to_string()));
+        cells.push(Cell::Text(outcome.status().to_string()));
         csv.row(&cells);
     }
     let path = angles_path(dir);

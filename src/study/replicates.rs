@@ -4,24 +4,23 @@
 //!
 //! Replicate `r` of a point is [`Study::replicate_experiment`] with the
 //! packing seed of [`Study::seed_rule`] (drawn per point in a noise-aware
-//! study). Every experiment is handed to
-//! [`crate::exec::run_incomplete`] at once, so a killed stage resumes and a
-//! run shared with another stage is simulated once. A run that failed before
-//! is not run again unless asked (`retry_failed`): its error.json already
-//! says why (a pile that is not measurable stays so), and the noise-aware
-//! stages re-read many points on every batch.
+//! study). Every experiment is handed to the runs adapter
+//! [`crate::exec::outcomes::run_collect`] at once, so a killed stage resumes
+//! and a run shared with another stage is simulated once. A run that failed
+//! before is not run again unless asked (`retry_failed`).
 //!
 //! The value of a run is the target's response ([`response_of`]): the named
 //! response of the scene when the target names one, else the headline
 //! angle.
 
 use super::StudyError;
-use crate::exec::{run_incomplete, Executor, Ran};
+use crate::exec::outcomes::{run_collect, Retry, RunOutcome};
+use crate::exec::Executor;
 use crate::manifest::{ContentId, Experiment, Study, TargetScene};
 use crate::report::table::{parse_number, Cell, CsvWriter, Table};
 use crate::scenes::responses::response;
 use crate::stats::summary::{mean_ci, MeanCi};
-use crate::store::{ErrorRecord, RunDir, RunResult, RunStatus, Store};
+use crate::store::{ErrorRecord, RunDir, RunResult, RunState, Store, StoreError};
 
 /// One packing seed of a point.
 #[derive(Debug, Clone, PartialEq)]
@@ -140,34 +139,23 @@ where
             experiments.push(e);
         }
     }
-    let ids: Vec<ContentId> = experiments.iter().map(Experiment::id).collect();
-    let pending: Vec<Experiment> = experiments
-        .iter()
-        .zip(&ids)
-        .filter(|(_, id)| retry_failed || store.status(id) != RunStatus::Failed)
-        .map(|(e, _)| e.clone())
-        .collect();
-    let Ran { failures, cached } = run_incomplete(&pending, store, pool, runner)?;
-    let not_simulated = cached + (experiments.len() - pending.len());
-    let failed_now: Vec<(ContentId, String)> = failures
-        .into_iter()
-        .map(|(i, m)| (pending[i].id(), m))
-        .collect();
+    let retry = if retry_failed {
+        Retry::Failed
+    } else {
+        Retry::NotFailed
+    };
+    let collected = run_collect(&experiments, store, pool, runner, retry)?;
+    let mut outcomes = experiments.iter().zip(&collected.outcomes);
     let mut out = Vec::with_capacity(points.len());
-    let mut k = 0;
     for (index, point) in points {
         let mut runs = Vec::with_capacity(replicates as usize);
         for r in 0..replicates {
-            let id = ids[k].clone();
-            k += 1;
-            let value = match failed_now.iter().find(|(f, _)| *f == id) {
-                Some((_, message)) => Err(message.clone()),
-                None => value_in_store(store, &id, target)?,
-            };
+            let (e, outcome) = outcomes.next().expect("one outcome per experiment");
+            let id = e.id();
             runs.push(SeedRun {
                 replicate: r,
+                value: value_of(store, &id, outcome, target)?,
                 id,
-                value,
             });
         }
         out.push(Replicated {
@@ -177,26 +165,36 @@ where
         });
     }
     let tally = Tally {
-        not_simulated,
-        failed_now: failed_now.len(),
+        not_simulated: collected.cached + collected.skipped,
+        failed_now: collected.failed_now(),
     };
     Ok((out, tally))
 }
 
-/// The value of a run the store holds: its response when complete, its
-/// recorded error when failed.
-fn value_in_store(
+/// The value of run `id` from its `outcome`: its response when complete,
+/// its error (now, or as recorded) when failed; a damaged run is an error.
+fn value_of(
     store: &Store,
     id: &ContentId,
+    outcome: &RunOutcome,
     target: &TargetScene,
 ) -> Result<Result<f64, String>, StudyError> {
-    if let Some(result) = store.load_result(id)? {
-        return Ok(response_of(&result, target));
-    }
-    let error = Store::read_json::<ErrorRecord>(&store.run_dir(id).error_path())
+    Ok(match outcome {
+        RunOutcome::Complete(result) => response_of(result, target),
+        RunOutcome::FailedNow(message) => Err(message.clone()),
+        RunOutcome::Stored(RunState::Damaged(problem)) => {
+            return Err(StoreError::Damaged {
+                id: id.clone(),
+                problem: problem.clone(),
+            }
+            .into())
+        }
+        RunOutcome::Stored(_) => Err(Store::read_json::<ErrorRecord>(
+            &store.run_dir(id).error_path(),
+        )
         .map(|e| e.error)
-        .unwrap_or_else(|_| format!("run {} has no result", id.short(12)));
-    Ok(Err(error))
+        .unwrap_or_else(|_| format!("run {} has no result", id.short(12)))),
+    })
 }
 
 /// Columns of a replicates table: `scene`, `index`, the parameters,

@@ -13,11 +13,12 @@ use std::path::Path;
 
 use super::spec::{DesignStudy, SeedStage};
 use super::StudyError;
-use crate::exec::{run_incomplete, Executor, Ran};
+use crate::exec::outcomes::{run_collect, Retry, RunOutcome};
+use crate::exec::Executor;
 use crate::manifest::{ContentId, Experiment};
 use crate::report::table::{Cell, CsvWriter};
 use crate::scenes::responses::response;
-use crate::store::{Depth, InputRef, RunDir, RunResult, RunState, Store};
+use crate::store::{InputRef, RunDir, RunResult, Store};
 use crate::streams::SeedRule;
 
 /// One point of a stage, in actual units.
@@ -185,10 +186,12 @@ where
             }
         }
     }
-    let Ran { cached, failures } = run_incomplete(&experiments, store, pool, runner)?;
+    let collected = run_collect(&experiments, store, pool, runner, Retry::Failed)?;
     let mut replicates_out: Vec<Replicate> = Vec::new();
     let mut inputs = Vec::new();
-    for (i, (e, (k, r, seed, scene))) in experiments.iter().zip(&slots).enumerate() {
+    for ((e, outcome), (k, r, seed, scene)) in
+        experiments.iter().zip(&collected.outcomes).zip(&slots)
+    {
         if replicates_out
             .last()
             .is_none_or(|last| last.point != *k || last.replicate != *r)
@@ -205,23 +208,23 @@ where
         let rep = replicates_out.last_mut().expect("pushed above");
         let id = e.id();
         rep.ids.insert(scene.clone(), id.clone());
-        let result = match failures.iter().find(|(j, _)| *j == i) {
-            Some((_, message)) => Err(format!("{scene} run {} failed: {message}", id.short(12))),
-            None => match store.check(&id, Depth::Full) {
-                RunState::Complete(result) => {
-                    inputs.push(InputRef::file(
-                        format!("{scene}_result"),
-                        &store.run_dir(&id).result_path(),
-                        Some(store.root()),
-                    )?);
-                    Ok(result)
-                }
-                other => Err(format!(
-                    "{scene} run {} is {}",
-                    id.short(12),
-                    other.status()
-                )),
-            },
+        let result = match outcome {
+            RunOutcome::FailedNow(message) => {
+                Err(format!("{scene} run {} failed: {message}", id.short(12)))
+            }
+            RunOutcome::Complete(result) => {
+                inputs.push(InputRef::file(
+                    format!("{scene}_result"),
+                    &store.run_dir(&id).result_path(),
+                    Some(store.root()),
+                )?);
+                Ok(result)
+            }
+            RunOutcome::Stored(state) => Err(format!(
+                "{scene} run {} is {}",
+                id.short(12),
+                state.status()
+            )),
         };
         for (name, rr) in study.responses.iter().filter(|(_, rr)| &rr.scene == scene) {
             let value = match &result {
@@ -247,7 +250,7 @@ where
         points,
         replicates: replicates_out,
         responses: study.responses.keys().cloned().collect(),
-        cached,
+        cached: collected.cached,
         total: experiments.len(),
         inputs,
     })

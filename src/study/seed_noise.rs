@@ -19,11 +19,12 @@ use std::fmt::Write as _;
 use serde::Serialize;
 
 use super::StudyError;
-use crate::exec::{run_incomplete, Executor};
+use crate::exec::outcomes::{run_collect, Retry, RunOutcome};
+use crate::exec::Executor;
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::responses::{catalogue, response};
 use crate::stats::summary::mean_ci;
-use crate::store::{RunDir, RunResult, Store, TimingRecord};
+use crate::store::{RunDir, RunResult, RunState, Store, StoreError, TimingRecord};
 
 /// The noise of one named response over the seeds.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -160,17 +161,27 @@ where
     let experiments: Vec<Experiment> = (0..seeds as u64)
         .map(|r| with_packing_offset(base, r))
         .collect();
-    let ran = run_incomplete(&experiments, store, exec, runner)?;
-    let failures = ran
-        .failures
-        .iter()
-        .map(|(i, m)| (experiments[*i].seeds.packing_seed, m.clone()))
-        .collect();
+    let collected = run_collect(&experiments, store, exec, runner, Retry::Failed)?;
+    let mut failures = Vec::new();
+    let mut results: Vec<Option<RunResult>> = Vec::new();
+    for (e, outcome) in experiments.iter().zip(collected.outcomes) {
+        results.push(match outcome {
+            RunOutcome::Complete(result) => Some(*result),
+            RunOutcome::FailedNow(message) => {
+                failures.push((e.seeds.packing_seed, message));
+                None
+            }
+            RunOutcome::Stored(RunState::Damaged(problem)) => {
+                return Err(StoreError::Damaged {
+                    id: e.id(),
+                    problem,
+                }
+                .into())
+            }
+            RunOutcome::Stored(_) => None,
+        });
+    }
     let ids: Vec<ContentId> = experiments.iter().map(Experiment::id).collect();
-    let results: Vec<Option<RunResult>> = ids
-        .iter()
-        .map(|id| store.load_result(id))
-        .collect::<Result<_, _>>()?;
     let cost = run_cost(store, exec, &ids);
     let kind = base.scene.kind();
     let responses = catalogue(kind)

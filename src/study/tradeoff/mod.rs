@@ -16,11 +16,14 @@ pub mod report;
 use std::path::{Path, PathBuf};
 
 use super::StudyError;
-use crate::exec::{run_incomplete, ExecError, Executor, Ran};
+use crate::exec::outcomes::{run_collect, Retry, RunOutcome};
+use crate::exec::{ExecError, Executor};
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::run_logged;
 use crate::stats::summary::{difference_ci, mean_ci, MeanCi};
-use crate::store::{InputRef, Lineage, RunResult, RunStatus, Store, StoreError, TimingRecord};
+use crate::store::{
+    InputRef, Lineage, RunResult, RunState, RunStatus, Store, StoreError, TimingRecord,
+};
 use pareto::pareto_front;
 use plan::Point;
 
@@ -136,17 +139,11 @@ pub fn run(
         .iter()
         .flat_map(|p| p.replicates.iter().cloned())
         .collect();
-    let Ran { failures, .. } = run_incomplete(&all, store, pool, &run_logged)?;
+    let collected = run_collect(&all, store, pool, &run_logged, Retry::Failed)?;
     let mut flat: Vec<Outcome> = all
         .iter()
-        .enumerate()
-        .map(|(i, e)| {
-            let failed = failures
-                .iter()
-                .find(|(k, _)| *k == i)
-                .map(|(_, m)| m.clone());
-            outcome(store, e, failed)
-        })
+        .zip(collected.outcomes)
+        .map(|(e, o)| outcome(store, e, o))
         .collect();
     let mut out = Vec::new();
     for p in points {
@@ -156,19 +153,21 @@ pub fn run(
     Ok(out)
 }
 
-/// The outcome of `e` as the store holds it (`failed`: the executor's message
-/// when the run failed just now).
-fn outcome(store: &Store, e: &Experiment, failed: Option<String>) -> Outcome {
+/// The row outcome of `e` from its run's outcome `o`.
+fn outcome(store: &Store, e: &Experiment, o: RunOutcome) -> Outcome {
     let id = e.id();
-    let timing: Option<TimingRecord> = Store::read_json(&store.run_dir(&id).timing_path()).ok();
-    let loaded = match failed {
-        Some(message) => Err(message),
-        None => match store.load_result(&id) {
-            Ok(Some(result)) => Ok(result),
-            Ok(None) => Err("the run is not complete".to_string()),
-            Err(e) => Err(crate::errors::chain(&e)),
-        },
+    let loaded = match o {
+        RunOutcome::Complete(result) => Ok(*result),
+        RunOutcome::FailedNow(message) => Err(message),
+        RunOutcome::Stored(RunState::Damaged(problem)) => {
+            Err(crate::errors::chain(&StoreError::Damaged {
+                id: id.clone(),
+                problem,
+            }))
+        }
+        RunOutcome::Stored(_) => Err("the run is not complete".to_string()),
     };
+    let timing: Option<TimingRecord> = Store::read_json(&store.run_dir(&id).timing_path()).ok();
     match loaded {
         Ok(result) => Outcome {
             id,
