@@ -706,12 +706,7 @@ impl GaussianProcess {
             self.dimension()
         );
         let h = &self.hyper;
-        let k = DVector::from_iterator(
-            self.x.len(),
-            self.x
-                .iter()
-                .map(|xi| h.signal_var * matern52(scaled_distance(x, xi, &h.length_scales))),
-        );
+        let k = self.covariances(x);
         let mean = h.mean + k.dot(&self.alpha);
         let v = self
             .cholesky
@@ -723,6 +718,24 @@ impl GaussianProcess {
             mean,
             sd: variance.sqrt(),
         }
+    }
+
+    /// k(x, X): the prior covariances (deg²) of the latent function at `x`
+    /// with the data points, in their order.
+    pub(crate) fn covariances(&self, x: &[f64]) -> DVector<f64> {
+        let h = &self.hyper;
+        DVector::from_iterator(
+            self.x.len(),
+            self.x
+                .iter()
+                .map(|xi| h.signal_var * matern52(scaled_distance(x, xi, &h.length_scales))),
+        )
+    }
+
+    /// K⁻¹ b for the observations' covariance K (module docs), by its
+    /// Cholesky factor.
+    pub(crate) fn solve(&self, b: &DVector<f64>) -> DVector<f64> {
+        self.cholesky.solve(b)
     }
 
     /// Predictive standard deviation (deg) of a new observation at the

@@ -34,6 +34,9 @@
 //!   noise-aware surrogate), hyperparameters by multi-start maximum likelihood; the
 //!   probability of a band and the expected improvement on the distance to
 //!   a target.
+//! - [`gp_two_level`]: the two-level (multi-fidelity) process y_fine =
+//!   ρ · y_coarse + β + δ of Kennedy & O'Hagan, recursive form: many coarse
+//!   runs and a few fine ones predicting the fine level.
 //!
 //! The fits and analyses of variance check their inputs before any
 //! arithmetic: a non-finite value, slices of different lengths, too few
@@ -42,6 +45,7 @@
 
 pub mod equivalence;
 pub mod gp;
+pub mod gp_two_level;
 pub mod homogeneity;
 pub mod levenberg;
 pub mod metrics;
