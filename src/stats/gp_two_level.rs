@@ -37,19 +37,19 @@
 //!
 //! # Fitting δ's hyperparameters
 //!
-//! [`TwoLevelGp::fit`] alternates: ρ, β from an ordinary least-squares
-//! start; δ's hyperparameters by [`GaussianProcess::fit`] (maximum
-//! likelihood, the same bounds and restarts) on y − ρ μ_coarse; ρ, β again
-//! by GLS under that K; until ρ changes by less than 10⁻⁹ (1 + |ρ|) or
-//! [`MAX_ROUNDS`] rounds. Every step is deterministic, so a fit is
-//! bit-identical across runs.
+//! [`TwoLevelGp::fit`] maximises δ's likelihood profiled over (ρ, β)
+//! ([`GaussianProcess::fit_trend`]: at every trial of δ's hyperparameters,
+//! ρ and β are their GLS estimates under that K), with the coarse level's
+//! bounds, starts and optimiser, as SMT's `MFK` does with its
+//! concentrated likelihood. An earlier version alternated GP fits on
+//! y − ρ μ_coarse with GLS updates of ρ; on the Forrester pair it settled at
+//! ρ = 0.93 where the profile gives ρ ≈ 2 (the pair's construction), so the
+//! profile it is. Every step is deterministic, so a fit is bit-identical
+//! across runs.
 
 use nalgebra::{DVector, Matrix2, Vector2};
 
 use super::gp::{GaussianProcess, GpError, GpHyper, GpPrediction, GpSettings};
-
-/// Most rounds of the alternating fit of ρ, β and δ's hyperparameters.
-pub const MAX_ROUNDS: usize = 20;
 
 /// One level's data: points in the unit cube, outputs and their known noise
 /// variances (output units squared).
@@ -115,25 +115,14 @@ impl TwoLevelGp {
                 source,
             })?;
         let f_fine = regressors(&coarse_gp, fine.x);
-        let mut b = ordinary_least_squares(&f_fine, fine.y)?;
-        let mut hyper = None;
-        for _ in 0..MAX_ROUNDS {
-            let residual = residuals(&f_fine, fine.y, &Vector2::new(b.x, 0.0));
-            let delta = GaussianProcess::fit(fine.x, &residual, fine.noise_var, settings).map_err(
-                |source| TwoLevelError::Level {
-                    level: "fine",
-                    source,
-                },
-            )?;
-            let (next, _) = generalised_least_squares(&delta, &f_fine, fine.y)?;
-            let converged = (next.x - b.x).abs() < 1e-9 * (1.0 + b.x.abs());
-            b = next;
-            hyper = Some(delta.hyper().clone());
-            if converged {
-                break;
-            }
-        }
-        let hyper = hyper.expect("at least one round");
+        let rows: Vec<Vec<f64>> = f_fine.iter().map(|f| vec![f.x, f.y]).collect();
+        // The regression must be identifiable before δ is fitted around it.
+        check_regressors(&f_fine)?;
+        let hyper = GaussianProcess::fit_trend(fine.x, fine.y, fine.noise_var, &rows, settings)
+            .map_err(|source| TwoLevelError::Level {
+                level: "fine",
+                source,
+            })?;
         Self::condition(coarse_gp, fine, hyper, f_fine)
     }
 
@@ -256,15 +245,13 @@ fn residuals(f: &[Vector2<f64>], y: &[f64], b: &Vector2<f64>) -> Vec<f64> {
     f.iter().zip(y).map(|(fi, yi)| yi - fi.dot(b)).collect()
 }
 
-/// (ρ, β) by ordinary least squares, the start of the alternating fit.
-fn ordinary_least_squares(f: &[Vector2<f64>], y: &[f64]) -> Result<Vector2<f64>, TwoLevelError> {
-    let (a, rhs) = f
+/// Refuses a regression on `f` that cannot be estimated (fewer than 3
+/// fine points, or the coarse prediction the same at all of them).
+fn check_regressors(f: &[Vector2<f64>]) -> Result<(), TwoLevelError> {
+    let a = f
         .iter()
-        .zip(y)
-        .fold((Matrix2::zeros(), Vector2::zeros()), |(a, r), (fi, yi)| {
-            (a + fi * fi.transpose(), r + fi * *yi)
-        });
-    solve_normal(f.len(), a, rhs).map(|(b, _)| b)
+        .fold(Matrix2::zeros(), |a, fi| a + fi * fi.transpose());
+    solve_normal(f.len(), a, Vector2::zeros()).map(|_| ())
 }
 
 /// (ρ, β) = (FᵀK⁻¹F)⁻¹FᵀK⁻¹y under the covariance K of `gp`'s
@@ -445,5 +432,88 @@ mod tests {
         )
         .unwrap_err();
         assert!(err.to_string().contains("2 fine point(s)"), "{err}");
+    }
+}
+
+#[cfg(test)]
+mod smt_comparison {
+    use super::*;
+
+    fn hf(x: f64) -> f64 {
+        (6.0 * x - 2.0).powi(2) * (12.0 * x - 4.0).sin()
+    }
+
+    fn lf(x: f64) -> f64 {
+        0.5 * hf(x) + 10.0 * (x - 0.5) - 5.0
+    }
+
+    #[test]
+    fn the_forrester_pair_is_predicted_as_smt_mfk_predicts_it() {
+        let xl: Vec<Vec<f64>> = (0..=10).map(|i| vec![i as f64 / 10.0]).collect();
+        let yl: Vec<f64> = xl.iter().map(|p| lf(p[0])).collect();
+        let xh: Vec<Vec<f64>> = [0.0, 0.4, 0.6, 1.0].iter().map(|&x| vec![x]).collect();
+        let yh: Vec<f64> = xh.iter().map(|p| hf(p[0])).collect();
+        let gp = TwoLevelGp::fit(
+            LevelData {
+                x: &xl,
+                y: &yl,
+                noise_var: &[0.0; 11],
+            },
+            LevelData {
+                x: &xh,
+                y: &yh,
+                noise_var: &[0.0; 4],
+            },
+            &GpSettings {
+                fit_nugget: false,
+                ..GpSettings::default()
+            },
+        )
+        .unwrap();
+        // SMT 2.15.0's MFK, corr "matern52": tests/data/mfk_forrester_reference.py
+        // (x, mean, sd). Tolerance: means within 0.5 % of the high-fidelity
+        // range (22.3); sds within 25 % where either exceeds that mean
+        // tolerance (between the coarse points: SMT 0.28–0.40). At the
+        // coarse points both sds are below it (SMT 0.002–0.006, here
+        // 0.006–0.05, the discrepancy's uncertainty between the 4 fine
+        // points, scaled by its fitted variance, which 4 points identify
+        // weakly). The two fits differ in
+        // their optimisers (SMT: COBYLA on the likelihood concentrated over
+        // σ², unbounded; here projected BFGS within the documented bounds)
+        // and in the coarse level's constant (SMT: GLS; here the arithmetic
+        // mean), which moves the hyperparameters by a few percent; measured
+        // 2026-11-28: largest mean difference 0.061 (x = 0.95), where both
+        // models are 0.7 from the true function.
+        let smt = [
+            (0.05, 0.7284242181708156, 0.3952334982712453),
+            (0.1, -0.6565764113149795, 0.0025095733240653203),
+            (0.2, -0.6397265387401871, 0.002142692817556601),
+            (0.25, -0.21462900336777624, 0.28638227823273577),
+            (0.3, -0.015576320397270305, 0.0020899711573265376),
+            (0.45, 0.49727723010533165, 0.28310132828876433),
+            (0.5, 0.9092982694812823, 0.002152692156623694),
+            (0.7, -4.605746941931821, 0.005110504651294636),
+            (0.8, -4.949121360357353, 0.006227688116219232),
+            (0.85, -0.5095257721781754, 0.3022003413313337),
+            (0.9, 5.711953991319542, 0.003263971920019036),
+            (0.95, 11.54581537144779, 0.3952335060125482),
+        ];
+        let range = 22.3;
+        for (x, mean, sd) in smt {
+            let p = gp.predict(&[x]);
+            assert!(
+                (p.mean - mean).abs() <= 0.005 * range,
+                "x {x}: mean {} vs SMT {mean}",
+                p.mean
+            );
+            assert!(
+                (p.sd - sd).abs() <= 0.25 * sd || p.sd.max(sd) <= 0.005 * range,
+                "x {x}: sd {} vs SMT {sd}",
+                p.sd
+            );
+        }
+        // ρ: the pair is built with 2 (hf = 2 lf + a linear discrepancy).
+        let (se, _) = gp.standard_errors();
+        assert!((gp.rho() - 2.0).abs() <= 1.96 * se, "ρ {} ± {se}", gp.rho());
     }
 }
