@@ -35,11 +35,9 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::manifest::{content_id, ContentId, Study};
 use crate::scenes::run_logged;
+use crate::store::lineage::{self, LINEAGE_SUFFIX};
 use crate::store::{Depth, Lineage, RunState, Store, StoreError, MCAP_FILE, RESULT_FILE};
 use crate::study::spec::DesignStudy;
-
-/// Suffix of lineage records.
-const LINEAGE_SUFFIX: &str = ".lineage.json";
 
 /// What the audit found.
 #[derive(Debug, Default)]
@@ -202,8 +200,7 @@ fn check_record(
             problem,
         })
     };
-    let name = record.to_string_lossy();
-    let output = PathBuf::from(&name[..name.len() - LINEAGE_SUFFIX.len()]);
+    let output = lineage::output_of(record);
     if !output.exists() {
         broken(format!("its output {} is missing", output.display()));
     }
@@ -239,7 +236,7 @@ fn check_record(
             }
         } else {
             report.files_checked += 1;
-            if let Some(id) = run_of_result_file(Path::new(&input.id_or_path)) {
+            if let Some(id) = lineage::run_of_result_file(Path::new(&input.id_or_path)) {
                 if let Err(problem) = checked(store, runs, &id) {
                     broken(format!("{label}: {problem}"));
                 }
@@ -323,29 +320,17 @@ fn rerun_one(store: &Store, id: &ContentId) -> Result<RerunCheck, AuditError> {
     Ok(check)
 }
 
-/// Every lineage record under `path` (or beside it, if it is a file), sorted.
+/// Every lineage record under `path` ([`lineage::records_under`]).
 fn lineage_records(path: &Path) -> Result<Vec<PathBuf>, AuditError> {
-    let meta = std::fs::metadata(path).map_err(|source| AuditError::Path {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    if meta.is_file() {
-        let beside = Lineage::path_beside(path);
-        return Ok(if path.to_string_lossy().ends_with(LINEAGE_SUFFIX) {
-            vec![path.to_path_buf()]
-        } else if beside.is_file() {
-            vec![beside]
-        } else {
-            Vec::new()
-        });
+    lineage::records_under(path).map_err(path_error)
+}
+
+/// A failed read of the audited tree, naming the path.
+fn path_error(e: StoreError) -> AuditError {
+    match e {
+        StoreError::Io { path, source } => AuditError::Path { path, source },
+        other => AuditError::Store(other),
     }
-    let mut found = Vec::new();
-    walk(path, &mut |p| {
-        if p.to_string_lossy().ends_with(LINEAGE_SUFFIX) {
-            found.push(p.to_path_buf());
-        }
-    })?;
-    Ok(found)
 }
 
 /// Content ids of every `study.json` under `path` (a stage may name its study
@@ -353,47 +338,17 @@ fn lineage_records(path: &Path) -> Result<Vec<PathBuf>, AuditError> {
 fn study_ids(path: &Path) -> Result<BTreeSet<String>, AuditError> {
     let mut ids = BTreeSet::new();
     if path.is_dir() {
-        walk(path, &mut |p| {
+        for p in lineage::files_under(path).map_err(path_error)? {
             if p.file_name().is_some_and(|n| n == "study.json") {
-                if let Ok(study) = Store::read_json::<Study>(p) {
+                if let Ok(study) = Store::read_json::<Study>(&p) {
                     ids.insert(content_id(&study).to_string());
-                } else if let Ok(study) = Store::read_json::<DesignStudy>(p) {
+                } else if let Ok(study) = Store::read_json::<DesignStudy>(&p) {
                     ids.insert(study.id().to_string());
                 }
             }
-        })?;
-    }
-    Ok(ids)
-}
-
-/// Visits every file under `dir`, in name order, depth first.
-fn walk(dir: &Path, visit: &mut dyn FnMut(&Path)) -> Result<(), AuditError> {
-    let io = |source| AuditError::Path {
-        path: dir.to_path_buf(),
-        source,
-    };
-    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(io)?
-        .map(|e| e.map(|e| e.path()))
-        .collect::<Result<_, _>>()
-        .map_err(io)?;
-    entries.sort();
-    for entry in entries {
-        if entry.is_dir() {
-            walk(&entry, visit)?;
-        } else {
-            visit(&entry);
         }
     }
-    Ok(())
-}
-
-/// The run whose result.json `path` is (`[...]/<id>/result.json`), if it is one.
-fn run_of_result_file(path: &Path) -> Option<ContentId> {
-    if path.file_name()? != RESULT_FILE {
-        return None;
-    }
-    ContentId::parse(path.parent()?.file_name()?.to_str()?)
+    Ok(ids)
 }
 
 /// An input path as recorded, resolved: absolute as is; relative against the

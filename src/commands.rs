@@ -142,6 +142,9 @@ pub enum CommandError {
     /// A study stage failed or its options are invalid.
     #[error(transparent)]
     Study(#[from] StudyError),
+    /// The report page could not be written.
+    #[error("report: {0}")]
+    Page(#[from] crate::report::page::PageError),
     /// The executor refused the runs (inconsistent plans or over the limits).
     #[error(transparent)]
     Exec(#[from] crate::exec::ExecError),
@@ -188,6 +191,7 @@ impl CommandError {
             CommandError::Audit(AuditError::Store(e)) => e.is_invalid_input(),
             CommandError::Exec(e) => e.is_invalid_input(),
             CommandError::Study(e) => e.is_invalid_input(),
+            CommandError::Page(e) => e.is_invalid_input(),
             CommandError::RunFailed { .. }
             | CommandError::Output(_)
             | CommandError::BatchIncomplete { .. }
@@ -538,6 +542,24 @@ pub fn audit(
             differing: report.reruns.iter().filter(|r| !r.identical()).count(),
         })
     }
+}
+
+/// `repose report STUDY`: writes the study's report page
+/// ([`crate::report::page`]) into its directory in the store, or into
+/// `out_dir`, and prints the page's path.
+pub fn report(
+    store_root: &Path,
+    study_path: &Path,
+    out_dir: Option<&Path>,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let dir = match StudyFile::read(study_path).map_err(manifest_error(study_path))? {
+        StudyFile::Calibration(study) => StudyDir::path_in(store_root, &study),
+        StudyFile::Design(study) => StudyDir::path_in(store_root, &study),
+    };
+    let page = crate::report::page::write_page(store_root, &dir, out_dir)?;
+    writeln!(out, "{}", page.display())?;
+    Ok(())
 }
 
 /// Options of `repose tradeoff`.

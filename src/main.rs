@@ -235,6 +235,18 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
+    /// Write a study's report page: one self-contained static HTML file (no
+    /// server, network or scripts) with the study spec, every stage's tables and
+    /// plots, the verdicts, resolution warnings, the lineage records and links
+    /// to each run's run.mcap
+    Report {
+        /// The study file (as given to the stages that wrote its outputs).
+        study: PathBuf,
+        /// Directory to write report.html into [default: the study's
+        /// directory in the store].
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// List the named responses (scalar physics results with units) of one
     /// scene kind, or of every kind, that a calibration can target.
     Responses {
@@ -1032,6 +1044,9 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         ),
         Command::Audit { path, rerun, seed } => {
             commands::audit(&cli.store, &path, rerun, seed, &mut out)
+        }
+        Command::Report { study, out: dir } => {
+            commands::report(&cli.store, &study, dir.as_deref(), &mut out)
         }
         Command::Responses { scene, json } => commands::responses(scene.as_deref(), json, &mut out),
         Command::Stages {

@@ -15,11 +15,18 @@
 //!   `String`, deterministic and without timestamps; the caller writes it
 //!   atomically ([`crate::store::write_atomic`]).
 //!
-//! Nothing here touches the run store or knows about studies: the functions
-//! are pure (data in, text out), which keeps the outputs reproducible and
-//! testable byte for byte.
+//! - [`page`]: the study report page (`repose report`), one static HTML file
+//!   per study rendered with askama from the study's outputs, lineage
+//!   records and runs.
+//!
+//! Except [`page`], nothing here touches the run store or knows about
+//! studies: the functions are pure (data in, text out), which keeps the
+//! outputs reproducible and testable byte for byte. [`page`] sits above the
+//! stages: it reads what they wrote (files and lineage records, through
+//! [`crate::store`]) and never calls a stage.
 
 pub mod markdown;
+pub mod page;
 pub mod plots;
 pub mod svg;
 pub mod table;

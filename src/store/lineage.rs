@@ -1,6 +1,10 @@
 //! Lineage records: every stage output names the stage, the repose version, the
 //! stage's parameters and the id or sha256 of every input, so any output can be
 //! traced back to manifests (a DAG, as DVC keeps).
+//!
+//! [`records_under`] finds the records of a study's outputs in one order (file
+//! names, depth first) for everything that reads them back: `repose audit`
+//! and the study report page.
 
 use std::path::{Path, PathBuf};
 
@@ -9,6 +13,9 @@ use sha2::{Digest, Sha256};
 
 use super::{Store, StoreError};
 use crate::manifest::ContentId;
+
+/// Suffix of lineage records: the record of output `F` is `F.lineage.json`.
+pub const LINEAGE_SUFFIX: &str = ".lineage.json";
 
 /// Where an output came from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -49,6 +56,15 @@ impl InputRef {
             role: role.into(),
             id_or_path: id.to_string(),
             sha256: id.to_string(),
+        }
+    }
+
+    /// The run this input names: by its id, or by its `<id>/result.json`.
+    pub fn run(&self) -> Option<ContentId> {
+        if self.id_or_path == self.sha256 {
+            ContentId::parse(&self.sha256)
+        } else {
+            run_of_result_file(Path::new(&self.id_or_path))
         }
     }
 
@@ -114,7 +130,7 @@ impl Lineage {
             .file_name()
             .map(|n| n.to_os_string())
             .unwrap_or_default();
-        name.push(".lineage.json");
+        name.push(LINEAGE_SUFFIX);
         output.with_file_name(name)
     }
 
@@ -134,4 +150,64 @@ impl Lineage {
     pub fn read_beside(output: &Path) -> Result<Lineage, StoreError> {
         Store::read_json(&Self::path_beside(output))
     }
+}
+
+/// Every lineage record under `path` (a directory, walked in name order,
+/// depth first), or the record of `path` when it is a file (itself when it is
+/// a record). An unreadable directory is an error naming it.
+pub fn records_under(path: &Path) -> Result<Vec<PathBuf>, StoreError> {
+    let meta = std::fs::metadata(path).map_err(StoreError::io(path))?;
+    if meta.is_file() {
+        let beside = Lineage::path_beside(path);
+        return Ok(if is_record(path) {
+            vec![path.to_path_buf()]
+        } else if beside.is_file() {
+            vec![beside]
+        } else {
+            Vec::new()
+        });
+    }
+    Ok(files_under(path)?
+        .into_iter()
+        .filter(|p| is_record(p))
+        .collect())
+}
+
+/// Whether `path` names a lineage record.
+pub fn is_record(path: &Path) -> bool {
+    path.to_string_lossy().ends_with(LINEAGE_SUFFIX)
+}
+
+/// The output a lineage record describes (`F` for `F.lineage.json`).
+pub fn output_of(record: &Path) -> PathBuf {
+    let name = record.to_string_lossy();
+    PathBuf::from(name.strip_suffix(LINEAGE_SUFFIX).unwrap_or(&name))
+}
+
+/// Every file under `dir`, in name order, depth first (a directory's files
+/// where its name sorts among its siblings).
+pub fn files_under(dir: &Path) -> Result<Vec<PathBuf>, StoreError> {
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(StoreError::io(dir))?
+        .map(|e| e.map(|e| e.path()))
+        .collect::<Result<_, _>>()
+        .map_err(StoreError::io(dir))?;
+    entries.sort();
+    let mut files = Vec::new();
+    for entry in entries {
+        if entry.is_dir() {
+            files.extend(files_under(&entry)?);
+        } else {
+            files.push(entry);
+        }
+    }
+    Ok(files)
+}
+
+/// The run whose result.json `path` is (`[...]/<id>/result.json`), if it is one.
+pub fn run_of_result_file(path: &Path) -> Option<ContentId> {
+    if path.file_name()? != super::RESULT_FILE {
+        return None;
+    }
+    ContentId::parse(path.parent()?.file_name()?.to_str()?)
 }

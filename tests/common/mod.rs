@@ -62,16 +62,22 @@ pub fn edit(mut v: Value, pointer: &str, new: Option<Value>) -> Value {
 /// `measured/` folders: they hold measured outputs (e.g.
 /// experiments/he2019-quick/measured/outcome.json), not manifests.
 pub fn json_files(dir: &Path) -> Vec<PathBuf> {
+    files_with_extension(dir, "json", "measured")
+}
+
+/// Every file with extension `ext` under `dir`, recursively, sorted, except
+/// those in folders named `skip`.
+pub fn files_with_extension(dir: &Path, ext: &str, skip: &str) -> Vec<PathBuf> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
         for entry in std::fs::read_dir(&d).unwrap() {
             let path = entry.unwrap().path();
             if path.is_dir() {
-                if path.file_name().is_some_and(|n| n != "measured") {
+                if path.file_name().is_some_and(|n| n != skip) {
                     stack.push(path);
                 }
-            } else if path.extension().is_some_and(|e| e == "json") {
+            } else if path.extension().is_some_and(|e| e == ext) {
                 out.push(path);
             }
         }
