@@ -37,6 +37,7 @@ use crate::manifest::{content_id, ContentId, Study};
 use crate::scenes::run_logged;
 use crate::store::lineage::{self, LINEAGE_SUFFIX};
 use crate::store::{Depth, Lineage, RunState, Store, StoreError, MCAP_FILE, RESULT_FILE};
+use crate::study::dir::STUDY_FILE;
 use crate::study::spec::DesignStudy;
 
 /// What the audit found.
@@ -170,6 +171,15 @@ pub fn audit(
     for record in &records {
         report.records += 1;
         check_record(store, record, &studies, &mut runs, &mut report);
+    }
+    for file in unrecorded_outputs(path)? {
+        report.broken.push(BrokenLink {
+            record: Lineage::path_beside(&file),
+            problem: format!(
+                "{} has no lineage record: no stage wrote it, or its record was deleted",
+                file.display()
+            ),
+        });
     }
     report.runs_checked = runs.values().filter(|v| v.is_ok()).count();
     let completed: Vec<ContentId> = runs
@@ -318,6 +328,40 @@ fn rerun_one(store: &Store, id: &ContentId) -> Result<RerunCheck, AuditError> {
         source,
     })?;
     Ok(check)
+}
+
+/// Files in the stage directories of the study directory `path` (one that
+/// holds `study.json`) without a lineage record beside them; none when
+/// `path` is not a study directory. Every stage output has a record, so a
+/// file without one was put there by hand or lost its record. Not outputs:
+/// the study's own `study.json` and `report.html` (the report page), the
+/// Slurm ledger (`slurm/`), temp files of a write in progress and the
+/// sampled experiment manifests (`sample/experiments/`: content-addressed,
+/// their ids in `sample/design.csv`, whose record hashes them).
+fn unrecorded_outputs(path: &Path) -> Result<Vec<PathBuf>, AuditError> {
+    if !path.join(STUDY_FILE).is_file() {
+        return Ok(Vec::new());
+    }
+    let exempt_dirs = [path.join("slurm"), path.join("sample").join("experiments")];
+    let exempt_files = [
+        path.join(STUDY_FILE),
+        path.join(crate::report::page::PAGE_FILE),
+    ];
+    Ok(lineage::files_under(path)
+        .map_err(path_error)?
+        .into_iter()
+        .filter(|f| {
+            let temp = f
+                .file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with(crate::store::TEMP_PREFIX));
+            !temp
+                && !lineage::is_record(f)
+                && !exempt_files.contains(f)
+                && !exempt_dirs.iter().any(|d| f.starts_with(d))
+                && !Lineage::path_beside(f).is_file()
+        })
+        .collect())
 }
 
 /// Every lineage record under `path` ([`lineage::records_under`]).

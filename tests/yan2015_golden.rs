@@ -231,6 +231,23 @@ fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
     ] {
         tamper(case);
         assert_ne!(common::snapshot(&one), a, "{case}");
+        if case == "deleted lineage record" {
+            // audit names the output whose record is gone.
+            let report = repose::audit::audit(
+                &repose::store::Store::open(&one).unwrap(),
+                &study_dir(&one),
+                0,
+                0,
+            )
+            .unwrap();
+            assert!(
+                report
+                    .broken
+                    .iter()
+                    .any(|b| b.problem.contains("fits.csv has no lineage record")),
+                "{report:#?}"
+            );
+        }
         sensitivity(
             &one,
             &common::root().join(STUDY),

@@ -28,6 +28,9 @@ use super::StudyError;
 use crate::manifest::{canonical_json, ContentId, Study};
 use crate::store::{write_atomic, InputRef, Lineage, StoreError};
 
+/// The study document's file in its directory: the canonical JSON whose
+/// sha256 is the study id.
+pub const STUDY_FILE: &str = "study.json";
 /// A study document: what names its directory and what `study.json` holds.
 pub trait StudyDocument: Serialize {
     /// Its short name (the directory's prefix).
@@ -123,7 +126,7 @@ impl StudyDir {
 
     /// `study.json` in the directory.
     pub fn study_file(&self) -> PathBuf {
-        self.path.join("study.json")
+        self.path.join(STUDY_FILE)
     }
 
     /// A stage's directory (not created).
