@@ -53,9 +53,14 @@ impl Value {
 }
 
 impl serde::Serialize for Value {
-    /// A number as a JSON number, a text as a string.
+    /// A number as a JSON number (a whole one below 2⁵³ without a fraction,
+    /// as the text shows it), a text as a string.
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        const EXACT: f64 = 9_007_199_254_740_992.0;
         match self {
+            Value::Number(v) if v.fract() == 0.0 && v.abs() < EXACT => {
+                serializer.serialize_i64(*v as i64)
+            }
             Value::Number(v) => serializer.serialize_f64(*v),
             Value::Text(t) => serializer.serialize_str(t),
         }
