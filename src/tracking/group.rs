@@ -76,9 +76,13 @@ impl Group {
         }
         let mut common = BTreeMap::new();
         for name in names {
-            let first = members[0].get(name);
-            if first.is_some() && members.iter().all(|m| m.get(name) == first) {
-                common.insert(name.to_string(), first.expect("checked"));
+            if let Some(first) = members[0].get(name) {
+                if members[1..]
+                    .iter()
+                    .all(|m| m.get(name).as_ref() == Some(&first))
+                {
+                    common.insert(name.to_string(), first);
+                }
             }
         }
         if !common.contains_key("status") {

@@ -64,8 +64,8 @@ pub struct ListOptions {
 /// One row of a listing: a run, or a group of replicates.
 #[derive(Debug, Clone)]
 pub enum Row {
-    /// One run.
-    Run(Record),
+    /// One run (boxed: a record holds its manifest and result).
+    Run(Box<Record>),
     /// Replicates folded together.
     Group(Group),
 }
@@ -171,7 +171,7 @@ pub fn list_runs(store: &Store, options: &ListOptions) -> Result<Listing, Tracki
     let rows: Vec<Row> = if options.group_seeds {
         group_by_seed(records).into_iter().map(Row::Group).collect()
     } else {
-        records.into_iter().map(Row::Run).collect()
+        records.into_iter().map(|r| Row::Run(Box::new(r))).collect()
     };
     let rows = sorted(rows, &keys);
     let columns = columns(&rows, options);

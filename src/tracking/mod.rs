@@ -1,18 +1,18 @@
 //! Experiment tracking: the questions a user asks of a store of runs and
 //! studies, answered from what the store already holds (nothing is run).
 //!
-//! - [`fields`]: a run as named fields (manifest paths, responses, status),
+//! - [`fields`] — a run as named fields (manifest paths, responses, status),
 //!   and the closest known names for a misspelt one.
-//! - [`query`]: `--where` filters and `--sort` keys.
-//! - [`group`]: replicates (runs that differ only in their packing seed)
+//! - [`query`] — `--where` filters and `--sort` keys.
+//! - [`group`] — replicates (runs that differ only in their packing seed)
 //!   folded into one row with each response's mean and 95 % interval.
-//! - [`listing`]: `repose runs list` with a query.
-//! - [`render`]: a listing as text, CSV or JSON.
-//! - [`diff`]: `repose diff A B` of two runs.
-//! - [`study_files`]: what a study directory holds (its files, the run ids
+//! - [`listing`] — `repose runs list` with a query.
+//! - [`render`] — a listing as text, CSV or JSON.
+//! - [`diff`] — `repose diff A B` of two runs.
+//! - [`study_files`] — what a study directory holds (its files, the run ids
 //!   its tables name, its stages).
-//! - [`study_diff`]: `repose diff A B` of two studies.
-//! - [`studies`]: `repose studies`, every study of the store.
+//! - [`study_diff`] — `repose diff A B` of two studies.
+//! - [`studies`] — `repose studies`, every study of the store.
 //!
 //! Tracking sits above [`crate::study`] in the pipeline: it reads the store
 //! and the study directories and writes nothing.
