@@ -131,6 +131,31 @@ pub struct RunDiff {
     pub files: Vec<FileChange>,
 }
 
+/// The fields of `a` and `b` (dotted paths) whose values differ, by path.
+pub fn changed_fields(
+    a: &BTreeMap<String, Value>,
+    b: &BTreeMap<String, Value>,
+) -> Vec<FieldChange> {
+    let fields: BTreeSet<&String> = a.keys().chain(b.keys()).collect();
+    fields
+        .into_iter()
+        .filter(|f| a.get(*f) != b.get(*f))
+        .map(|f| FieldChange {
+            field: f.clone(),
+            a: a.get(f).cloned(),
+            b: b.get(f).cloned(),
+        })
+        .collect()
+}
+
+impl FieldChange {
+    /// `  field: A → B` and a line break (`(absent)` for a missing side).
+    pub fn line(&self) -> String {
+        let show = |v: &Option<Value>| v.as_ref().map_or("(absent)".to_string(), Value::to_string);
+        format!("  {}: {} → {}\n", self.field, show(&self.a), show(&self.b))
+    }
+}
+
 /// What `a` and `b` name, compared (module docs).
 pub fn diff(store: &Store, a: &str, b: &str) -> Result<Diff, TrackingError> {
     match (target(store, a)?, target(store, b)?) {
@@ -190,16 +215,7 @@ pub fn diff_runs(store: &Store, a: &ContentId, b: &ContentId) -> Result<RunDiff,
         ))
     };
     let (ra, rb) = (full(a), full(b));
-    let fields: BTreeSet<&String> = ra.manifest.keys().chain(rb.manifest.keys()).collect();
-    let manifest = fields
-        .into_iter()
-        .filter(|f| ra.manifest.get(*f) != rb.manifest.get(*f))
-        .map(|f| FieldChange {
-            field: f.clone(),
-            a: ra.manifest.get(f).cloned(),
-            b: rb.manifest.get(f).cloned(),
-        })
-        .collect();
+    let manifest = changed_fields(&ra.manifest, &rb.manifest);
     let warnings = |r: &Record| -> BTreeSet<String> {
         r.summary
             .result
@@ -292,7 +308,6 @@ fn files(store: &Store, a: &ContentId, b: &ContentId) -> Vec<FileChange> {
 impl RunDiff {
     /// The diff as text: one section per part, `A → B` for each change.
     pub fn text(&self) -> String {
-        let show = |v: &Option<Value>| v.as_ref().map_or("(absent)".to_string(), Value::to_string);
         let num = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.6}"));
         let mut out = format!("runs {} → {}\n", self.a.short(12), self.b.short(12));
         out.push_str(&format!(
@@ -308,7 +323,7 @@ impl RunDiff {
             self.manifest.len()
         ));
         for c in &self.manifest {
-            out.push_str(&format!("  {}: {} → {}\n", c.field, show(&c.a), show(&c.b)));
+            out.push_str(&c.line());
         }
         out.push_str(&format!("responses ({}), B − A:\n", self.responses.len()));
         for r in &self.responses {

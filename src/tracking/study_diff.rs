@@ -20,8 +20,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::diff::FieldChange;
-use super::fields::flatten;
+use super::diff::{changed_fields, FieldChange};
+use super::fields::{flatten, Value};
 use super::study_files::{files, run_ids, study_id, STUDY_FILE};
 use super::TrackingError;
 use crate::manifest::ContentId;
@@ -95,24 +95,14 @@ pub struct RowChange {
 
 /// The diff of the study directories `a` and `b` (module docs).
 pub fn diff_studies(a: &Path, b: &Path) -> Result<StudyDiff, TrackingError> {
-    let spec = |dir: &Path| -> Result<BTreeMap<String, super::fields::Value>, TrackingError> {
+    let spec = |dir: &Path| -> Result<BTreeMap<String, Value>, TrackingError> {
         let path = dir.join(STUDY_FILE);
         let json: serde_json::Value = crate::store::Store::read_json(&path)?;
         let mut out = BTreeMap::new();
         flatten(&json, String::new(), &mut out);
         Ok(out)
     };
-    let (sa, sb) = (spec(a)?, spec(b)?);
-    let names: BTreeSet<&String> = sa.keys().chain(sb.keys()).collect();
-    let spec = names
-        .into_iter()
-        .filter(|n| sa.get(*n) != sb.get(*n))
-        .map(|n| FieldChange {
-            field: n.clone(),
-            a: sa.get(n).cloned(),
-            b: sb.get(n).cloned(),
-        })
-        .collect();
+    let spec = changed_fields(&spec(a)?, &spec(b)?);
     let (fa, fb) = (stage_files(a)?, stage_files(b)?);
     let stages: BTreeSet<&String> = fa.keys().chain(fb.keys()).collect();
     let stages = stages
@@ -245,14 +235,10 @@ fn table_diff(file: String, a: &Table, b: &Table) -> TableDiff {
 impl StudyDiff {
     /// The diff as text: the spec changes, then one section per stage.
     pub fn text(&self) -> String {
-        let show = |v: &Option<super::fields::Value>| {
-            v.as_ref()
-                .map_or("(absent)".to_string(), ToString::to_string)
-        };
         let mut out = format!("studies {} → {}\n", self.a.display(), self.b.display());
         out.push_str(&format!("spec fields that differ ({}):\n", self.spec.len()));
         for c in &self.spec {
-            out.push_str(&format!("  {}: {} → {}\n", c.field, show(&c.a), show(&c.b)));
+            out.push_str(&c.line());
         }
         for s in &self.stages {
             out.push_str(&s.text());
