@@ -171,7 +171,7 @@ fn group_seeds_folds_replicates_with_mean_and_t_interval() {
     // Text: one row per group, `mean ± half-width`.
     let out = stdout(&repose(tmp.path(), &["runs", "list", "--group-seeds"]));
     assert_eq!(out.lines().count(), 5, "{out}");
-    assert!(out.contains("32.5 ± 3.7262"), "{out}");
+    assert!(out.contains("32.5 ± 3.72621"), "{out}");
 }
 
 #[test]

@@ -28,6 +28,7 @@ use serde::Serialize;
 
 use super::fields::{Record, Value};
 use super::group::seed_key;
+use super::render::short_number;
 use super::study_diff::{diff_studies, StudyDiff};
 use super::study_files::{resolve_study, STUDY_FILE};
 use super::TrackingError;
@@ -308,7 +309,7 @@ fn files(store: &Store, a: &ContentId, b: &ContentId) -> Vec<FileChange> {
 impl RunDiff {
     /// The diff as text: one section per part, `A → B` for each change.
     pub fn text(&self) -> String {
-        let num = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.6}"));
+        let num = |v: Option<f64>| v.map_or("-".to_string(), short_number);
         let mut out = format!("runs {} → {}\n", self.a.short(12), self.b.short(12));
         out.push_str(&format!(
             "status: {} → {}\n",
@@ -336,11 +337,11 @@ impl RunDiff {
             ));
             if let Some(s) = &r.seed_noise {
                 out.push_str(&format!(
-                    "; over replicates ({} vs {}) Δ {:.6} ± {:.6} (Welch 95 %): {}",
+                    "; over replicates ({} vs {}) Δ {} ± {} (Welch 95 %): {}",
                     s.n_a,
                     s.n_b,
-                    s.difference,
-                    s.ci95_half_width,
+                    short_number(s.difference),
+                    short_number(s.ci95_half_width),
                     if s.inside_noise {
                         "inside the seed noise"
                     } else {

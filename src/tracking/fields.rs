@@ -187,19 +187,25 @@ pub fn known_fields(records: &[Record]) -> BTreeSet<String> {
     known
 }
 
-/// The (at most) five names of `known` closest to `field`: by Levenshtein
+/// The (at most) five names of `known` closest to `field`: those containing
+/// it first (`angle_deg` finds `dynamic_angle_deg`), then by Levenshtein
 /// distance to the whole dotted path or to its last segment, whichever is
-/// smaller, so `static_friction` finds `contact.particle_particle.static_friction`.
+/// smaller (`static_frction` finds `contact.particle_particle.static_friction`).
 pub fn closest<'a>(field: &str, known: impl IntoIterator<Item = &'a String>) -> Vec<String> {
-    let mut scored: Vec<(usize, &String)> = known
+    let mut scored: Vec<(bool, usize, &String)> = known
         .into_iter()
         .map(|k| {
             let tail = k.rsplit('.').next().unwrap_or(k);
-            (levenshtein(field, k).min(levenshtein(field, tail)), k)
+            let distance = levenshtein(field, k).min(levenshtein(field, tail));
+            (!k.contains(field), distance, k)
         })
         .collect();
     scored.sort();
-    scored.into_iter().take(5).map(|(_, k)| k.clone()).collect()
+    scored
+        .into_iter()
+        .take(5)
+        .map(|(_, _, k)| k.clone())
+        .collect()
 }
 
 /// The Levenshtein distance between `a` and `b` (insertions, deletions and
@@ -244,6 +250,11 @@ mod tests {
             closest("static_frction", &known)[0],
             "contact.particle_particle.static_friction"
         );
+        let known = [
+            "seeds.sample_index".to_string(),
+            "dynamic_angle_deg".to_string(),
+        ];
+        assert_eq!(closest("angle_deg", &known)[0], "dynamic_angle_deg");
     }
 
     #[test]

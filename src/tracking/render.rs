@@ -3,7 +3,7 @@
 //! - Text: the classic table ([`crate::store::runs_line`]) when the listing
 //!   is classic, else one column per field, left-aligned, two spaces apart,
 //!   headed by the field names; ids as their first 12 hex digits, numbers
-//!   longer than 10 characters rounded to 4 decimals, a group's response as
+//!   longer than 10 characters to 6 significant digits, a group's response as
 //!   `mean ± half-width` (the mean alone for one run), `-` where a row has
 //!   no value. Damaged runs are named below the table.
 //! - CSV ([`CsvWriter`]): full ids and every digit; a group's `id` is its
@@ -186,20 +186,43 @@ fn text_cell(row: &Row, column: &str) -> String {
     }
 }
 
-/// `v` in shortest form, or to 4 decimals when that is longer than 10
-/// characters.
-fn short_number(v: f64) -> String {
+/// `v` in shortest form, or to 6 significant digits when that is longer
+/// than 10 characters (`36.2057`, `117253`; below 10⁻⁴ or from 10⁹ in
+/// exponent form, `1.10872e-5`).
+pub fn short_number(v: f64) -> String {
     let full = v.to_string();
-    if full.len() > 10 {
-        format!("{v:.4}")
-    } else {
-        full
+    if full.len() <= 10 || !v.is_finite() || v == 0.0 {
+        return full;
     }
+    if !(1e-4..1e9).contains(&v.abs()) {
+        let shortest = format!("{v:e}");
+        return if shortest.len() <= 10 {
+            shortest
+        } else {
+            format!("{v:.5e}")
+        };
+    }
+    let decimals = (5 - v.abs().log10().floor() as i32).clamp(0, 15) as usize;
+    format!("{v:.decimals$}")
 }
 
 fn csv_cell(v: &Value) -> Cell {
     match v {
         Value::Number(n) => Cell::Number(*n),
         Value::Text(t) => Cell::Text(t.clone()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::short_number;
+
+    #[test]
+    fn long_numbers_keep_six_significant_digits() {
+        assert_eq!(short_number(0.5), "0.5");
+        assert_eq!(short_number(36.20569455248687), "36.2057");
+        assert_eq!(short_number(0.000011087208331525961), "1.10872e-5");
+        assert_eq!(short_number(1.5e-21), "1.5e-21");
+        assert_eq!(short_number(-4.826711394), "-4.82671");
     }
 }

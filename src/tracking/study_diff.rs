@@ -282,7 +282,7 @@ impl StageDiff {
                 let cells: Vec<String> = r
                     .cells
                     .iter()
-                    .map(|[c, a, b]| format!("{c}: {a} → {b}"))
+                    .map(|[c, a, b]| format!("{c}: {} → {}", or_empty(a), or_empty(b)))
                     .collect();
                 out.push_str(&format!(
                     "  {} row {key}={}: {}\n",
@@ -293,5 +293,14 @@ impl StageDiff {
             }
         }
         out
+    }
+}
+
+/// A table cell as text: `(empty)` for an empty one.
+fn or_empty(cell: &str) -> &str {
+    if cell.is_empty() {
+        "(empty)"
+    } else {
+        cell
     }
 }
