@@ -22,8 +22,7 @@ use crate::scenes::protocol::set_quiet;
 use crate::scenes::responses::listing;
 use crate::scenes::run_logged;
 use crate::store::{
-    runs_line, write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, RunSummary, Store,
-    StoreError,
+    write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, Store, StoreError,
 };
 use crate::study::batch::batch as run_batch;
 use crate::study::calibration::Stage;
@@ -48,6 +47,7 @@ use crate::study::train::{train_study, train_table, TableSpec, TrainOptions};
 use crate::study::verify_clusters::verify as run_verify;
 use crate::study::{self, StudyError};
 use crate::surrogate::ga_bp::Selection;
+use crate::tracking::{self, Format, ListOptions, TrackingError};
 
 /// Which kind of manifest a file holds, as chosen on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -154,6 +154,9 @@ pub enum CommandError {
         /// How many.
         count: usize,
     },
+    /// A tracking query (`runs list`, `diff`, `studies`) could not be answered.
+    #[error(transparent)]
+    Tracking(#[from] TrackingError),
     /// Some runs of a batch failed (each recorded in its error.json; the
     /// table was written with their status).
     #[error("{failed} of {total} run(s) failed; rerun `repose batch` to retry them")]
@@ -192,6 +195,7 @@ impl CommandError {
             CommandError::Exec(e) => e.is_invalid_input(),
             CommandError::Study(e) => e.is_invalid_input(),
             CommandError::Page(e) => e.is_invalid_input(),
+            CommandError::Tracking(e) => e.is_invalid_input(),
             CommandError::RunFailed { .. }
             | CommandError::Output(_)
             | CommandError::BatchIncomplete { .. }
@@ -448,34 +452,49 @@ pub fn responses(scene: Option<&str>, json: bool, out: &mut dyn Write) -> Result
     Ok(())
 }
 
-/// `repose runs list`: one line per run (id prefix, scene, profile, the
-/// particle–particle restitution, friction and surface energy, status, headline
-/// angle).
-pub fn runs_list(store_root: &Path, out: &mut dyn Write) -> Result<(), CommandError> {
-    let store = open_store(store_root)?;
-    let runs = store.list()?;
-    if runs.is_empty() {
-        writeln!(out, "no runs in {}", store.root().display())?;
-        return Ok(());
+/// `repose runs list`: the runs of the store that `options` select, as a
+/// table (by default the classic one: id prefix, scene, profile, the
+/// particle–particle restitution, friction and surface energy, status,
+/// headline angle), CSV or JSON ([`crate::tracking::listing`]); damaged runs
+/// listed make it fail.
+pub fn runs_list(
+    store_root: &Path,
+    options: &ListOptions,
+    format: Format,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let listing = tracking::list_runs(&open_store(store_root)?, options)?;
+    out.write_all(listing.render(format).as_bytes())?;
+    match listing.damaged().len() {
+        0 => Ok(()),
+        count => Err(CommandError::Damaged { count }),
     }
-    writeln!(out, "{}", runs_line(&RunSummary::HEADER))?;
-    let mut damaged = Vec::new();
-    for run in &runs {
-        if let Some(p) = &run.problem {
-            damaged.push(format!("{}: {p}", run.id.short(12)));
-        }
-        writeln!(out, "{}", runs_line(&run.row()))?;
+}
+
+/// `repose diff A B`: what differs between two runs or two studies
+/// ([`crate::tracking::diff`]), as text or JSON.
+pub fn diff(
+    store_root: &Path,
+    a: &str,
+    b: &str,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let diff = tracking::diff::diff(&open_store(store_root)?, a, b)?;
+    if json {
+        return print_json(&diff, out);
     }
-    if !damaged.is_empty() {
-        writeln!(out, "damaged (run them again to recompute):")?;
-        for line in &damaged {
-            writeln!(out, "  {line}")?;
-        }
-        return Err(CommandError::Damaged {
-            count: damaged.len(),
-        });
+    Ok(out.write_all(diff.text().as_bytes())?)
+}
+
+/// `repose studies`: every study of the store with its method, stages, run
+/// counts, verdicts and last change ([`crate::tracking::studies`]).
+pub fn studies(store_root: &Path, json: bool, out: &mut dyn Write) -> Result<(), CommandError> {
+    let entries = tracking::studies::list_studies(&open_store(store_root)?)?;
+    if json {
+        return print_json(&entries, out);
     }
-    Ok(())
+    Ok(out.write_all(tracking::studies::studies_text(&entries, store_root).as_bytes())?)
 }
 
 /// `repose runs show PREFIX`: the run whose id starts with PREFIX (which must be

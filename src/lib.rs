@@ -3,6 +3,8 @@
 //!
 //! Module map (dependencies point downward only):
 //! - [`commands`]: one function per CLI subcommand (the binary only parses arguments).
+//! - [`tracking`]: queries over the store: runs filtered, sorted and grouped
+//!   over seeds, the diff of two runs or two studies, the list of studies.
 //! - [`study`]: studies as data — one study model whose methods are stage
 //!   lists (he2019's sample, batch, train, search, verify; the design
 //!   studies' screen, rsm, sensitivity, verify; the noise floor; the
@@ -51,3 +53,4 @@ pub mod store;
 pub mod streams;
 pub mod study;
 pub mod surrogate;
+pub mod tracking;

@@ -25,6 +25,7 @@ use repose::surrogate::ga_bp::genetic::GaSettings;
 use repose::surrogate::ga_bp::levenberg::TrainlmSettings;
 use repose::surrogate::ga_bp::TrainSettings;
 use repose::surrogate::ga_bp::{Selection, DEFAULT_FOLDS, DEFAULT_TRAIN_FRACTION};
+use repose::tracking::{Format, ListOptions};
 
 /// Huge pages for the engine's large arrays (see `repose::huge_pages`).
 #[cfg(target_os = "linux")]
@@ -260,6 +261,27 @@ enum Command {
     Runs {
         #[command(subcommand)]
         command: RunsCommand,
+    },
+    /// What differs between two runs (id prefixes: manifest fields, responses
+    /// with the seed noise when both have replicates, warnings, sealed files)
+    /// or two studies (directories, or prefixes of their ids or directory
+    /// names: spec fields, and per stage the files, shared runs and changed
+    /// table rows).
+    Diff {
+        /// The first run or study.
+        a: String,
+        /// The second run or study.
+        b: String,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Every study of the store: name, id, method, stages done, run counts,
+    /// verdicts and the time of its last change.
+    Studies {
+        /// Print a JSON list instead of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Latin hypercube over a study's calibrated parameters (he2019 §3.1): one
     /// experiment manifest per sample, design diagnostics; or, with --diagnose,
@@ -869,13 +891,64 @@ impl BenchArgs {
 
 #[derive(Subcommand)]
 enum RunsCommand {
-    /// Table of every run.
-    List,
+    /// Table of the runs: every run, or those a query selects, sorted,
+    /// grouped over packing seeds, as text, CSV or JSON. Fields: `id`,
+    /// `scene`, `profile`, `status`, `physics_version`, any manifest field by
+    /// dotted path (`contact.particle_particle.static_friction`) and any
+    /// response (`angle_deg`, `headline_angle_deg`).
+    List(ListArgs),
     /// One run, by a unique id prefix.
     Show {
         /// Leading hex digits of the run id.
         prefix: String,
     },
+}
+
+#[derive(clap::Args)]
+struct ListArgs {
+    /// Keep the runs where FIELD OP VALUE holds (OP: = != < <= > >=; numbers
+    /// compare as numbers); repeatable, every one must hold.
+    #[arg(long = "where", value_name = "EXPR")]
+    filters: Vec<String>,
+    /// Order by FIELD, or FIELD:desc; repeatable or a comma list; stable.
+    #[arg(long, value_name = "KEY[:desc]")]
+    sort: Vec<String>,
+    /// The columns to show, in order (`id` always first).
+    #[arg(long, value_name = "a,b,c", value_delimiter = ',')]
+    columns: Option<Vec<String>>,
+    /// Only the fields whose values differ among the listed runs.
+    #[arg(long)]
+    only_changed: bool,
+    /// Fold runs that differ only in their packing seed into one row: n and
+    /// each response's mean ± 95 % interval (Student t).
+    #[arg(long)]
+    group_seeds: bool,
+    /// Print a JSON list, one object per row.
+    #[arg(long, conflicts_with = "csv")]
+    json: bool,
+    /// Print a CSV table.
+    #[arg(long)]
+    csv: bool,
+}
+
+impl ListArgs {
+    fn format(&self) -> Format {
+        match (self.json, self.csv) {
+            (true, _) => Format::Json,
+            (_, true) => Format::Csv,
+            _ => Format::Text,
+        }
+    }
+
+    fn options(self) -> ListOptions {
+        ListOptions {
+            filters: self.filters,
+            sort: self.sort,
+            columns: self.columns,
+            only_changed: self.only_changed,
+            group_seeds: self.group_seeds,
+        }
+    }
 }
 
 fn dispatch(cli: Cli) -> Result<(), CommandError> {
@@ -1062,8 +1135,13 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             commands::stages(&study, analysis, adaptive, json, &mut out)
         }
         Command::Runs {
-            command: RunsCommand::List,
-        } => commands::runs_list(&cli.store, &mut out),
+            command: RunsCommand::List(args),
+        } => {
+            let format = args.format();
+            commands::runs_list(&cli.store, &args.options(), format, &mut out)
+        }
+        Command::Diff { a, b, json } => commands::diff(&cli.store, &a, &b, json, &mut out),
+        Command::Studies { json } => commands::studies(&cli.store, json, &mut out),
         Command::Runs {
             command: RunsCommand::Show { prefix },
         } => commands::runs_show(&cli.store, &prefix, &mut out),

@@ -21,6 +21,23 @@ pub struct RunSummary {
 }
 
 impl RunSummary {
+    /// The summary of run `id` found in `state`, with its manifest.
+    pub fn new(id: ContentId, state: RunState, experiment: Option<Experiment>) -> RunSummary {
+        let status = state.status();
+        let (result, problem) = match state {
+            RunState::Complete(r) => (Some(*r), None),
+            RunState::Damaged(p) => (None, Some(p)),
+            _ => (None, None),
+        };
+        RunSummary {
+            id,
+            status,
+            problem,
+            experiment,
+            result,
+        }
+    }
+
     /// The header of [`RunSummary::row`]'s table (`repose runs list`).
     pub const HEADER: [&'static str; 8] = [
         "ID",
@@ -101,19 +118,7 @@ impl Store {
             .into_iter()
             .map(|id| {
                 let state = self.check(&id, Depth::Sizes);
-                let status = state.status();
-                let (result, problem) = match state {
-                    RunState::Complete(r) => (Some(*r), None),
-                    RunState::Damaged(p) => (None, Some(p)),
-                    _ => (None, None),
-                };
-                RunSummary {
-                    status,
-                    problem,
-                    experiment: self.load_manifest(&id).ok(),
-                    result,
-                    id,
-                }
+                RunSummary::new(id.clone(), state, self.load_manifest(&id).ok())
             })
             .collect())
     }

@@ -67,7 +67,12 @@ impl FileDigest {
     pub fn of_file(path: &Path) -> io::Result<FileDigest> {
         let mut file = File::open(path)?;
         let mut hasher = Sha256::new();
-        let mut buf = vec![0u8; 1 << 20];
+        // No larger than the file: a 1 MiB buffer is a huge-page mapping
+        // (`crate::huge_pages`) whose 2 MiB the kernel zeroes, which for a
+        // few-kB manifest cost 30 times the hashing (`runs list` of 10⁴ runs:
+        // docs/performance.md, 2026-11-28).
+        let len = file.metadata()?.len();
+        let mut buf = vec![0u8; len.clamp(1, 1 << 20) as usize];
         let mut bytes = 0u64;
         loop {
             let n = file.read(&mut buf)?;
