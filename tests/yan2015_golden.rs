@@ -62,15 +62,16 @@ fn study_dir(store: &Path) -> PathBuf {
         .join(format!("{}-{}", study.name, study.id().short(12)))
 }
 
-/// `repose sensitivity STUDY --jobs <jobs>` into `store`; returns the summary.
-fn run(store: &Path, jobs: usize) -> String {
+/// `repose sensitivity STUDY --jobs <jobs> [--json]` into `store`; returns
+/// what it prints.
+fn run(store: &Path, jobs: usize, json: bool) -> String {
     let mut out = Vec::new();
     sensitivity(
         store,
         &common::root().join(STUDY),
         &Executor::local(jobs, Limits::default()),
         Levels::ALL,
-        false,
+        json,
         &mut out,
     )
     .unwrap_or_else(|e| panic!("sensitivity failed: {e}\n{}", String::from_utf8_lossy(&out)));
@@ -119,7 +120,7 @@ fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
     let tmp = tempfile::tempdir().unwrap();
     let one = tmp.path().join("one-worker");
     let two = tmp.path().join("two-workers");
-    let summary = run(&two, 2);
+    let summary = run(&two, 2, false);
     eprintln!("{summary}");
     // The analysis again on one worker, over the same runs: the second store
     // starts with the first one's runs (and no study outputs), so what is
@@ -128,7 +129,7 @@ fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
     // cai2024_golden (a whole study on one and two workers) and
     // dem_determinism; simulating this study twice cost 3–4 minutes of CI.
     copy_runs(&two, &one);
-    run(&one, 1);
+    run(&one, 1, false);
     // Every file of the two stores — study outputs, lineage, manifests, each
     // run's result.json and MCAP log — is byte-identical: no output says how
     // many runs were already stored (issue 40.5).
@@ -145,17 +146,7 @@ fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
     }
 
     // A second call reads every level back from the store.
-    let mut out = Vec::new();
-    sensitivity(
-        &two,
-        &common::root().join(STUDY),
-        &Executor::local(2, Limits::default()),
-        Levels::ALL,
-        true,
-        &mut out,
-    )
-    .unwrap();
-    let json: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&run(&two, 2, true)).unwrap();
     let stages = json["stages"].as_array().unwrap();
     assert_eq!(stages.len(), 3);
     assert!(stages.iter().all(|s| s["cached"] == true), "{stages:?}");
@@ -184,17 +175,7 @@ fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
             .contains("level1.json changed since the stage wrote it")),
         "{tampered:#?}"
     );
-    let mut out = Vec::new();
-    sensitivity(
-        &one,
-        &common::root().join(STUDY),
-        &Executor::local(1, Limits::default()),
-        Levels::ALL,
-        true,
-        &mut out,
-    )
-    .unwrap();
-    let json: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&run(&one, 1, true)).unwrap();
     let level1_state = json["stages"]
         .as_array()
         .unwrap()
@@ -248,15 +229,7 @@ fn the_smoke_study_is_deterministic_and_matches_the_golden_tables() {
                 "{report:#?}"
             );
         }
-        sensitivity(
-            &one,
-            &common::root().join(STUDY),
-            &Executor::local(1, Limits::default()),
-            Levels::ALL,
-            true,
-            &mut Vec::new(),
-        )
-        .unwrap();
+        run(&one, 1, true);
         assert_eq!(common::snapshot(&one), a, "{case}: the store is restored");
     }
 
