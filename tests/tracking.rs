@@ -404,6 +404,13 @@ fn diff_of_two_studies_differing_in_one_factor_range() {
             &format!("1,0,0.7,8,{r3},47.0,ok"),
         ],
     );
+    // A fitted term that moved: coefficients.csv rows are keyed by term.
+    for (dir, b_a) in [(&a, "2.5"), (&b, "3.1")] {
+        let sub = dir.join("rsm").join("dynamic_angle_deg");
+        std::fs::create_dir_all(&sub).unwrap();
+        let csv = format!("term,coefficient\nintercept,40\nA,{b_a}\nB,-1\n");
+        std::fs::write(sub.join("coefficients.csv"), csv).unwrap();
+    }
     let out = repose(
         tmp.path(),
         &["diff", a.to_str().unwrap(), b.to_str().unwrap(), "--json"],
@@ -417,13 +424,22 @@ fn diff_of_two_studies_differing_in_one_factor_range() {
     );
     let rsm = &d["stages"][0];
     assert_eq!(rsm["stage"], json!("rsm"));
-    assert_eq!(rsm["differ"], json!(["responses.csv"]));
+    assert_eq!(
+        rsm["differ"],
+        json!(["dynamic_angle_deg/coefficients.csv", "responses.csv"])
+    );
     assert_eq!(rsm["shared_runs"], json!([r1]));
     assert_eq!(
         (rsm["runs_only_a"].clone(), rsm["runs_only_b"].clone()),
         (json!(1), json!(1))
     );
-    let table = &rsm["tables"][0];
+    let terms = &rsm["tables"][0];
+    assert_eq!(terms["key"], json!(["term"]));
+    assert_eq!(
+        terms["changed"],
+        json!([{"key": ["A"], "cells": [["coefficient", "2.5", "3.1"]]}])
+    );
+    let table = &rsm["tables"][1];
     assert_eq!(table["key"], json!(["point", "replicate"]));
     assert_eq!(
         table["changed"],

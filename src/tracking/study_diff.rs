@@ -10,10 +10,13 @@
 //!   id and so differ whenever the studies do (their outputs are compared).
 //! - Runs: the run ids the stage's CSV tables name
 //!   ([`super::study_files::run_ids`]), shared and one-sided.
-//! - Rows: in each `responses.csv` and `verification.csv`, rows are matched by
-//!   their first two columns (point and replicate; point and response, or
-//!   group and scene) and each matched row's differing cells are given, with
-//!   the rows only one side has.
+//! - Rows: in the tables that say what a stage found ([`ROW_TABLES`]: design
+//!   points, responses, fitted terms, analyses of variance, optima,
+//!   estimates and verdicts), rows are matched by their key columns (the
+//!   design's `index`; point and replicate; a term or source; a rank;
+//!   response and parameter; point and response, or group and scene) and
+//!   each matched row's differing cells are given, with the rows only one
+//!   side has.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -28,8 +31,17 @@ use crate::manifest::ContentId;
 use crate::report::table::Table;
 use crate::store::StoreError;
 
-/// The tables whose rows are compared.
-pub const ROW_TABLES: [&str; 2] = ["responses.csv", "verification.csv"];
+/// The tables whose rows are compared, with how many leading columns key a
+/// row.
+pub const ROW_TABLES: [(&str, usize); 7] = [
+    ("design.csv", 1),
+    ("responses.csv", 2),
+    ("coefficients.csv", 1),
+    ("anova.csv", 1),
+    ("optimum.csv", 1),
+    ("estimates.csv", 2),
+    ("verification.csv", 2),
+];
 
 /// What differs between two studies (module docs).
 #[derive(Debug, Clone, Serialize)]
@@ -160,13 +172,14 @@ fn stage_diff(
             continue;
         }
         differ.push(name(f));
-        let is_row_table = f
-            .file_name()
-            .is_some_and(|n| ROW_TABLES.iter().any(|t| n == *t));
-        if is_row_table {
+        let key = ROW_TABLES
+            .iter()
+            .find(|(t, _)| f.file_name().is_some_and(|n| n == *t))
+            .map(|&(_, key)| key);
+        if let Some(key) = key {
             let text = |b: Vec<u8>| String::from_utf8_lossy(&b).into_owned();
             if let (Ok(ta), Ok(tb)) = (Table::parse(&text(bytes_a)), Table::parse(&text(bytes_b))) {
-                tables.push(table_diff(name(f), &ta, &tb));
+                tables.push(table_diff(name(f), &ta, &tb, key));
             }
         }
     }
@@ -184,14 +197,15 @@ fn stage_diff(
     })
 }
 
-/// The rows of `a` and `b` matched by their first two columns (module docs).
-fn table_diff(file: String, a: &Table, b: &Table) -> TableDiff {
+/// The rows of `a` and `b` matched by their first `key` columns (module
+/// docs).
+fn table_diff(file: String, a: &Table, b: &Table, key: usize) -> TableDiff {
     let keyed = |t: &Table| -> BTreeMap<Vec<String>, BTreeMap<String, String>> {
         t.rows
             .iter()
             .map(|row| {
                 let cells = t.header.iter().cloned().zip(row.iter().cloned()).collect();
-                (row.iter().take(2).cloned().collect(), cells)
+                (row.iter().take(key).cloned().collect(), cells)
             })
             .collect()
     };
@@ -217,7 +231,7 @@ fn table_diff(file: String, a: &Table, b: &Table) -> TableDiff {
         .collect();
     TableDiff {
         file,
-        key: a.header.iter().take(2).cloned().collect(),
+        key: a.header.iter().take(key).cloned().collect(),
         only_a: ka
             .keys()
             .filter(|k| !kb.contains_key(*k))
