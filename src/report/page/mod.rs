@@ -414,12 +414,14 @@ fn csv_table(file: &Path, caption: String) -> Result<Table, PageError> {
 
 /// An SVG document split after its opening tag's attributes (see
 /// [`Figure`]), without the XML prolog; `None` when it holds a script, a
-/// `foreignObject` or an `href` (it could reach outside the page).
+/// `foreignObject`, an `href` (it could reach outside the page) or an event
+/// handler attribute (`onload=` and the like, which run script).
 fn split_svg(svg: &str) -> Option<(&str, &str)> {
     let lower = svg.to_ascii_lowercase();
     if ["<script", "<foreignobject", "href"]
         .iter()
         .any(|bad| lower.contains(bad))
+        || has_event_attribute(&lower)
     {
         return None;
     }
@@ -430,6 +432,18 @@ fn split_svg(svg: &str) -> Option<(&str, &str)> {
         return None; // an empty `<svg/>`: nothing to show
     }
     Some((open_tag, &svg[end + 1..]))
+}
+
+/// Whether `lower` (lower-cased markup) holds an attribute `on<letters>=`
+/// after white space, the form of every event handler.
+fn has_event_attribute(lower: &str) -> bool {
+    let bytes = lower.as_bytes();
+    lower.match_indices("on").any(|(i, _)| {
+        let after_space = i > 0 && bytes[i - 1].is_ascii_whitespace();
+        let rest = &lower[i + 2..];
+        let name = rest.bytes().take_while(u8::is_ascii_lowercase).count();
+        after_space && name > 0 && rest[name..].trim_start().starts_with('=')
+    })
 }
 
 /// The text of the first `<text>` element of an SVG body, unescaped: the
@@ -628,6 +642,8 @@ mod tests {
             "<svg><script>alert(1)</script></svg>",
             "<svg><a href=\"https://x\">x</a></svg>",
             "<svg><foreignObject/></svg>",
+            "<svg onload=\"alert(1)\"><rect/></svg>",
+            "<svg><rect\n  onclick = \"x()\"/></svg>",
             "<svg/>",
         ] {
             assert!(split_svg(bad).is_none(), "{bad}");
