@@ -52,9 +52,9 @@
 //!
 //! Why only layouts that could not start are moved: moving every misfit
 //! changes the packing, and so the results, of layouts that run today under
-//! the same physics version (the drum's paired-sphere smoke run moved from
-//! 42.7° to 38.9°); results keyed by a manifest's id must not change under
-//! it. Moving every misfit belongs with the next physics version bump.
+//! the same physics version (measured: docs/performance.md,
+//! src/scenes/grains.rs); results keyed by a manifest's id must not change
+//! under it. Moving every misfit belongs with the next physics version bump.
 //!
 //! Why not pack the clumps' bounding spheres instead: they hold only 66 %
 //! of the solid of the same layout (paired spheres of aspect 1.3), so a
@@ -92,12 +92,9 @@ const WORDS_PER_BODY: u128 = 8 * ORIENTATION_TRIALS as u128;
 pub const RELOCATION_TRIALS: u32 = 20_000;
 
 /// Farthest a clump is moved from the centre of the sphere it replaces, in
-/// that sphere's (volume-equivalent) radii. Gaps for clumps near aspect 2
-/// lie a few neighbours away in the dense layouts: with
-/// [`RELOCATION_TRIALS`] trials, 7 of the 72 misfits of the drum's smoke
-/// layout at aspect ratio 1.999999 find no free place within 2 radii, 4
-/// within 3 and none within 4; the hopper's smoke layout needs more (one
-/// left with 8,000 trials within 8 radii, none with these).
+/// that sphere's (volume-equivalent) radii: gaps for clumps near aspect 2
+/// lie a few neighbours away in the dense layouts (how far, per layout:
+/// docs/performance.md, src/scenes/grains.rs).
 pub const RELOCATION_REACH: f64 = 10.0;
 
 /// The ChaCha8 stream of the packing seed that moves misfits.

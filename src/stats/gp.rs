@@ -80,8 +80,8 @@ const SIGNAL_VAR_BOUNDS: (f64, f64) = (1e-3, 1e2);
 /// ([`GaussianProcess::fit_trend`]): the two-level process's discrepancy
 /// is often a smooth trend beyond its constant (the Forrester pair's is
 /// linear), which a long-length-scale Matérn carries only at a large
-/// variance; with 10² the Forrester fit stopped on the bound at ρ = 1.92
-/// against SMT's 2.00, with 10⁴ it reaches 1.996.
+/// variance, beyond the constant-mean bound (measured on the Forrester
+/// pair: docs/performance.md, src/stats/gp_two_level.rs).
 const TREND_SIGNAL_VAR_MAX: f64 = 1e4;
 /// Bounds of σ_n² as multiples of var(y).
 const NUGGET_VAR_BOUNDS: (f64, f64) = (1e-6, 1.0);

@@ -41,10 +41,9 @@
 //! ([`GaussianProcess::fit_trend`]: at every trial of δ's hyperparameters,
 //! ρ and β are their GLS estimates under that K), with the coarse level's
 //! bounds, starts and optimiser, as SMT's `MFK` does with its
-//! concentrated likelihood. An earlier version alternated GP fits on
-//! y − ρ μ_coarse with GLS updates of ρ; on the Forrester pair it settled at
-//! ρ = 0.93 where the profile gives ρ ≈ 2 (the pair's construction), so the
-//! profile it is. Every step is deterministic, so a fit is bit-identical
+//! concentrated likelihood; alternating GP fits with GLS updates of ρ
+//! settles at a different fixed point (docs/performance.md,
+//! src/stats/gp_two_level.rs). Every step is deterministic, so a fit is bit-identical
 //! across runs.
 
 use nalgebra::{DVector, Matrix2, Vector2};

@@ -68,9 +68,8 @@ impl FileDigest {
         let mut file = File::open(path)?;
         let mut hasher = Sha256::new();
         // No larger than the file: a 1 MiB buffer is a huge-page mapping
-        // (`crate::huge_pages`) whose 2 MiB the kernel zeroes, which for a
-        // few-kB manifest cost 30 times the hashing (`runs list` of 10⁴ runs:
-        // docs/performance.md, 2026-11-28).
+        // (`crate::huge_pages`) whose 2 MiB the kernel zeroes for every small
+        // file (measured: docs/performance.md, src/store/seal.rs).
         let len = file.metadata()?.len();
         let mut buf = vec![0u8; len.clamp(1, 1 << 20) as usize];
         let mut bytes = 0u64;
