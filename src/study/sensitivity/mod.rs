@@ -127,10 +127,13 @@ fn cached<T: DeserializeOwned>(json: &Path, lineage: &Lineage) -> Option<T> {
         if name.starts_with(TEMP_PREFIX) {
             continue;
         }
-        let output = name
-            .strip_suffix(".lineage.json")
-            .map_or(path.clone(), |o| dir.join(o));
-        if !written_by(&output, lineage) {
+        // A record needs its output; each output is checked (with its
+        // record) once, when the loop reaches it.
+        let intact = match name.strip_suffix(".lineage.json") {
+            Some(output) => dir.join(output).is_file(),
+            None => written_by(&path, lineage),
+        };
+        if !intact {
             return None;
         }
     }
