@@ -26,6 +26,7 @@ use crate::store::{
 };
 use crate::study::batch::batch as run_batch;
 use crate::study::calibration::Stage;
+use crate::study::convergence::{self, plan::plan as size_plan, SurfaceEnergyRule};
 use crate::study::dir::StudyDir;
 use crate::study::gp_train::train_gp;
 use crate::study::learning_curve;
@@ -625,6 +626,77 @@ pub fn tradeoff(
     )?;
     write!(out, "{}", done.markdown)?;
     writeln!(out, "\nwritten: {}", done.dir.display())?;
+    Ok(())
+}
+
+/// Options of `repose convergence`.
+#[derive(Debug, Clone)]
+pub struct ConvergenceOptions {
+    /// Size factors relative to the base's particle (1 = the base).
+    pub factors: Vec<f64>,
+    /// Replicates (packing seeds) per size, ≥ 2.
+    pub replicates: usize,
+    /// How Γ follows the size for a base without coarse graining.
+    pub rule: Option<SurfaceEnergyRule>,
+    /// The real particle's radius, m, for a base without coarse graining.
+    pub real_radius_m: Option<f64>,
+    /// Responses and tolerance.
+    pub analysis: convergence::Analysis,
+    /// Output directory (default `<store>/convergence/<first 12 hex of the
+    /// base id>`).
+    pub out_dir: Option<PathBuf>,
+    /// Print the analysis as JSON instead of Markdown.
+    pub json: bool,
+}
+
+/// `repose convergence MANIFEST`: sweeps the scene over particle sizes with
+/// replicates (see [`crate::study::convergence`]), writes convergence.csv /
+/// .md / .svg with a lineage record, and prints the report.
+pub fn convergence(
+    store_root: &Path,
+    manifest: &Path,
+    options: &ConvergenceOptions,
+    exec: &Executor,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
+    let plan = size_plan(
+        &base,
+        &options.factors,
+        options.replicates,
+        options.rule,
+        options.real_radius_m,
+    )
+    .map_err(|e| CommandError::Usage(e.to_string()))?;
+    let levels = plan.levels.len() as u64;
+    StudySpec::convergence(
+        &manifest.display().to_string(),
+        base.id(),
+        levels,
+        options.replicates as u64,
+    )
+    .check_runs(exec.max_runs)
+    .map_err(CommandError::Usage)?;
+    let store = open_store(store_root)?;
+    let out_dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| convergence::default_dir(&store, &base));
+    let pool = exec.in_study(&out_dir);
+    let done = convergence::sweep(
+        &store,
+        &base,
+        manifest,
+        &plan,
+        &options.analysis,
+        &pool,
+        &out_dir,
+    )?;
+    if options.json {
+        return print_json(&done.convergence, out);
+    }
+    write!(out, "{}", done.markdown)?;
+    writeln!(out, "\nwritten: {}", out_dir.display())?;
     Ok(())
 }
 

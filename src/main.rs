@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use repose::bench::BenchOptions;
-use repose::commands::{self, CommandError, KindArg, TradeoffOptions};
+use repose::commands::{self, CommandError, ConvergenceOptions, KindArg, TradeoffOptions};
 use repose::dem::simulation::{NormalChoice, RollingChoice};
 use repose::doe::lhs::Placement;
 use repose::exec::slurm::SlurmSettings;
@@ -16,6 +16,7 @@ use repose::exec::Executor;
 use repose::scenes::plan::Limits;
 use repose::search::meanshift::Kernel;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
+use repose::study::convergence::plan::{SurfaceEnergyRule, RULE_NAMES};
 use repose::study::sample::SampleSettings;
 use repose::study::stages::Analysis;
 use repose::study::tolerance_search::SearchSettings;
@@ -206,6 +207,11 @@ enum Command {
     /// manifest (one at a time, R replicates each) and tabulate angle error vs the
     /// finest setting against wall time, with the Pareto front.
     Tradeoff(TradeoffArgs),
+    /// Measure what resolution costs and buys: sweep a scene manifest over
+    /// particle sizes (R replicates each), fit each angle against d/D, read
+    /// it at the real particle size with its interval, and give the cost per
+    /// run against size and the coarsest size within a tolerance.
+    Convergence(ConvergenceArgs),
     /// Accuracy vs number of DEM simulations for a study: train on nested
     /// prefixes of its design (fixed validation rows), with validation R², the
     /// calibrated parameters' spread and the DEM time of each size. Runs the
@@ -801,6 +807,78 @@ impl TradeoffArgs {
     }
 }
 
+/// Options of `repose convergence`.
+#[derive(clap::Args)]
+struct ConvergenceArgs {
+    /// Experiment manifest of the scene (a lab scene): the coarsest level.
+    manifest: PathBuf,
+    /// Size factors relative to the manifest's particle, comma-separated
+    /// (1 = the manifest's; 0.5 = half its radius).
+    #[arg(long, value_delimiter = ',', default_value = "1,0.75,0.5")]
+    sizes: Vec<f64>,
+    /// Replicates (packing seeds) per size, >= 2.
+    #[arg(long, default_value_t = 5)]
+    replicates: usize,
+    /// How the surface energy follows the radius when the manifest has no
+    /// coarse_graining: constant_bond (Γ ∝ R², the default), proportional
+    /// (Γ ∝ R), cohesion_number (Γ ∝ R^0.4) or fixed.
+    #[arg(long)]
+    rule: Option<String>,
+    /// The real particle's radius, m, when the manifest states its simulated
+    /// particle directly (with coarse_graining the manifest's radius is the
+    /// real one); without it the trend is read at d/D -> 0.
+    #[arg(long)]
+    real_radius: Option<f64>,
+    /// Responses to analyse, comma-separated (default: every angle response
+    /// of the scene that a run measured).
+    #[arg(long, value_delimiter = ',')]
+    responses: Vec<String>,
+    /// Tolerance of the responses (degrees): the standard size is the
+    /// coarsest whose estimated bias is within half of it.
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// Runs at once (default: the number of CPUs).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Output directory (default <store>/convergence/<base id prefix>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Print the analysis as JSON.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    exec: ExecArgs,
+}
+
+impl ConvergenceArgs {
+    fn options(&self) -> Result<ConvergenceOptions, String> {
+        let rule = match &self.rule {
+            None => None,
+            Some(name) => Some(SurfaceEnergyRule::parse(name).ok_or_else(|| {
+                format!("--rule `{name}`: must be one of {}", RULE_NAMES.join(", "))
+            })?),
+        };
+        if let Some(r) = self.real_radius.filter(|r| !(r.is_finite() && *r > 0.0)) {
+            return Err(format!("--real-radius {r}: must be a length in m, > 0"));
+        }
+        if let Some(t) = self.tolerance.filter(|t| !(t.is_finite() && *t > 0.0)) {
+            return Err(format!("--tolerance {t}: must be a number > 0 (degrees)"));
+        }
+        Ok(ConvergenceOptions {
+            factors: self.sizes.clone(),
+            replicates: self.replicates,
+            rule,
+            real_radius_m: self.real_radius,
+            analysis: repose::study::convergence::Analysis {
+                responses: self.responses.clone(),
+                tolerance: self.tolerance,
+            },
+            out_dir: self.out.clone(),
+            json: self.json,
+        })
+    }
+}
+
 /// Options of `repose bench`.
 #[derive(clap::Args)]
 struct BenchArgs {
@@ -1102,6 +1180,13 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
                 .exec
                 .executor(default_jobs(args.jobs), limits, cli.max_runs)?;
             commands::tradeoff(&cli.store, &args.manifest, &options, &exec, &mut out)
+        }
+        Command::Convergence(args) => {
+            let options = args.options().map_err(CommandError::Usage)?;
+            let exec = args
+                .exec
+                .executor(default_jobs(args.jobs), limits, cli.max_runs)?;
+            commands::convergence(&cli.store, &args.manifest, &options, &exec, &mut out)
         }
         Command::LearningCurve {
             study,

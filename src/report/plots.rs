@@ -743,6 +743,182 @@ pub fn curves(
     Ok(svg)
 }
 
+/// One response's panel of [`size_trends`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrendPanel {
+    /// The response's name with its unit (y axis).
+    pub response: String,
+    /// Each level's (d/D, mean, 95 % half-width).
+    pub levels: Vec<(f64, f64, f64)>,
+    /// The fitted line as (d/D, mean, 95 % half-width of the line), drawn
+    /// solid with its interval dashed; may be empty.
+    pub fit: Vec<(f64, f64, f64)>,
+    /// The extrapolated value at the real size, (d/D, mean, half-width).
+    pub extrapolated: Option<(f64, f64, f64)>,
+}
+
+/// The cost panel of [`size_trends`]: CPU-seconds per run against d/D on
+/// log axes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CostPanel {
+    /// Each run's (d/D, CPU-s).
+    pub runs: Vec<(f64, f64)>,
+    /// The fitted power law's (d/D, CPU-s); may be empty.
+    pub fit: Vec<(f64, f64)>,
+}
+
+/// Colour of extrapolated values.
+const EXTRAPOLATED: RGBColor = RGBColor(0xe1, 0x57, 0x59);
+
+/// A response against particle size (one panel per response: each level's
+/// mean with its 95 % interval, the fitted line and its interval, and the
+/// value extrapolated to the real size in red), then the cost per run
+/// against size on log axes.
+pub fn size_trends(
+    panels: &[TrendPanel],
+    cost: Option<&CostPanel>,
+    title: &str,
+) -> Result<String, PlotError> {
+    if panels.is_empty() && cost.is_none() {
+        return Err(PlotError::Empty {
+            what: "size trends: panels".to_string(),
+        });
+    }
+    for (i, p) in panels.iter().enumerate() {
+        if p.levels.is_empty() {
+            return Err(PlotError::Empty {
+                what: format!("size trends: panel {i} ({}) levels", p.response),
+            });
+        }
+        let all = p.levels.iter().chain(&p.fit).chain(&p.extrapolated);
+        for (k, (x, m, h)) in all.enumerate() {
+            for v in [x, m, h] {
+                finite(
+                    || format!("size trends: panel {i} ({}) value {k}", p.response),
+                    *v,
+                )?;
+            }
+        }
+    }
+    if let Some(c) = cost {
+        for (k, (x, y)) in c.runs.iter().chain(&c.fit).enumerate() {
+            if !(x.is_finite() && *x > 0.0 && y.is_finite() && *y > 0.0) {
+                return Err(PlotError::Shape(format!(
+                    "size trends: cost point {k} ({x}, {y}) must be finite and > 0 (log axes)"
+                )));
+            }
+        }
+        if c.runs.is_empty() {
+            return Err(PlotError::Empty {
+                what: "size trends: cost runs".to_string(),
+            });
+        }
+    }
+    let count = panels.len() + usize::from(cost.is_some());
+    let columns = count.min(3);
+    let rows = count.div_ceil(columns);
+    let (panel_w, panel_h) = (380u32, 330u32);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(
+            &mut svg,
+            (panel_w * columns as u32, panel_h * rows as u32 + 40),
+        )
+        .into_drawing_area();
+        root.fill(&WHITE)?;
+        let root = root.titled(title, (FONT, 18))?;
+        let areas = root.split_evenly((rows, columns));
+        for (panel, area) in panels.iter().zip(&areas) {
+            let spans = panel
+                .levels
+                .iter()
+                .chain(&panel.fit)
+                .chain(&panel.extrapolated);
+            let (x_lo, x_hi) = extent(spans.clone().map(|p| p.0));
+            let (y_lo, y_hi) = extent(spans.flat_map(|&(_, m, h)| [m - h, m + h]));
+            let x_range = padded(x_lo.min(0.0), x_hi);
+            let mut chart = ChartBuilder::on(area)
+                .caption(panel.response.as_str(), (FONT, 14))
+                .margin(10)
+                .x_label_area_size(40)
+                .y_label_area_size(56)
+                .build_cartesian_2d(x_range.clone(), padded(y_lo, y_hi))?;
+            chart
+                .configure_mesh()
+                .x_labels(5)
+                .x_desc("d/D")
+                .y_desc(panel.response.as_str())
+                .x_label_formatter(&|v| tick(*v))
+                .y_label_formatter(&|v| tick(*v))
+                .label_style((FONT, 11))
+                .light_line_style(BLACK.mix(0.04))
+                .draw()?;
+            chart.draw_series(LineSeries::new(
+                panel.fit.iter().map(|&(x, m, _)| (x, m)),
+                INK.stroke_width(1),
+            ))?;
+            for sign in [-1.0, 1.0] {
+                chart.draw_series(std::iter::once(DashedPathElement::new(
+                    panel.fit.iter().map(|&(x, m, h)| (x, m + sign * h)),
+                    4,
+                    3,
+                    INK.mix(0.6).stroke_width(1),
+                )))?;
+            }
+            let cap = 0.015 * (x_range.end - x_range.start);
+            let bars = panel
+                .levels
+                .iter()
+                .map(|&p| (p, INK))
+                .chain(panel.extrapolated.map(|p| (p, EXTRAPOLATED)));
+            for ((x, m, h), colour) in bars {
+                chart.draw_series([
+                    PathElement::new(vec![(x, m - h), (x, m + h)], colour.stroke_width(1)),
+                    PathElement::new(
+                        vec![(x - cap, m - h), (x + cap, m - h)],
+                        colour.stroke_width(1),
+                    ),
+                    PathElement::new(
+                        vec![(x - cap, m + h), (x + cap, m + h)],
+                        colour.stroke_width(1),
+                    ),
+                ])?;
+                chart.draw_series(std::iter::once(Circle::new((x, m), 4, colour.filled())))?;
+            }
+        }
+        if let (Some(c), Some(area)) = (cost, areas.get(panels.len())) {
+            let (x_lo, x_hi) = extent(c.runs.iter().chain(&c.fit).map(|p| p.0));
+            let (y_lo, y_hi) = extent(c.runs.iter().chain(&c.fit).map(|p| p.1));
+            let mut chart = ChartBuilder::on(area)
+                .caption("cost per run", (FONT, 14))
+                .margin(10)
+                .x_label_area_size(40)
+                .y_label_area_size(56)
+                .build_cartesian_2d(
+                    (x_lo / 1.2..x_hi * 1.2).log_scale(),
+                    (y_lo / 1.5..y_hi * 1.5).log_scale(),
+                )?;
+            chart
+                .configure_mesh()
+                .x_desc("d/D")
+                .y_desc("CPU-s per run")
+                .x_label_formatter(&|v| tick(*v))
+                .y_label_formatter(&|v| tick(*v))
+                .label_style((FONT, 11))
+                .light_line_style(BLACK.mix(0.04))
+                .draw()?;
+            chart.draw_series(LineSeries::new(c.fit.iter().copied(), INK.stroke_width(1)))?;
+            chart.draw_series(
+                c.runs
+                    .iter()
+                    .map(|&(x, y)| Circle::new((x, y), 3, INK.mix(0.7).filled())),
+            )?;
+        }
+        root.present()?;
+    }
+    Ok(svg)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -37,6 +37,9 @@
 //! - [`gp_two_level`]: the two-level (multi-fidelity) process y_fine =
 //!   ρ · y_coarse + β + δ of Kennedy & O'Hagan, recursive form: many coarse
 //!   runs and a few fine ones predicting the fine level.
+//! - [`trend`]: a weighted least-squares line and its value extrapolated
+//!   with a confidence interval (a response against particle size, read at
+//!   the real size).
 //!
 //! The fits and analyses of variance check their inputs before any
 //! arithmetic: a non-finite value, slices of different lengths, too few
@@ -56,6 +59,7 @@ pub mod regression;
 pub mod rsm;
 pub mod sensitivity;
 pub mod summary;
+pub mod trend;
 
 /// Why a statistic could not be computed from the data given.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

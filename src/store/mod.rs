@@ -22,6 +22,7 @@
 
 mod atomic;
 pub mod claim;
+pub mod cpu_time;
 pub mod lineage;
 mod lookup;
 pub mod result;
@@ -498,8 +499,12 @@ impl Store {
         remove_if_present(&dir.error_path())?;
 
         let started = Instant::now();
+        let cpu_started = cpu_time::thread_cpu_s();
         let outcome = runner(experiment, &dir);
         let wall_time_s = started.elapsed().as_secs_f64();
+        let thread_cpu_s = cpu_time::thread_cpu_s()
+            .zip(cpu_started)
+            .map(|(end, start)| end - start);
         match outcome {
             Ok(result) => {
                 if result.id != id {
@@ -516,7 +521,13 @@ impl Store {
                     self.record_error(&id, &error.to_string(), Vec::new())?;
                     return Err(error);
                 }
-                self.write_json(&dir.timing_path(), &TimingRecord { wall_time_s })?;
+                self.write_json(
+                    &dir.timing_path(),
+                    &TimingRecord {
+                        wall_time_s,
+                        thread_cpu_s,
+                    },
+                )?;
                 self.write_json(&dir.result_path(), &result)?;
                 let seal = seal::seal_of(&dir).map_err(StoreError::io(dir.path()))?;
                 self.write_json(&dir.seal_path(), &seal)?;

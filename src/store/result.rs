@@ -245,4 +245,11 @@ pub struct ErrorRecord {
 pub struct TimingRecord {
     /// Wall time of the runner, s.
     pub wall_time_s: f64,
+    /// CPU time (user + system) of the thread that ran the runner, s: the
+    /// run's whole CPU cost when its engine ran on that one thread, as every
+    /// executor run does; a lower bound for a run given more threads (their
+    /// time is not counted). Absent on platforms without per-thread CPU
+    /// clocks and in timing files written before it existed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thread_cpu_s: Option<f64>,
 }

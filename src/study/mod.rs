@@ -23,6 +23,9 @@
 //!   spread and its precision per cost (`repose noise MANIFEST`).
 //! - [`tradeoff`]: what accuracy costs in time: fidelity knobs swept around
 //!   one experiment with replicates (`repose tradeoff`).
+//! - [`convergence`]: what resolution costs and buys: one scene swept over
+//!   particle size with replicates, each response's trend read at the real
+//!   particle size, and the cost per run (`repose convergence`).
 //! - [`acceptance`]: the one acceptance rule of a candidate in a scene.
 //! - [`dir`]: where a study's outputs live and how they are written.
 //!
@@ -33,6 +36,7 @@ pub mod acceptance;
 pub mod adaptive;
 pub mod batch;
 pub mod calibration;
+pub mod convergence;
 pub mod dir;
 pub mod gp_surface;
 pub mod gp_train;

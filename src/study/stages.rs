@@ -17,8 +17,10 @@
 //! A design study runs as a response surface (`repose rsm`) or a
 //! sensitivity analysis (`repose sensitivity`): the same document, two
 //! stage lists. The noise floor of one experiment (`repose noise MANIFEST`)
-//! and the tradeoff sweep (`repose tradeoff`) are one-stage studies of a
-//! manifest ([`StudySpec::noise_floor`], [`StudySpec::tradeoff`]).
+//! the tradeoff sweep (`repose tradeoff`) and the particle-size sweep
+//! (`repose convergence`) are one-stage studies of a manifest
+//! ([`StudySpec::noise_floor`], [`StudySpec::tradeoff`],
+//! [`StudySpec::convergence`]).
 
 use std::path::Path;
 
@@ -78,6 +80,8 @@ pub enum Method {
     NoiseFloor,
     /// Fidelity knobs around one experiment (`repose tradeoff`).
     Tradeoff,
+    /// One experiment over particle sizes (`repose convergence`).
+    Convergence,
 }
 
 impl Method {
@@ -213,6 +217,14 @@ pub enum Stage {
         /// Packing seeds per point.
         replicates: u64,
     },
+    /// Particle sizes swept with replicates, each response's trend read at
+    /// the real size.
+    Convergence {
+        /// Size levels.
+        levels: u64,
+        /// Packing seeds per level.
+        replicates: u64,
+    },
 }
 
 impl Stage {
@@ -229,6 +241,7 @@ impl Stage {
             Stage::Sensitivity => "sensitivity",
             Stage::Verify { .. } => "verify",
             Stage::Tradeoff { .. } => "tradeoff",
+            Stage::Convergence { .. } => "convergence",
         }
     }
 
@@ -259,6 +272,7 @@ impl Stage {
             Stage::Tradeoff {
                 points, replicates, ..
             } => points.saturating_mul(*replicates),
+            Stage::Convergence { levels, replicates } => levels.saturating_mul(*replicates),
             Stage::Design { .. }
             | Stage::Fit { .. }
             | Stage::Search { .. }
@@ -471,6 +485,17 @@ impl StudySpec {
         }
     }
 
+    /// The particle-size sweep of one experiment: `levels` sizes ×
+    /// `replicates` runs.
+    pub fn convergence(name: &str, id: ContentId, levels: u64, replicates: u64) -> StudySpec {
+        StudySpec {
+            name: name.to_string(),
+            id,
+            method: Method::Convergence,
+            stages: vec![Stage::Convergence { levels, replicates }],
+        }
+    }
+
     /// The most runs the study may start: every stage's [`Stage::runs`]
     /// (saturating).
     pub fn runs(&self) -> u64 {
@@ -570,6 +595,9 @@ impl StudySpec {
                     "{points} point(s) over knobs {} x {replicates} seed(s)",
                     knobs.join(", ")
                 ),
+                Stage::Convergence { levels, replicates } => {
+                    format!("{levels} particle size(s) x {replicates} seed(s)")
+                }
             };
             let runs = stage.runs();
             let runs = if runs > 0 {

@@ -207,7 +207,7 @@ pub fn plan(base: &Experiment, knobs: &[Knob], replicates: usize) -> Result<Vec<
 }
 
 /// `e` with packing seeds base, base + 1, ...
-fn replicate(e: &Experiment, n: usize) -> Vec<Experiment> {
+pub(crate) fn replicate(e: &Experiment, n: usize) -> Vec<Experiment> {
     (0..n as u64)
         .map(|r| {
             let mut x = e.clone();
