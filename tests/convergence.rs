@@ -59,7 +59,16 @@ fn a_tiny_drum_over_three_sizes() {
         let tmp = tempfile::tempdir().unwrap();
         let store = Store::open(tmp.path()).unwrap();
         let out = tmp.path().join("out");
-        let done = sweep(&store, &base, &manifest, &plan, &analysis, &pool(jobs), &out).unwrap();
+        let done = sweep(
+            &store,
+            &base,
+            &manifest,
+            &plan,
+            &analysis,
+            &pool(jobs),
+            &out,
+        )
+        .unwrap();
         let c = &done.convergence;
         // Coarsest first; the base level's first run is the base manifest.
         let factors: Vec<f64> = c.levels.iter().map(|l| l.factor).collect();
@@ -94,7 +103,16 @@ fn a_tiny_drum_over_three_sizes() {
         let at = trend.at_real.unwrap();
         assert_eq!(at.mean, line.intercept + line.slope * real_x);
         // A second call finds every run in the store.
-        let again = sweep(&store, &base, &manifest, &plan, &analysis, &pool(jobs), &out).unwrap();
+        let again = sweep(
+            &store,
+            &base,
+            &manifest,
+            &plan,
+            &analysis,
+            &pool(jobs),
+            &out,
+        )
+        .unwrap();
         assert_eq!(again.convergence.levels[2].ids, c.levels[2].ids);
         for name in ["convergence.csv", "convergence.md", "convergence.svg"] {
             assert!(out.join(name).is_file(), "{name}");
@@ -123,7 +141,10 @@ fn cli_names_a_bad_rule_and_a_bad_size() {
     let out = run(&["--rule", "bond"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--rule `bond`") && err.contains("constant_bond"), "{err}");
+    assert!(
+        err.contains("--rule `bond`") && err.contains("constant_bond"),
+        "{err}"
+    );
     let out = run(&["--sizes", "1,0"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);

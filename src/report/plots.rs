@@ -887,31 +887,33 @@ pub fn size_trends(
             }
         }
         if let (Some(c), Some(area)) = (cost, areas.get(panels.len())) {
-            let (x_lo, x_hi) = extent(c.runs.iter().chain(&c.fit).map(|p| p.0));
-            let (y_lo, y_hi) = extent(c.runs.iter().chain(&c.fit).map(|p| p.1));
+            // Log axes drawn as log10 values on linear axes, so a range
+            // narrower than a decade still gets tick labels (in real units).
+            let log = |p: &(f64, f64)| (p.0.log10(), p.1.log10());
+            let (x_lo, x_hi) = extent(c.runs.iter().chain(&c.fit).map(|p| log(p).0));
+            let (y_lo, y_hi) = extent(c.runs.iter().chain(&c.fit).map(|p| log(p).1));
             let mut chart = ChartBuilder::on(area)
-                .caption("cost per run", (FONT, 14))
+                .caption("cost per run (log axes)", (FONT, 14))
                 .margin(10)
                 .x_label_area_size(40)
                 .y_label_area_size(56)
-                .build_cartesian_2d(
-                    (x_lo / 1.2..x_hi * 1.2).log_scale(),
-                    (y_lo / 1.5..y_hi * 1.5).log_scale(),
-                )?;
+                .build_cartesian_2d(padded(x_lo, x_hi), padded(y_lo, y_hi))?;
             chart
                 .configure_mesh()
+                .x_labels(5)
+                .y_labels(6)
                 .x_desc("d/D")
                 .y_desc("CPU-s per run")
-                .x_label_formatter(&|v| tick(*v))
-                .y_label_formatter(&|v| tick(*v))
+                .x_label_formatter(&|v| tick(10f64.powf(*v)))
+                .y_label_formatter(&|v| tick(10f64.powf(*v)))
                 .label_style((FONT, 11))
                 .light_line_style(BLACK.mix(0.04))
                 .draw()?;
-            chart.draw_series(LineSeries::new(c.fit.iter().copied(), INK.stroke_width(1)))?;
+            chart.draw_series(LineSeries::new(c.fit.iter().map(log), INK.stroke_width(1)))?;
             chart.draw_series(
                 c.runs
                     .iter()
-                    .map(|&(x, y)| Circle::new((x, y), 3, INK.mix(0.7).filled())),
+                    .map(|p| Circle::new(log(p), 3, INK.mix(0.7).filled())),
             )?;
         }
         root.present()?;
@@ -1160,5 +1162,47 @@ mod tests {
             ..grid
         };
         assert_eq!(iso_segments(&saddle, 0.5).len(), 2);
+    }
+
+    /// Each level's bar, the extrapolated bar in red, the cost panel with
+    /// labelled log ticks; identical input, identical bytes; bad input named.
+    #[test]
+    fn size_trends_draws_levels_extrapolation_and_cost() {
+        let panel = TrendPanel {
+            response: "angle (°)".into(),
+            levels: vec![(0.064, 42.0, 1.5), (0.048, 43.0, 1.0), (0.032, 44.5, 0.8)],
+            fit: vec![(0.001, 46.0, 2.0), (0.064, 42.0, 0.9)],
+            extrapolated: Some((0.001, 46.0, 2.0)),
+        };
+        let cost = CostPanel {
+            runs: vec![(0.064, 12.0), (0.048, 40.0), (0.032, 190.0)],
+            fit: vec![(0.064, 12.0), (0.032, 190.0)],
+        };
+        let svg = size_trends(std::slice::from_ref(&panel), Some(&cost), "sizes").unwrap();
+        assert_eq!(
+            svg,
+            size_trends(&[panel.clone()], Some(&cost), "sizes").unwrap()
+        );
+        assert!(svg.contains("cost per run") && svg.contains("CPU-s per run"));
+        assert!(
+            svg.contains("#E15759"),
+            "the extrapolated value is drawn in red"
+        );
+        let circles = svg.matches("<circle").count();
+        assert_eq!(
+            circles,
+            3 + 1 + 3,
+            "three levels, one extrapolation, three runs"
+        );
+        let mut bad = panel.clone();
+        bad.levels[1].1 = f64::NAN;
+        let err = size_trends(&[bad], None, "t").unwrap_err().to_string();
+        assert!(err.contains("panel 0 (angle (°)) value 1"), "{err}");
+        let zero = CostPanel {
+            runs: vec![(0.05, 0.0)],
+            fit: vec![],
+        };
+        let err = size_trends(&[], Some(&zero), "t").unwrap_err().to_string();
+        assert!(err.contains("cost point 0"), "{err}");
     }
 }
