@@ -367,7 +367,7 @@ fn scene() -> impl Strategy<Value = Scene> {
 prop_compose! {
     fn experiment()(
         versions in (any::<u32>(), any::<u32>()),
-        profile in prop_oneof![Just(Profile::Smoke), Just(Profile::Quick), Just(Profile::Paper)],
+        profile in prop_oneof![Just(Profile::Smoke), Just(Profile::Quick), Just(Profile::Paper), Just(Profile::Standard)],
         scene in scene(),
         particle in (float(), float(), float(), size()),
         walls in prop::collection::btree_map(name(), wall(), 0..3),

@@ -45,8 +45,10 @@ pub struct Experiment {
     pub at_rest: AtRest,
 }
 
-/// Fidelity profile: `smoke` (seconds, CI), `quick` (minutes, the default) or
-/// `paper` (the paper's sizes; hours).
+/// Fidelity profile: `smoke` (seconds, CI), `quick` (minutes, the default),
+/// `paper` (the paper's sizes; hours) or `standard` (the size a convergence
+/// sweep chose). Declared in that order, so ordering the older three is
+/// unchanged.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Profile {
@@ -56,6 +58,10 @@ pub enum Profile {
     Quick,
     /// The paper's geometry and particle count; for a cluster.
     Paper,
+    /// The coarsest particle size whose estimated bias from the converged
+    /// (real-size) value is within half the scene's tolerance, measured by
+    /// `repose convergence`; hours per study, for `--executor slurm`.
+    Standard,
 }
 
 impl Profile {
@@ -64,6 +70,7 @@ impl Profile {
         match self {
             Profile::Smoke => "smoke",
             Profile::Quick => "quick",
+            Profile::Standard => "standard",
             Profile::Paper => "paper",
         }
     }

@@ -1181,7 +1181,7 @@ mod tests {
         let svg = size_trends(std::slice::from_ref(&panel), Some(&cost), "sizes").unwrap();
         assert_eq!(
             svg,
-            size_trends(&[panel.clone()], Some(&cost), "sizes").unwrap()
+            size_trends(std::slice::from_ref(&panel), Some(&cost), "sizes").unwrap()
         );
         assert!(svg.contains("cost per run") && svg.contains("CPU-s per run"));
         assert!(

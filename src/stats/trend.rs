@@ -21,7 +21,8 @@
 //! with its distance from the measured sizes as (x₀ − x̄)², which is the
 //! honest statement of how far a trend is being trusted.
 
-use super::summary::t_quantile;
+use super::nlls::LackOfFit;
+use super::summary::{f_survival, t_quantile};
 use super::{check_finite, StatsError};
 
 /// A weighted least-squares line with its covariance.
@@ -135,6 +136,52 @@ impl LineFit {
         }
     }
 
+    /// Lack of fit of the line against the pure error of replicates (runs
+    /// at the same x, bitwise), both weighted as the fit was: whether the
+    /// levels' means stray from the line by more than the scatter of their
+    /// runs allows. `x`, `y`, `w` are the fit's. `None` without replicates or
+    /// with only two distinct x (no degree of freedom for lack of fit).
+    /// (A line through 3+ levels read far outside them is only as good as
+    /// this test says.)
+    pub fn lack_of_fit(&self, x: &[f64], y: &[f64], w: &[f64]) -> Option<LackOfFit> {
+        let n = y.len();
+        if x.len() != n || w.len() != n || n != self.df_residual + 2 {
+            return None;
+        }
+        let mut groups: std::collections::BTreeMap<u64, Vec<usize>> = Default::default();
+        for (i, v) in x.iter().enumerate() {
+            groups.entry(v.to_bits()).or_default().push(i);
+        }
+        let df_pure_error = n - groups.len();
+        let df_lack_of_fit = groups.len().checked_sub(2)?;
+        if df_pure_error == 0 || df_lack_of_fit == 0 {
+            return None;
+        }
+        let ss_pure_error: f64 = groups
+            .values()
+            .map(|members| {
+                let sw: f64 = members.iter().map(|&i| w[i]).sum();
+                let mean = members.iter().map(|&i| w[i] * y[i]).sum::<f64>() / sw;
+                members
+                    .iter()
+                    .map(|&i| w[i] * (y[i] - mean).powi(2))
+                    .sum::<f64>()
+            })
+            .sum();
+        let sse = self.s2 * self.df_residual as f64;
+        let ss_lack_of_fit = (sse - ss_pure_error).max(0.0);
+        let ratio =
+            (ss_lack_of_fit / df_lack_of_fit as f64) / (ss_pure_error / df_pure_error as f64);
+        Some(LackOfFit {
+            ss_lack_of_fit,
+            df_lack_of_fit,
+            ss_pure_error,
+            df_pure_error,
+            ratio,
+            p_value: f_survival(ratio, df_lack_of_fit as f64, df_pure_error as f64),
+        })
+    }
+
     /// Half-width of the 95 % interval of the slope.
     pub fn slope_half_width(&self) -> f64 {
         t_quantile(0.975, self.df_residual as f64) * self.covariance[1][1].max(0.0).sqrt()
@@ -194,6 +241,15 @@ mod tests {
         assert!(close(p.std_error, 1.168513909825582), "{}", p.std_error);
         assert!(close(p.half_width, 2.524420825427974), "{}", p.half_width);
         assert!(close(fit.slope_half_width(), 68.7983779951781));
+        // Lack of fit: SSE_w = r.ssr; SS_pe,w = Σ_levels w·Σ(y − ȳ)²
+        // (= n − 1 per level, as w = 1/s²); F = (SSE − SS_pe)/1 / (SS_pe/12);
+        // scipy.stats.f.sf(F, 1, 12).
+        let lof = fit.lack_of_fit(&x, &y, &w).unwrap();
+        assert_eq!((lof.df_lack_of_fit, lof.df_pure_error), (1, 12));
+        assert!(close(lof.ss_pure_error, 12.0), "{}", lof.ss_pure_error);
+        assert!(close(lof.ss_lack_of_fit, 12.224325144070372 - 12.0));
+        assert!(close(lof.ratio, 0.22432514407037196), "{}", lof.ratio);
+        assert!(close(lof.p_value, 0.6442643074305461), "{}", lof.p_value);
     }
 
     #[test]

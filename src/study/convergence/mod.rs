@@ -28,6 +28,10 @@
 //! slope's interval. The standard size for a tolerance T is the coarsest
 //! measured level whose estimated bias is within T/2; where none is, the d/D
 //! at which the line reaches T/2 and its cost from the cost law are given.
+//! With three or more sizes the line is tested for lack of fit against the
+//! runs' pure error; a line the levels contradict (p < 0.05) is reported but
+//! neither a standard size nor a needed size is read from it: the response
+//! has not converged to any trend a line can carry to the real size.
 //!
 //! # The cost law
 //! CPU-seconds per run against d/D as a power law, a line in logs over the
@@ -48,8 +52,13 @@ use super::StudyError;
 use crate::exec::{ExecError, Executor};
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::responses::{catalogue, response};
+use crate::stats::nlls::LackOfFit;
 use crate::stats::summary::{mean_ci, MeanCi};
 use crate::stats::trend::{weighted_line, LineFit, LinePrediction};
+
+/// Lack-of-fit p-value below which a line is not trusted to extrapolate:
+/// its levels' means stray from it by more than their runs' scatter allows.
+pub const LACK_OF_FIT_ALPHA: f64 = 0.05;
 use crate::store::{InputRef, Lineage, RunStatus, Store, TimingRecord};
 pub use plan::{Level, SizePlan, SurfaceEnergyRule};
 
@@ -144,6 +153,9 @@ pub struct Trend {
     pub weighting: &'static str,
     /// The fitted line, or why there is none.
     pub fit: Result<LineFit, String>,
+    /// The line's lack of fit against the runs' pure error (three or more
+    /// sizes with replicates).
+    pub lack_of_fit: Option<LackOfFit>,
     /// The line at the real d/D with its interval (the extrapolated value).
     pub at_real: Option<LinePrediction>,
     /// Per level (coarsest first): the estimated bias b·(x − x_real) and its
@@ -506,12 +518,21 @@ fn trend(
             response: name.to_string(),
             weighting,
             fit,
+            lack_of_fit: None,
             at_real: None,
             bias: vec![None; levels.len()],
             standard_factor: None,
             needed: None,
         };
     };
+    let lack_of_fit = line.lack_of_fit(&x, &y, &w);
+    // A line the levels contradict says nothing about the real size: no
+    // standard size and no needed size from it.
+    let tolerance = tolerance.filter(|_| {
+        lack_of_fit
+            .as_ref()
+            .is_none_or(|l| l.p_value >= LACK_OF_FIT_ALPHA)
+    });
     let half = line.slope_half_width();
     let bias: Vec<Option<(f64, f64)>> = levels
         .iter()
@@ -542,6 +563,7 @@ fn trend(
     Trend {
         response: name.to_string(),
         weighting,
+        lack_of_fit,
         at_real: Some(line.at(real_x)),
         fit: Ok(line),
         bias,

@@ -183,6 +183,7 @@ pub fn markdown(c: &Convergence, title: &str) -> String {
         "response",
         "weighting",
         "slope (°)",
+        "lack of fit p",
         "extrapolated (°)",
         "bias per size (°)",
         "coarsest within T/2",
@@ -215,10 +216,19 @@ pub fn markdown(c: &Convergence, title: &str) -> String {
                 n.cpu_s.map_or("—".into(), |s| format!("{s:.3e}"))
             )
         });
+        let lof = t.lack_of_fit.as_ref().map_or("—".into(), |l| {
+            let verdict = if l.p_value < super::LACK_OF_FIT_ALPHA {
+                ": the line misses the sizes, not extrapolated"
+            } else {
+                ""
+            };
+            format!("{:.3}{verdict}", l.p_value)
+        });
         trends.row(&[
             t.response.clone(),
             t.weighting.to_string(),
             slope,
+            lof,
             at_real,
             bias.join("; "),
             t.standard_factor
