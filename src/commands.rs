@@ -28,6 +28,7 @@ use crate::study::batch::batch as run_batch;
 use crate::study::calibration::Stage;
 use crate::study::convergence::{self, plan::plan as size_plan, SurfaceEnergyRule};
 use crate::study::dir::StudyDir;
+use crate::study::fidelity_pilot::{self, PilotSpec};
 use crate::study::gp_train::train_gp;
 use crate::study::learning_curve;
 use crate::study::noise::noise as run_noise;
@@ -696,6 +697,38 @@ pub fn convergence(
         return print_json(&done.convergence, out);
     }
     write!(out, "{}", done.markdown)?;
+    writeln!(out, "\nwritten: {}", out_dir.display())?;
+    Ok(())
+}
+
+/// `repose pilot STUDY --scene NAME`: the two-level pilot (see
+/// [`crate::study::fidelity_pilot`]); writes pilot.md / pilot.json and
+/// prints the report (or the JSON).
+pub fn pilot(
+    store_root: &Path,
+    study_path: &Path,
+    spec: &PilotSpec,
+    exec: &Executor,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let study = read_study(study_path)?;
+    let runs = 2 * spec.points as u64 * u64::from(spec.seeds);
+    if runs > exec.max_runs {
+        return Err(CommandError::Usage(format!(
+            "pilot: {runs} runs, more than --max-runs {}",
+            exec.max_runs
+        )));
+    }
+    let store = open_store(store_root)?;
+    let out_dir = fidelity_pilot::default_dir(&store, &study.id(), spec);
+    let pool = exec.in_study(&out_dir);
+    let (done, markdown) =
+        fidelity_pilot::pilot(&study, study_path, spec, &store, &pool, &out_dir)?;
+    if json {
+        return print_json(&done, out);
+    }
+    write!(out, "{markdown}")?;
     writeln!(out, "\nwritten: {}", out_dir.display())?;
     Ok(())
 }

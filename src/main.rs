@@ -212,6 +212,35 @@ enum Command {
     /// it at the real particle size with its interval, and give the cost per
     /// run against size and the coarsest size within a tolerance.
     Convergence(ConvergenceArgs),
+    /// Does a two-level calibration pay in a scene of a he2019 study? The
+    /// same Latin-hypercube points at the study's particle size and at a
+    /// finer one (--fine-size, Γ ∝ R²), several seeds each, and the
+    /// two-level Gaussian process y_fine = ρ·y_coarse + δ: ρ and δ with
+    /// their uncertainty.
+    Pilot {
+        /// he2019 study manifest (e.g. experiments/he2019-quick/study.json).
+        study: PathBuf,
+        /// The scene: `calibration` or a scene's name (funnel, baffle, drum).
+        #[arg(long, default_value = "calibration")]
+        scene: String,
+        /// Fine particle radius / the study's, in (0, 1).
+        #[arg(long, default_value_t = 0.75)]
+        fine_size: f64,
+        /// Design points (>= 3).
+        #[arg(long, default_value_t = 8)]
+        points: usize,
+        /// Packing seeds per point and size (>= 2).
+        #[arg(long, default_value_t = 5)]
+        seeds: u32,
+        /// Runs at once (default: the number of CPUs).
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Print the result as JSON.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        exec: ExecArgs,
+    },
     /// Accuracy vs number of DEM simulations for a study: train on nested
     /// prefixes of its design (fixed validation rows), with validation R², the
     /// calibrated parameters' spread and the DEM time of each size. Runs the
@@ -1187,6 +1216,25 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
                 .exec
                 .executor(default_jobs(args.jobs), limits, cli.max_runs)?;
             commands::convergence(&cli.store, &args.manifest, &options, &exec, &mut out)
+        }
+        Command::Pilot {
+            study,
+            scene,
+            fine_size,
+            points,
+            seeds,
+            jobs,
+            json,
+            exec,
+        } => {
+            let exec = exec.executor(default_jobs(jobs), limits, cli.max_runs)?;
+            let spec = repose::study::fidelity_pilot::PilotSpec {
+                scene,
+                points,
+                seeds,
+                fine_factor: fine_size,
+            };
+            commands::pilot(&cli.store, &study, &spec, &exec, json, &mut out)
         }
         Command::LearningCurve {
             study,

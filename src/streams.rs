@@ -39,6 +39,8 @@ pub enum Stream {
     /// The genetic algorithm of the GA-BP sweep's cross-validation folds (one
     /// sub-stream per hidden size and fold).
     CrossValidation = 6,
+    /// The two-level pilot's design points (`repose pilot`).
+    Pilot = 7,
 }
 
 /// The ChaCha8 stream for `purpose` (and sub-stream `index`) of `seed`.

@@ -26,6 +26,9 @@
 //! - [`convergence`]: what resolution costs and buys: one scene swept over
 //!   particle size with replicates, each response's trend read at the real
 //!   particle size, and the cost per run (`repose convergence`).
+//! - [`fidelity_pilot`]: does a two-level (coarse + fine particle)
+//!   calibration pay in a scene: ρ and δ of the two-level process on a few
+//!   points at both sizes (`repose pilot`).
 //! - [`acceptance`]: the one acceptance rule of a candidate in a scene.
 //! - [`dir`]: where a study's outputs live and how they are written.
 //!
@@ -38,6 +41,7 @@ pub mod batch;
 pub mod calibration;
 pub mod convergence;
 pub mod dir;
+pub mod fidelity_pilot;
 pub mod gp_surface;
 pub mod gp_train;
 pub mod learning_curve;

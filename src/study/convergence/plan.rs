@@ -197,7 +197,7 @@ pub fn plan(
 
 /// `base` at size factor `f`, validated. A factor of exactly 1 leaves every
 /// number as it is (so the id is the base's).
-fn scaled(
+pub(crate) fn scaled(
     base: &Experiment,
     f: f64,
     rule: Option<SurfaceEnergyRule>,
