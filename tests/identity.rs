@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use common::{edit, json_files, pair_jkr, pair_wall, root};
 use proptest::prelude::*;
 use repose::manifest::scene::{
-    BaffleLiftScene, DrumScene, FunnelPileScene, HopperScene, StaticPileScene,
+    BaffleLiftScene, DrumScene, EndWalls, FunnelPileScene, HopperScene, StaticPileScene,
 };
 use repose::manifest::{
     canonical_json, parse_document, parse_experiment, AtRest, CoarseGraining, CoarseGrainingRule,
@@ -107,6 +107,24 @@ fn spelled_out_defaults_hash_like_omitted_ones() {
     );
     let rest = json!({"kinetic_energy_fraction": 1e-6, "hold_s": 0.05});
     assert_eq!(id_of(&edit(full, "/at_rest", Some(rest)).to_string()), base);
+}
+
+#[test]
+fn drum_end_walls_rotating_hash_like_omitted_and_fixed_is_hashed() {
+    let full = edit(
+        common::example("drum/smoke.json"),
+        "/scene/periodic_slice_m",
+        None,
+    );
+    let base = id_of(&full.to_string());
+    let rotating = edit(full.clone(), "/scene/end_walls", Some(json!("rotating")));
+    assert_eq!(id_of(&rotating.to_string()), base);
+    let fixed = edit(full, "/scene/end_walls", Some(json!("fixed")));
+    assert_ne!(id_of(&fixed.to_string()), base);
+    assert!(
+        canonical_json(&parse_experiment(&fixed.to_string()).unwrap())
+            .contains(r#""end_walls":"fixed""#)
+    );
 }
 
 #[test]
@@ -308,7 +326,8 @@ fn scene() -> impl Strategy<Value = Scene> {
                 sample_interval_s: o[3],
             })
         });
-    let drum = (prop::collection::vec(float(), 6), name()).prop_map(|(f, w)| {
+    let end_walls = prop_oneof![Just(EndWalls::Rotating), Just(EndWalls::Fixed)];
+    let drum = (prop::collection::vec(float(), 6), name(), end_walls).prop_map(|(f, w, e)| {
         Scene::Drum(DrumScene {
             inner_diameter_m: f[0],
             length_m: f[1],
@@ -317,6 +336,7 @@ fn scene() -> impl Strategy<Value = Scene> {
             rotation_time_s: f[4],
             standing_time_s: f[5],
             periodic_slice_m: None,
+            end_walls: e,
             settle_max_s: f[0],
             sample_interval_s: f[1],
             wall_material: w,

@@ -889,6 +889,44 @@ fn at_rest_fields_default_separately_and_unknown_ones_are_refused() {
     assert!(err.to_string().contains("unknown field `hold`"), "{err}");
 }
 
+// --- drum end walls: only a full drum has them
+#[test]
+fn fixed_end_walls_on_a_periodic_slice_read_as_specified() {
+    // drum/smoke.json simulates a 9 mm periodic slice: no end walls to fix.
+    let doc = edit(drum(), "/scene/end_walls", Some(json!("fixed")));
+    let errors = errors(&doc);
+    assert!(
+        errors.contains(
+            &"scene.end_walls = \"fixed\": must be left out (or \"rotating\", the default) \
+              with periodic_slice_m = 0.009: a periodic slice has no end walls; \"fixed\" needs \
+              the full drum (remove periodic_slice_m)"
+                .to_string()
+        ),
+        "{errors:#?}"
+    );
+}
+
+#[test]
+fn end_walls_are_accepted_on_the_full_drum_and_the_default_on_a_slice() {
+    let full = edit(drum(), "/scene/periodic_slice_m", None);
+    for value in ["fixed", "rotating"] {
+        let doc = edit(full.clone(), "/scene/end_walls", Some(json!(value)));
+        parse_document(&doc.to_string(), None).unwrap_or_else(|e| panic!("{value}: {e}"));
+    }
+    // A spelled-out default is the manifest without the field (same id).
+    let slice = edit(drum(), "/scene/end_walls", Some(json!("rotating")));
+    parse_document(&slice.to_string(), None).unwrap();
+    // Any other value is refused naming the two allowed.
+    let glass = edit(full, "/scene/end_walls", Some(json!("glass")));
+    let err = parse_document(&glass.to_string(), None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("unknown variant `glass`, expected `rotating` or `fixed`"),
+        "{err}"
+    );
+}
+
 // --- static pile: insertion and sampling intervals
 reject!(
     static_pile_insertion_interval_positive,

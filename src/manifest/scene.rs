@@ -368,12 +368,22 @@ pub struct DrumScene {
     /// Standing time after the drum stops, s, ≥ 0.
     pub standing_time_s: f64,
     /// Thickness of an axially periodic slice simulated instead of the whole
-    /// drum, m, in (0, length_m]; absent: the full drum with its two end caps.
-    /// A slice has no end walls, so it leaves out their friction, which in a
-    /// real drum steepens the surface near the caps; it costs length / slice
-    /// times fewer particles. `repose tradeoff` measures the angle difference.
+    /// drum, m, in (0, length_m]; absent: the full drum with its two end caps
+    /// (turning with it or at rest, see `end_walls`). A slice has no end walls,
+    /// so it leaves out their friction, which in a real drum steepens the
+    /// surface near the caps; it costs length / slice times fewer particles.
+    /// `repose tradeoff` measures the angle difference.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub periodic_slice_m: Option<f64>,
+    /// Whether the full drum's two end caps turn with the cylinder
+    /// (`"rotating"`, the default) or stand still while it turns (`"fixed"`,
+    /// e.g. glass end plates), as drum testers differ. Either way the caps
+    /// are of `wall_material` with its contact parameters; only their
+    /// velocity differs. `"fixed"` needs the full drum: a `periodic_slice_m`
+    /// has no end walls. The default is left out of the canonical form, so
+    /// manifests without the field keep their ids.
+    #[serde(default, skip_serializing_if = "EndWalls::is_rotating")]
+    pub end_walls: EndWalls,
     /// Longest time the poured bed may take to come to rest before the drum
     /// starts, s, > 0 (it starts earlier once the mean kinetic energy per
     /// particle stays below the experiment's `at_rest` threshold, by default
@@ -385,6 +395,35 @@ pub struct DrumScene {
     pub sample_interval_s: f64,
     /// Drum wall material name.
     pub wall_material: String,
+}
+
+/// How the end caps of a full drum move while the cylinder turns.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EndWalls {
+    /// The caps turn with the cylinder, at its rpm about its axis (a drum
+    /// closed by plates fixed to it).
+    #[default]
+    Rotating,
+    /// The caps stand still (zero wall velocity) while the cylinder turns (a
+    /// drum turning between stationary end plates).
+    Fixed,
+}
+
+impl EndWalls {
+    /// True for the default, [`EndWalls::Rotating`] (then the field is left
+    /// out of the canonical JSON, keeping the ids of manifests that omit it).
+    pub fn is_rotating(&self) -> bool {
+        *self == EndWalls::Rotating
+    }
+
+    /// The value as written in manifests (`"rotating"` or `"fixed"`).
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            EndWalls::Rotating => "rotating",
+            EndWalls::Fixed => "fixed",
+        }
+    }
 }
 
 /// yan2015: flat-bottomed cylindrical hopper with a central orifice above a plate.

@@ -4,8 +4,8 @@
 use super::checker::{join, number, string, Checker, Interval};
 use crate::manifest::experiment::Material;
 use crate::manifest::scene::{
-    BaffleLiftScene, DrumScene, FunnelPileScene, HopperScene, PairMode, PairScene, Partner, Scene,
-    StaticPileScene,
+    BaffleLiftScene, DrumScene, EndWalls, FunnelPileScene, HopperScene, PairMode, PairScene,
+    Partner, Scene, StaticPileScene,
 };
 
 /// Random close packing of monosized spheres: no poured bed is denser.
@@ -258,6 +258,20 @@ fn check_drum(c: &mut Checker, path: &str, s: &DrumScene) {
                 &join(path, "periodic_slice_m"),
                 number(slice),
                 format!("must be <= length_m = {}", number(s.length_m)),
+            );
+        }
+        // A spelled-out "rotating" is the default (same id as omitting it) and
+        // is accepted like it; "fixed" caps would be silently absent.
+        if s.end_walls == EndWalls::Fixed {
+            c.fail(
+                &join(path, "end_walls"),
+                string(s.end_walls.as_str()),
+                format!(
+                    "must be left out (or \"rotating\", the default) with periodic_slice_m = {}: \
+                     a periodic slice has no end walls; \"fixed\" needs the full drum \
+                     (remove periodic_slice_m)",
+                    number(slice)
+                ),
             );
         }
     }
