@@ -37,7 +37,6 @@ use crate::exec::outcomes::{run_collect, Retry, RunOutcome};
 use crate::exec::Executor;
 use crate::manifest::{ContentId, Experiment, Study};
 use crate::report::markdown::{Align, MarkdownTable};
-use crate::scenes::responses::response;
 use crate::scenes::run_logged;
 use crate::stats::gp::GpSettings;
 use crate::stats::gp_two_level::{LevelData, TwoLevelGp};
@@ -209,10 +208,11 @@ pub fn pilot(
 ) -> Result<(Pilot, String), StudyError> {
     let planned = experiments(study, spec).map_err(StudyError::Settings)?;
     let target = target(study, &spec.scene).map_err(StudyError::Settings)?;
+    super::replicates::check_response(target)?;
     let response_name = target
         .response
         .clone()
-        .unwrap_or_else(|| "headline_angle_deg".into());
+        .unwrap_or_else(|| "headline angle".into());
     let all: Vec<Experiment> = planned
         .iter()
         .flat_map(|p| p.coarse.iter().chain(&p.fine).cloned())
@@ -225,9 +225,8 @@ pub fn pilot(
         target.name
     );
     let collected = run_collect(&all, store, pool, &run_logged, Retry::Failed)?;
-    let kind = target.scene.kind();
     let value = |o: &RunOutcome| match o {
-        RunOutcome::Complete(r) => response(r, kind, &response_name).ok(),
+        RunOutcome::Complete(r) => super::replicates::response_of(r, target).ok(),
         _ => None,
     };
     let cpu = |e: &Experiment| -> Option<f64> {
