@@ -201,6 +201,22 @@ fn first_line(text: &str, position: &csv::Position) -> usize {
     position.line() as usize + blank
 }
 
+/// A CSV cell of an optional number: Rust's shortest round-trip form, or
+/// empty for `None`.
+pub fn optional_cell(v: Option<f64>) -> String {
+    v.map(|x| format!("{x}")).unwrap_or_default()
+}
+
+/// A CSV cell of free text: quoted (inner quotes doubled) when it holds a
+/// comma, a quote or a line break, a line break becoming a space.
+pub fn text_cell(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\"").replace('\n', " "))
+    } else {
+        s.to_string()
+    }
+}
+
 /// A finite number, or `None`.
 pub fn parse_number(cell: &str) -> Option<f64> {
     cell.trim().parse::<f64>().ok().filter(|v| v.is_finite())

@@ -597,16 +597,35 @@ pub fn lack_of_fit(fit: &NllsFit, x: &[Vec<f64>], y: &[f64]) -> Option<LackOfFit
             members.iter().map(|&i| (y[i] - mean).powi(2)).sum::<f64>()
         })
         .sum();
-    let ss_lack_of_fit = (fit.sse - ss_pure_error).max(0.0);
-    let ratio = (ss_lack_of_fit / df_lack_of_fit as f64) / (ss_pure_error / df_pure_error as f64);
-    Some(LackOfFit {
-        ss_lack_of_fit,
-        df_lack_of_fit,
+    Some(LackOfFit::from_sums(
+        fit.sse,
         ss_pure_error,
+        df_lack_of_fit,
         df_pure_error,
-        ratio,
-        p_value: f_survival(ratio, df_lack_of_fit as f64, df_pure_error as f64),
-    })
+    ))
+}
+
+impl LackOfFit {
+    /// The test from a fit's residual sum of squares `sse` and the pure
+    /// error's `ss_pure_error`, with their degrees of freedom.
+    pub fn from_sums(
+        sse: f64,
+        ss_pure_error: f64,
+        df_lack_of_fit: usize,
+        df_pure_error: usize,
+    ) -> LackOfFit {
+        let ss_lack_of_fit = (sse - ss_pure_error).max(0.0);
+        let ratio =
+            (ss_lack_of_fit / df_lack_of_fit as f64) / (ss_pure_error / df_pure_error as f64);
+        LackOfFit {
+            ss_lack_of_fit,
+            df_lack_of_fit,
+            ss_pure_error,
+            df_pure_error,
+            ratio,
+            p_value: f_survival(ratio, df_lack_of_fit as f64, df_pure_error as f64),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@
 //! honest statement of how far a trend is being trusted.
 
 use super::nlls::LackOfFit;
-use super::summary::{f_survival, t_quantile};
+use super::summary::t_quantile;
 use super::{check_finite, StatsError};
 
 /// A weighted least-squares line with its covariance.
@@ -169,17 +169,12 @@ impl LineFit {
             })
             .sum();
         let sse = self.s2 * self.df_residual as f64;
-        let ss_lack_of_fit = (sse - ss_pure_error).max(0.0);
-        let ratio =
-            (ss_lack_of_fit / df_lack_of_fit as f64) / (ss_pure_error / df_pure_error as f64);
-        Some(LackOfFit {
-            ss_lack_of_fit,
-            df_lack_of_fit,
+        Some(LackOfFit::from_sums(
+            sse,
             ss_pure_error,
+            df_lack_of_fit,
             df_pure_error,
-            ratio,
-            p_value: f_survival(ratio, df_lack_of_fit as f64, df_pure_error as f64),
-        })
+        ))
     }
 
     /// Half-width of the 95 % interval of the slope.

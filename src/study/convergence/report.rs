@@ -15,17 +15,7 @@ pub const CSV_HEADER: &str = "size_factor,radius_m,d_over_D,response,replicates,
 ci95,sd,bias,bias_ci95,particles,particle_steps,planned_particle_steps,cpu_s_per_run,\
 wall_s_per_run,unresolved,ids,failure";
 
-fn num(v: Option<f64>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
-}
-
-fn csv_text(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\"").replace('\n', " "))
-    } else {
-        s.to_string()
-    }
-}
+use crate::report::table::{optional_cell as num, text_cell as csv_text};
 
 /// The sweep as CSV: one row per level and response (a level without any
 /// response still gets one row, with the response empty).

@@ -11,17 +11,7 @@ use super::Row;
 pub const CSV_HEADER: &str = "label,knob,value,replicates,healthy,angle_mean_deg,angle_ci95_deg,\
 error_deg,error_ci95_deg,dt_s,wall_time_s,particle_steps,speed_up,pareto,ids,failure";
 
-fn num(v: Option<f64>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
-}
-
-fn csv_text(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\"").replace('\n', " "))
-    } else {
-        s.to_string()
-    }
-}
+use crate::report::table::{optional_cell as num, text_cell as csv_text};
 
 /// The table as CSV, one row per point.
 pub fn csv(rows: &[Row]) -> String {
