@@ -231,6 +231,97 @@ fn clump_runs_are_bit_identical_on_one_and_two_threads() {
     assert_eq!(ba.angular_momentum, bb.angular_momentum);
 }
 
+/// A heap of 150 clumps of two shapes (paired spheres and the three-member
+/// asymmetric clump, alternating, so that the bodies' member counts differ)
+/// thrown with random velocities and spins onto a floor, periodic sideways,
+/// and run for 6,000 steps on `threads` threads; returns the world.
+fn heap(threads: usize) -> World {
+    // Bounding spheres 5 % apart on a cubic lattice, any orientation, five
+    // by five in a box periodic along x and y.
+    let shapes = vec![paired(), asymmetric()];
+    let reach = shapes
+        .iter()
+        .map(|s| s.bounding_radius_m)
+        .fold(0.0, f64::max);
+    let spacing = 2.1 * reach;
+    let floor = Wall::plane(Vec3::zeros(), Vec3::z(), 0).unwrap();
+    let domain = Domain::new(
+        Vec3::new(-2.5 * spacing, -2.5 * spacing, -reach),
+        Vec3::new(2.5 * spacing, 2.5 * spacing, 12.0 * spacing),
+        [true, true, false],
+    )
+    .unwrap();
+    let mut world = World::with_clumps(vec![floor], domain, shapes);
+    let mut rng = SplitMix(7);
+    let mut jitter =
+        |scale: f64| Vec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5) * scale;
+    for k in 0..150 {
+        let (i, j, l) = (k % 5, (k / 5) % 5, k / 25);
+        let centre = Vec3::new(i as f64 - 2.0, j as f64 - 2.0, l as f64 + 0.55) * spacing;
+        let init = ClumpInit {
+            shape: k % 2,
+            position: centre,
+            orientation: UnitQuaternion::from_scaled_axis(jitter(6.0)),
+            velocity: jitter(1.0),
+            angular_velocity: jitter(500.0),
+        };
+        world.push_clump(&init, RHO).unwrap();
+    }
+    let c = contact_setup(RollingChoice::Cdt, 0.05);
+    let dt = auto_dt(&c, R, RHO, 1.0);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut sim = Simulation::new(world, &setup(c, RHO, true, dt, 2e-4)).unwrap();
+        sim.advance(6_000).unwrap();
+        // They collide and pile up on the floor.
+        let stats = sim.stats();
+        eprintln!("{threads} threads: dt {dt:.3e} s, {stats:?}");
+        assert!(
+            stats.contacts >= 10 && stats.wall_contacts >= 10,
+            "{stats:?}"
+        );
+        sim.world().clone()
+    })
+}
+
+#[test]
+fn a_heap_of_clumps_is_bit_identical_on_one_two_and_three_threads() {
+    // Three threads cut the 150 bodies and their members into three
+    // shares each, two into two; the bodies' sums must not notice.
+    let one = heap(1);
+    for threads in [2, 3] {
+        let other = heap(threads);
+        let (p, q) = (&one.particles, &other.particles);
+        assert!(p.id == q.id, "{threads} threads: particle order");
+        for (name, a, b) in [
+            ("position", &p.position, &q.position),
+            ("velocity", &p.velocity, &q.velocity),
+            ("angular velocity", &p.angular_velocity, &q.angular_velocity),
+            ("force", &p.force, &q.force),
+            ("torque", &p.torque, &q.torque),
+        ] {
+            assert!(a == b, "{threads} threads: member {name} differs");
+        }
+        let (a, b) = (one.bodies.as_ref().unwrap(), other.bodies.as_ref().unwrap());
+        for (name, x, y) in [
+            ("position", &a.position, &b.position),
+            ("velocity", &a.velocity, &b.velocity),
+            ("angular momentum", &a.angular_momentum, &b.angular_momentum),
+            ("force", &a.force, &b.force),
+            ("torque", &a.torque, &b.torque),
+        ] {
+            assert!(x == y, "{threads} threads: body {name} differs");
+        }
+        assert!(
+            a.orientation == b.orientation,
+            "{threads} threads: orientation"
+        );
+    }
+}
+
 #[test]
 fn members_of_one_clump_never_touch_and_spheres_cannot_enter_a_clump_world() {
     let mut world = clump_world(

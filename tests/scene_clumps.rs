@@ -6,11 +6,15 @@
 //! the engine's overlap bound: where some would not, they are moved to
 //! places free of overlaps, and such runs start.
 //!
-//! One test runs every long simulation, two at a time, each on one thread of
-//! its own: several engines sharing two cores with teams of threads each
-//! would spin against each other (this file took 190 s of CI that way,
-//! against about 70 s of work). The other tests run a few hundredths of a
-//! second each, on one thread.
+//! Every smoke-clumps run gives the same result.json and run.mcap bytes on
+//! one thread and on two (the rigid-body passes run on the engine's team).
+//!
+//! One test runs every long simulation: the one-thread runs two at a time,
+//! each on one thread of its own, then the two-thread runs one at a time:
+//! several engines sharing two cores with teams of threads each would spin
+//! against each other (this file took 190 s of CI that way, against about
+//! 70 s of work). The other tests run a few hundredths of a second each, on
+//! one thread.
 
 mod common;
 
@@ -42,12 +46,25 @@ const SCENES: [(&str, &str); 5] = [
 
 /// Runs `exp` on one thread (with its log at `log`).
 fn run_alone(exp: &Experiment, log: Option<&std::path::Path>) -> RunResult {
+    run_on(1, exp, log)
+}
+
+/// Runs `exp` on `threads` threads (with its log at `log`).
+fn run_on(threads: usize, exp: &Experiment, log: Option<&std::path::Path>) -> RunResult {
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
+        .num_threads(threads)
         .build()
         .unwrap();
     pool.install(|| run_experiment(exp, log))
         .unwrap_or_else(|e| panic!("{}: {e}", exp.scene.kind()))
+}
+
+/// The bytes of `r` as result.json and of the log at `log`.
+fn result_and_log_bytes(r: &RunResult, log: &std::path::Path) -> (Vec<u8>, Vec<u8>) {
+    (
+        serde_json::to_vec_pretty(r).unwrap(),
+        std::fs::read(log).unwrap(),
+    )
 }
 
 fn smoke_clumps(scene: &str) -> Experiment {
@@ -105,29 +122,60 @@ fn drum(paired: bool, seed: u64) -> Experiment {
 }
 
 #[test]
-fn lab_scenes_run_with_paired_spheres_and_paired_spheres_stand_steeper() {
+fn lab_scenes_run_with_paired_spheres_alike_on_two_threads_and_paired_spheres_stand_steeper() {
     let tmp = tempfile::tempdir().unwrap();
     // The five smoke runs and the four drum runs, two at a time.
     enum Job {
         Smoke(&'static str, &'static str),
         Drum(bool, u64),
     }
+    enum Done {
+        /// A smoke run: its scene, result.json and run.mcap bytes.
+        Smoke(&'static str, Vec<u8>, Vec<u8>),
+        /// A drum run: paired, seed, dynamic angle.
+        Drum(bool, u64, f64),
+    }
     let mut jobs: Vec<Job> = SCENES.iter().map(|&(s, h)| Job::Smoke(s, h)).collect();
     jobs.extend([(false, 1), (false, 2), (true, 1), (true, 2)].map(|(p, s)| Job::Drum(p, s)));
-    let drums: Vec<(bool, u64, f64)> = jobs
+    let done: Vec<Done> = jobs
         .par_iter()
-        .filter_map(|job| match *job {
+        .map(|job| match *job {
             Job::Smoke(scene, headline) => {
                 let log = tmp.path().join(format!("{scene}.mcap"));
                 let r = run_alone(&smoke_clumps(scene), Some(&log));
                 check_smoke_run(scene, headline, &r, &log);
-                None
+                let (result, log) = result_and_log_bytes(&r, &log);
+                Done::Smoke(scene, result, log)
             }
             Job::Drum(paired, seed) => {
                 let r = run_alone(&drum(paired, seed), None);
                 assert_eq!(r.measurements["particles"], 182.0, "same grain count");
-                Some((paired, seed, r.measurements["dynamic_angle_deg"]))
+                Done::Drum(paired, seed, r.measurements["dynamic_angle_deg"])
             }
+        })
+        .collect();
+    // The smoke runs again on two threads, one at a time: the same bytes.
+    for d in &done {
+        let Done::Smoke(scene, result_1, log_1) = d else {
+            continue;
+        };
+        let log = tmp.path().join(format!("{scene}-2.mcap"));
+        let r = run_on(2, &smoke_clumps(scene), Some(&log));
+        let (result_2, log_2) = result_and_log_bytes(&r, &log);
+        assert!(
+            *result_1 == result_2,
+            "{scene}: result.json differs between 1 and 2 threads"
+        );
+        assert!(
+            *log_1 == log_2,
+            "{scene}: run.mcap differs between 1 and 2 threads"
+        );
+    }
+    let drums: Vec<(bool, u64, f64)> = done
+        .iter()
+        .filter_map(|d| match *d {
+            Done::Drum(paired, seed, angle) => Some((paired, seed, angle)),
+            Done::Smoke(..) => None,
         })
         .collect();
     // Shape interlocking holds a slope that rolling spheres cannot (no

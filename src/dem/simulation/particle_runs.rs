@@ -167,6 +167,7 @@ impl<H: Copy + Default> ParticleRecords<H> {
             angular_velocity: &mut p.angular_velocity,
             force: &mut p.force,
             torque: &mut p.torque,
+            mass: &p.mass,
             spheres: &mut self.spheres,
             motion: &mut self.motion,
             kick: &self.kick,
@@ -191,6 +192,8 @@ pub(super) struct ParticleRun<'a, H> {
     /// Forces (N) and torques (N·m), stored when no drift follows.
     pub(super) force: &'a mut [Vec3],
     pub(super) torque: &'a mut [Vec3],
+    /// Masses, kg (in a world of clumps, each member's share of its body's).
+    pub(super) mass: &'a [f64],
     /// Packed records the pair kernel reads.
     pub(super) spheres: &'a mut [Sphere],
     pub(super) motion: &'a mut [Motion],
@@ -223,6 +226,7 @@ impl<'a, H> ParticleRun<'a, H> {
         let (w0, w1) = self.angular_velocity.split_at_mut(k);
         let (f0, f1) = self.force.split_at_mut(k);
         let (t0, t1) = self.torque.split_at_mut(k);
+        let (n0, n1) = self.mass.split_at(k);
         let (s0, s1) = self.spheres.split_at_mut(k);
         let (m0, m1) = self.motion.split_at_mut(k);
         let (k0, k1) = self.kick.split_at(k);
@@ -235,6 +239,7 @@ impl<'a, H> ParticleRun<'a, H> {
             angular_velocity: w0,
             force: f0,
             torque: t0,
+            mass: n0,
             spheres: s0,
             motion: m0,
             kick: k0,
@@ -248,6 +253,7 @@ impl<'a, H> ParticleRun<'a, H> {
             angular_velocity: w1,
             force: f1,
             torque: t1,
+            mass: n1,
             spheres: s1,
             motion: m1,
             kick: k1,
@@ -331,6 +337,7 @@ mod tests {
         let mut records = ParticleRecords::<u32>::new(3, 2);
         records.wall_history = vec![0, 1, 10, 11, 20, 21];
         records.pack(&p, 1e-5);
+        let masses = p.mass.clone();
         let runs = records.runs(&mut p, &[0, 1, 3]);
         assert_eq!(runs.len(), 2);
         assert_eq!((runs[0].first, runs[1].first), (0, 1));
@@ -340,6 +347,7 @@ mod tests {
         );
         assert_eq!(runs[1].wall_history, &[10, 11, 20, 21]);
         assert_eq!((runs[0].spheres.len(), runs[1].kick.len()), (1, 2));
+        assert_eq!(runs[1].mass, &masses[1..]);
         assert!(runs.iter().all(|r| r.sums.is_empty()), "no sweep yet");
     }
 }
