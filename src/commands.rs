@@ -29,6 +29,7 @@ use crate::study::calibration::Stage;
 use crate::study::convergence::{self, plan::plan as size_plan, SurfaceEnergyRule};
 use crate::study::dir::StudyDir;
 use crate::study::fidelity_pilot::{self, PilotSpec};
+use crate::study::fine::fine as run_fine;
 use crate::study::gp_train::train_gp;
 use crate::study::learning_curve;
 use crate::study::noise::noise as run_noise;
@@ -945,6 +946,26 @@ pub fn noise(
     let outcome = run_noise(&dir, &study, &store, &pool, run_logged)?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(out, "  outputs: {}", dir.stage(Stage::Noise).display())?;
+    Ok(())
+}
+
+/// `repose fine STUDY`: the fine stage of a two-level study
+/// ([`crate::study::fine`]).
+pub fn fine(
+    store_root: &Path,
+    study_path: &Path,
+    exec: &Executor,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
+    let store = open_store(store_root)?;
+    let pool = exec.in_study(dir.path());
+    set_quiet(true);
+    let outcome = run_fine(&dir, &study, &store, &pool, &run_logged, &mut |m| {
+        eprintln!("{m}")
+    })?;
+    write!(out, "{}", outcome.markdown)?;
+    writeln!(out, "  outputs: {}", dir.stage(Stage::Fine).display())?;
     Ok(())
 }
 

@@ -203,6 +203,19 @@ enum Command {
         #[command(flatten)]
         exec: ExecArgs,
     },
+    /// The fine stage of a two-level study (`noise_aware.fidelity`): design
+    /// points again at the finer particle size, chosen by the two-level
+    /// Gaussian process's fine-level sd, and the two-level fit (ρ, β, δ)
+    /// that the search and verification then use. Needs `repose train`.
+    Fine {
+        /// Study manifest with a `noise_aware.fidelity` block.
+        study: PathBuf,
+        /// Runs at once, each single-threaded [default: the number of CPUs].
+        #[arg(long)]
+        jobs: Option<usize>,
+        #[command(flatten)]
+        exec: ExecArgs,
+    },
     /// Measure what accuracy costs in time: sweep fidelity knobs around a scene
     /// manifest (one at a time, R replicates each) and tabulate angle error vs the
     /// finest setting against wall time, with the Pareto front.
@@ -1188,6 +1201,12 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
             candidates,
             commands::CalibrateFlags { adaptive, json },
+            &mut out,
+        ),
+        Command::Fine { study, jobs, exec } => commands::fine(
+            &cli.store,
+            &study,
+            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
             &mut out,
         ),
         Command::Noise {

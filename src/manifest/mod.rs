@@ -25,7 +25,7 @@ pub use experiment::{
 };
 pub use scene::{PairMode, PairScene, Partner, Scene};
 pub use study::{
-    Adaptive, Design, DesignKind, NoiseAware, ParameterRange, Slot, Study, TargetScene,
+    Adaptive, Design, DesignKind, Fidelity, NoiseAware, ParameterRange, Slot, Study, TargetScene,
 };
 pub use validate::{validate_experiment, validate_study, FieldError, ValidationErrors};
 

@@ -118,6 +118,31 @@ pub struct NoiseAware {
     /// searched and the main effects are reported only.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub screen: bool,
+    /// A second, finer particle size (absent: one size): the design runs at
+    /// the study's size, a few of its points again at the fine size, a
+    /// two-level Gaussian process predicts the fine level, and the search
+    /// and the verification are the fine level's (`crate::study::fine`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fidelity: Option<Fidelity>,
+}
+
+/// The fine level of a two-level (multi-fidelity) calibration: every
+/// experiment of it is the study's experiment with its particle radius ×
+/// `fine_size` and its surface energies × `fine_size`² (Γ ∝ R², the
+/// constant-Bond rule of `repose convergence` and `repose pilot`), so the
+/// pull-off force per weight of a grain is the study's.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fidelity {
+    /// Fine particle radius / the study's, in (0, 1).
+    pub fine_size: f64,
+    /// Design points run again at the fine size (≥ 3, at most the design's
+    /// samples): the fine points are a subset of the design's (a nested
+    /// design).
+    pub fine_points: u32,
+    /// Packing seeds per fine point (≥ 2: each fine mean's noise variance
+    /// is its replicates' s²/n).
+    pub fine_replicates: u32,
 }
 
 /// Batches of points chosen by the surrogate until a point's replicate mean

@@ -113,6 +113,16 @@ impl TwoLevelGp {
                 level: "coarse",
                 source,
             })?;
+        Self::fit_on(coarse_gp, fine, settings)
+    }
+
+    /// The fine level fitted on a coarse process already fitted (a study's
+    /// trained GP), with `settings` for δ's likelihood maximisation.
+    pub fn fit_on(
+        coarse_gp: GaussianProcess,
+        fine: LevelData,
+        settings: &GpSettings,
+    ) -> Result<TwoLevelGp, TwoLevelError> {
         let f_fine = regressors(&coarse_gp, fine.x);
         let rows: Vec<Vec<f64>> = f_fine.iter().map(|f| vec![f.x, f.y]).collect();
         // The regression must be identifiable before δ is fitted around it.
@@ -141,6 +151,17 @@ impl TwoLevelGp {
                     level: "coarse",
                     source,
                 })?;
+        Self::with_delta(coarse_gp, fine, delta_hyper)
+    }
+
+    /// The fine level on a coarse process already fitted, with δ's
+    /// hyperparameters given (its mean ignored): how a stage rebuilds the
+    /// model another stage fitted.
+    pub fn with_delta(
+        coarse_gp: GaussianProcess,
+        fine: LevelData,
+        delta_hyper: &GpHyper,
+    ) -> Result<TwoLevelGp, TwoLevelError> {
         let f_fine = regressors(&coarse_gp, fine.x);
         Self::condition(coarse_gp, fine, delta_hyper.clone(), f_fine)
     }

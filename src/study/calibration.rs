@@ -114,6 +114,8 @@ pub enum Stage {
     Noise,
     /// The adaptive rounds of `repose calibrate --adaptive`.
     Adaptive,
+    /// `repose fine`: the fine level of a two-level study.
+    Fine,
 }
 
 impl Stage {
@@ -128,6 +130,7 @@ impl Stage {
             Stage::LearningCurve => "learning-curve",
             Stage::Noise => "noise",
             Stage::Adaptive => "adaptive",
+            Stage::Fine => "fine",
         }
     }
 }

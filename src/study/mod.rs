@@ -29,6 +29,9 @@
 //! - [`fidelity_pilot`]: does a two-level (coarse + fine particle)
 //!   calibration pay in a scene: ρ and δ of the two-level process on a few
 //!   points at both sizes (`repose pilot`).
+//! - [`fine`]: the fine level of a two-level study (`noise_aware.fidelity`):
+//!   design points re-run at a finer size, chosen by the two-level Gaussian
+//!   process, which then carries the search and the verification.
 //! - [`acceptance`]: the one acceptance rule of a candidate in a scene.
 //! - [`dir`]: where a study's outputs live and how they are written.
 //!
@@ -42,6 +45,7 @@ pub mod calibration;
 pub mod convergence;
 pub mod dir;
 pub mod fidelity_pilot;
+pub mod fine;
 pub mod gp_surface;
 pub mod gp_train;
 pub mod learning_curve;

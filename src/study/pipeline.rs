@@ -7,9 +7,14 @@
 //! batch  ──▶ batch/replicates.csv, angles.csv  R seeds per sample, their means
 //! train  ──▶ train/model.json (GA-BP, he2019), train/gp.json, surrogates.md
 //! adaptive (--adaptive) ──▶ adaptive/replicates.csv (rounds until a GP candidate passes), then train again
+//! fine (noise_aware.fidelity) ──▶ fine/runs.csv, two_level.json: design points at the fine size
 //! search ──▶ search/points.csv, clusters.csv/.md, family.json
 //! verify ──▶ verify/acceptance.json (first), verification.csv/.md, runs.csv
 //! ```
+//!
+//! A two-level study (`noise_aware.fidelity`) runs the fine stage after
+//! train and has no adaptive rounds; its search and verification are the
+//! fine level's ([`super::fine`]).
 //!
 //! The outcome ([`CalibrationOutcome`], also `outcome.json` in the study's
 //! directory and what `repose calibrate --json` prints) gathers the noise
@@ -27,6 +32,7 @@ use super::calibration::Stage;
 use super::dir::json_bytes;
 use super::dir::write_output;
 use super::dir::StudyDir;
+use super::fine::{fine, TwoLevelRecord};
 use super::gp_train::{train_gp, SurrogateMetrics};
 use super::noise::{noise, NoiseFloor};
 use super::probability_search::{gp_search, Candidate};
@@ -85,9 +91,16 @@ pub struct RunCounts {
     pub design: usize,
     /// Adaptive points × replicates.
     pub adaptive: usize,
+    /// Fine points × fine replicates (a two-level study).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub fine: usize,
     /// Verification (candidates × scenes × seeds, less the adaptive
     /// candidate's calibration-scene runs, which `adaptive` counts).
     pub verification: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// The outcome of a noise-aware calibration (see the module docs).
@@ -103,6 +116,9 @@ pub struct CalibrationOutcome {
     pub runs: RunCounts,
     /// The adaptive stage, when run.
     pub adaptive: Option<AdaptiveOutcome>,
+    /// The fine level of a two-level study: its points, ρ, β and δ.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fine: Option<TwoLevelRecord>,
     /// Validation metrics of the GP and of the network.
     pub surrogates: Vec<SurrogateMetrics>,
     /// The candidates, largest cluster first.
@@ -128,12 +144,19 @@ impl CalibrationOutcome {
     pub fn summary(&self, outcome_json: &std::path::Path) -> String {
         let yes = |b: bool| if b { "yes" } else { "no" };
         format!(
-            "{}: {} noise + {} design + {} adaptive + {} verification runs; calibrated: {}, \
+            "{}: {} noise + {} design + {} adaptive{} + {} verification runs; calibrated: {}, \
              verified in every scene: {}\n  outcome: {}",
             self.study,
             self.runs.noise,
             self.runs.design,
             self.runs.adaptive,
+            match &self.fine {
+                Some(f) => format!(
+                    " + {} fine (size x {})",
+                    self.runs.fine, f.fidelity.fine_size
+                ),
+                None => String::new(),
+            },
             self.runs.verification,
             yes(self.calibrated),
             yes(self.verified),
@@ -157,6 +180,13 @@ where
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
     let spec = super::noise::noise_aware(study)?;
+    if spec.fidelity.is_some() && options.adaptive {
+        return Err(StudyError::Settings(
+            "--adaptive: the adaptive rounds are one-level; a study with noise_aware.fidelity \
+             chooses its fine points in the fine stage instead"
+                .into(),
+        ));
+    }
     super::replicates::check_response(&study.calibration)?;
     for v in &study.verification {
         super::replicates::check_response(v)?;
@@ -214,6 +244,16 @@ where
         gp = train_gp(dir, study, fraction, seed, Some(&net))?;
         adaptive_outcome = Some(a);
     }
+    let mut fine_outcome = None;
+    if let Some(f) = spec.fidelity {
+        log(&format!(
+            "== fine: {} design points x {} seeds at particle size x {}",
+            f.fine_points, f.fine_replicates, f.fine_size
+        ));
+        let o = fine(dir, study, store, pool, &runner, &mut |m| log(m))?;
+        log(&o.markdown);
+        fine_outcome = Some(o);
+    }
     log("== search");
     let found = gp_search(dir, study, &options.search)?;
     log(&found.markdown);
@@ -243,6 +283,7 @@ where
             noise: floor.floor.seeds,
             design: b.total,
             adaptive: adaptive_outcome.as_ref().map_or(0, |a| a.runs),
+            fine: fine_outcome.as_ref().map_or(0, |f| f.runs),
             // The adaptive candidate's calibration-scene runs are the
             // adaptive stage's, counted there.
             verification: v
@@ -257,6 +298,7 @@ where
         },
         noise_floor: floor.floor,
         adaptive: adaptive_outcome,
+        fine: fine_outcome.map(|f| f.record),
         surrogates: gp.metrics,
         candidates: found.candidates,
         family: found.family,

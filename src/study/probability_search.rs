@@ -11,6 +11,8 @@
 //! one it knows well is kept only when its mean is inside. The kept points
 //! are clustered by mean shift as in he2019 (§3.5, [`crate::search::meanshift`]),
 //! and the clusters (largest first) are the candidates `verify` re-simulates.
+//! In a two-level study (`noise_aware.fidelity`) μ and s are the fine
+//! level's, from the two-level process of the fine stage ([`super::fine`]).
 //!
 //! # The family
 //!
@@ -42,6 +44,7 @@ use super::calibration::Stage;
 use super::dir::json_bytes;
 use super::dir::write_output;
 use super::dir::StudyDir;
+use super::fine::{load_two_level, two_level_path};
 use super::gp_train::{gp_path, read_gp};
 use super::noise::noise_aware;
 use super::tolerance_search::SearchSettings;
@@ -99,7 +102,16 @@ pub fn gp_search(
 ) -> Result<GpSearchOutcome, StudyError> {
     let spec = noise_aware(study)?;
     let model = read_gp(dir)?;
-    let gp = model.process()?;
+    // A two-level study searches the fine level's prediction.
+    let two_level = match study.noise_aware.and_then(|n| n.fidelity) {
+        Some(_) => Some(load_two_level(dir)?),
+        None => None,
+    };
+    let coarse = model.process()?;
+    let predict = |u: &[f64]| match &two_level {
+        Some(t) => t.predict(u),
+        None => coarse.predict(u),
+    };
     let names = parameter_names(study);
     let effects = &model.screening;
     let samples = settings.samples * RESAMPLE_FACTOR;
@@ -108,7 +120,7 @@ pub fn gp_search(
         .map(|u| fix_inactive(u, effects))
         .collect();
     let (lo, hi) = study.calibration.band_deg();
-    let predictions: Vec<_> = unit.iter().map(|u| gp.predict(u)).collect();
+    let predictions: Vec<_> = unit.iter().map(|u| predict(u)).collect();
     let criterion = Criterion::Probability {
         lo,
         hi,
@@ -153,7 +165,7 @@ pub fn gp_search(
         .zip(&clustering.sizes)
         .enumerate()
         .map(|(k, (c, &size))| {
-            let p = gp.predict(c);
+            let p = predict(c);
             Candidate {
                 group: k + 1,
                 size,
@@ -170,16 +182,24 @@ pub fn gp_search(
     let label = cluster_column(unit.len(), &kept, &clustering.labels);
     let out = dir.stage(Stage::Search);
     dir.prepare_stage(study, Stage::Search)?;
-    let lineage = dir
+    let surrogate = if two_level.is_some() {
+        "two_level_gp"
+    } else {
+        "gp"
+    };
+    let mut lineage = dir
         .lineage(
             Stage::Search,
-            json!({ "settings": settings, "surrogate": "gp", "resampled": samples,
+            json!({ "settings": settings, "surrogate": surrogate, "resampled": samples,
                     "min_probability": spec.min_probability, "band_deg": [lo, hi],
                     "fixed_by_screening": effects.iter().filter(|e| !e.active)
                         .map(|e| e.parameter.clone()).collect::<Vec<_>>(),
                     "bandwidth_used": bandwidth }),
         )
         .with_input(dir.input("gp", &gp_path(dir))?);
+    if two_level.is_some() {
+        lineage = lineage.with_input(dir.input("two_level", &two_level_path(dir))?);
+    }
     let mut header = vec!["point".to_string()];
     header.extend(names.iter().cloned());
     header.extend(

@@ -13,6 +13,7 @@
 //! response of the scene when the target names one, else the headline
 //! angle.
 
+use super::convergence::plan::{scaled, SurfaceEnergyRule};
 use super::StudyError;
 use crate::exec::outcomes::{run_collect, Retry, RunOutcome};
 use crate::exec::Executor;
@@ -123,19 +124,57 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
+    run_replicated_at(
+        study,
+        target,
+        points,
+        replicates,
+        1.0,
+        store,
+        pool,
+        runner,
+        retry_failed,
+    )
+}
+
+/// [`run_replicated`] at particle size `size` × the study's (Γ ∝ R²: the
+/// fine level of a two-level study, [`crate::manifest::Fidelity`]); 1 is
+/// the study's own experiments, same ids.
+#[allow(clippy::too_many_arguments)]
+pub fn run_replicated_at<E, F>(
+    study: &Study,
+    target: &TargetScene,
+    points: &[(u64, Vec<f64>)],
+    replicates: u32,
+    size: f64,
+    store: &Store,
+    pool: &Executor,
+    runner: &F,
+    retry_failed: bool,
+) -> Result<(Vec<Replicated>, Tally), StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
     check_response(target)?;
     let names = super::calibration::parameter_names(study);
     let mut experiments = Vec::new();
     for (index, point) in points {
         let values = names.iter().cloned().zip(point.iter().copied()).collect();
         for r in 0..replicates {
+            let invalid = |errors| StudyError::InvalidPoint {
+                point: *index,
+                scene: target.name.clone(),
+                errors,
+            };
             let e = study
                 .replicate_experiment(&target.scene, &values, *index, r)
-                .map_err(|errors| StudyError::InvalidPoint {
-                    point: *index,
-                    scene: target.name.clone(),
-                    errors,
-                })?;
+                .map_err(invalid)?;
+            let e = if size == 1.0 {
+                e
+            } else {
+                scaled(&e, size, Some(SurfaceEnergyRule::ConstantBond)).map_err(invalid)?
+            };
             experiments.push(e);
         }
     }

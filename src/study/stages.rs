@@ -11,6 +11,7 @@
 //! | --- | --- |
 //! | he2019 | design (LHS) → simulate → fit (GA-BP) → search (tolerance) → verify |
 //! | he2019, noise-aware | noise → design (LHS) → simulate (replicates) → fit (GP, GA-BP) → [adaptive] → search (probability) → verify |
+//! | he2019, two-level (`noise_aware.fidelity`) | noise → design (LHS) → simulate (replicates) → fit (GP, GA-BP) → fine (points by the two-level GP, its fit) → search (probability, fine level) → verify (fine size) |
 //! | response surface (cai2024) | [screen] → design (Box–Behnken, full factorial or LHS) → simulate → fit (quadratic, or a GP with `fit: "gp"`) → search (desirability) → [verify] |
 //! | sensitivity (yan2015) | design (full factorial) → simulate → fit (power law) → sensitivity → [verify] |
 //!
@@ -139,7 +140,7 @@ pub enum SearchKind {
 }
 
 /// One stage of a study, with what it uses.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "stage", rename_all = "snake_case")]
 pub enum Stage {
     /// The noise floor: one point over packing seeds.
@@ -177,6 +178,16 @@ pub enum Stage {
         /// The surrogates, in the order they are fitted.
         models: Vec<FitKind>,
     },
+    /// Design points again at a finer particle size, chosen by the
+    /// two-level Gaussian process, which is fitted to both levels.
+    Fine {
+        /// Fine points (design points).
+        points: u64,
+        /// Packing seeds per fine point.
+        replicates: u32,
+        /// Fine particle radius / the study's.
+        size: f64,
+    },
     /// Rounds of points chosen by the GP until a candidate passes.
     Adaptive {
         /// Most runs the rounds may add.
@@ -207,6 +218,10 @@ pub enum Stage {
         /// for (noise-aware he2019 with `max_verification_seeds`).
         #[serde(skip_serializing_if = "Option::is_none")]
         max_seeds: Option<u32>,
+        /// Particle size of the verification runs / the study's (a
+        /// two-level study verifies at its fine size).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        size: Option<f64>,
     },
     /// Fidelity knobs swept with replicates.
     Tradeoff {
@@ -236,6 +251,7 @@ impl Stage {
             Stage::Design { .. } => "design",
             Stage::Simulate { .. } => "simulate",
             Stage::Fit { .. } => "fit",
+            Stage::Fine { .. } => "fine",
             Stage::Adaptive { .. } => "adaptive",
             Stage::Search { .. } => "search",
             Stage::Sensitivity => "sensitivity",
@@ -260,12 +276,16 @@ impl Stage {
             } => points
                 .saturating_mul(scenes.len() as u64)
                 .saturating_mul(u64::from(*replicates)),
+            Stage::Fine {
+                points, replicates, ..
+            } => points.saturating_mul(u64::from(*replicates)),
             Stage::Adaptive { max_runs } => u64::from(*max_runs),
             Stage::Verify {
                 scenes,
                 points,
                 seeds,
                 max_seeds,
+                ..
             } => points
                 .saturating_mul(scenes.len() as u64)
                 .saturating_mul(u64::from((*seeds).max(max_seeds.unwrap_or(0)))),
@@ -282,7 +302,7 @@ impl Stage {
 }
 
 /// A study as its method and stage list (module docs).
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StudySpec {
     /// The study's (or experiment's) name.
     pub name: String,
@@ -346,6 +366,7 @@ impl StudySpec {
                     points: candidates,
                     seeds: 1,
                     max_seeds: None,
+                    size: None,
                 },
             ],
             Some(n) => {
@@ -363,7 +384,13 @@ impl StudySpec {
                         models: vec![FitKind::Gp, FitKind::GaBp],
                     },
                 ];
-                if adaptive {
+                if let Some(f) = n.fidelity {
+                    stages.push(Stage::Fine {
+                        points: u64::from(f.fine_points),
+                        replicates: f.fine_replicates,
+                        size: f.fine_size,
+                    });
+                } else if adaptive {
                     stages.push(Stage::Adaptive {
                         max_runs: n.adaptive.max_runs,
                     });
@@ -372,11 +399,15 @@ impl StudySpec {
                     search: SearchKind::Probability,
                     screen: n.screen,
                 });
+                let fine = n.fidelity.map(|f| f.fine_size);
                 stages.push(Stage::Verify {
                     scenes,
                     points: candidates,
                     seeds: n.verification_seeds,
-                    max_seeds: n.max_verification_seeds,
+                    // The noise floor is the coarse level's: no power
+                    // calculation raises the fine seeds.
+                    max_seeds: n.max_verification_seeds.filter(|_| fine.is_none()),
+                    size: fine,
                 });
                 stages
             }
@@ -444,6 +475,7 @@ impl StudySpec {
                 points: 1 + v.points.len() as u64,
                 seeds: v.replicates,
                 max_seeds: None,
+                size: None,
             });
         }
         StudySpec {
@@ -560,9 +592,20 @@ impl StudySpec {
                     scenes.join(", ")
                 ),
                 Stage::Fit { models } => models.iter().map(word).collect::<Vec<_>>().join(", "),
+                Stage::Fine {
+                    points,
+                    replicates,
+                    size,
+                } => format!(
+                    "{points} design point(s) at particle size x {size} x {replicates} seed(s), \
+                     chosen by the two-level GP's fine sd; the two-level GP fitted"
+                ),
                 Stage::Adaptive { max_runs } => format!("up to {max_runs} runs"),
                 Stage::Search { search, screen } => {
                     let mut w = word(search);
+                    if self.stages.iter().any(|s| matches!(s, Stage::Fine { .. })) {
+                        w.push_str(" of the fine level");
+                    }
                     if *screen {
                         w.push_str(", parameters below the noise fixed at their centre");
                     }
@@ -574,7 +617,9 @@ impl StudySpec {
                     points,
                     seeds,
                     max_seeds,
+                    size,
                 } => {
+                    let at = size.map_or(String::new(), |f| format!(" at particle size x {f}"));
                     let per = match max_seeds {
                         Some(max) => format!(
                             "{seeds} seed(s) per candidate and scene; the calibration scene's \
@@ -583,7 +628,7 @@ impl StudySpec {
                         None => format!("{seeds} seed(s) per candidate and scene"),
                     };
                     format!(
-                        "up to {points} candidate(s) x scenes {}, {per}",
+                        "up to {points} candidate(s) x scenes {}{at}, {per}",
                         scenes.join(", ")
                     )
                 }

@@ -37,6 +37,11 @@
 //! [`VerifyOutcome::failed_runs`] by its store status, which `repose verify`
 //! and `repose calibrate` exit with after writing the tables.
 //!
+//! A two-level study (`noise_aware.fidelity`) verifies at its fine size
+//! (every scene's experiments with the fine particle, Γ ∝ R²,
+//! [`super::fine`]), with `verification_seeds` in every scene: its noise
+//! floor is the coarse level's and sets no fine seeds.
+//!
 //! Verification experiments are ordinary replicates of the study
 //! ([`Study::replicate_experiment`]) whose `sample_index` is the cluster's
 //! group number plus [`VERIFY_INDEX`], so a noise-aware study draws their
@@ -64,9 +69,10 @@ use super::calibration::Stage;
 use super::dir::json_bytes;
 use super::dir::write_output;
 use super::dir::StudyDir;
+use super::fine::verified_size;
 use super::gp_train::adaptive_path;
 use super::noise::read_noise;
-use super::replicates::{replicates_csv, run_replicated, Replicated};
+use super::replicates::{replicates_csv, run_replicated_at, Replicated};
 use super::StudyError;
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
@@ -245,7 +251,14 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let noise_sd = read_noise(dir).ok().and_then(|f| f.sd_deg);
+    // A two-level study verifies at the fine size, where the noise floor
+    // (measured at the study's size) says nothing of the seeds needed.
+    let size = verified_size(study);
+    let noise_sd = if size == 1.0 {
+        read_noise(dir).ok().and_then(|f| f.sd_deg)
+    } else {
+        None
+    };
     let ran_adaptive = adaptive_path(dir).is_file();
     let rule = acceptance(
         study,
@@ -278,11 +291,12 @@ where
     let mut per_scene: Vec<Vec<Replicated>> = Vec::new();
     for (target, accepted) in targets.iter().zip(&rule.targets) {
         per_scene.push(
-            run_replicated(
+            run_replicated_at(
                 study,
                 target,
                 &points,
                 accepted.seeds as u32,
+                size,
                 store,
                 pool,
                 &runner,

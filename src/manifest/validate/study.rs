@@ -9,7 +9,7 @@ use super::experiment::{
 };
 use super::scene::check_scene;
 use crate::manifest::experiment::PAIR_PARAM_FIELDS;
-use crate::manifest::study::{DesignKind, NoiseAware, Slot, Study, TargetScene};
+use crate::manifest::study::{DesignKind, Fidelity, NoiseAware, Slot, Study, TargetScene};
 use crate::manifest::Scene;
 
 /// Checks every field of a study.
@@ -31,6 +31,9 @@ pub(crate) fn check_study(c: &mut Checker, s: &Study) {
     }
     if let Some(n) = &s.noise_aware {
         check_noise_aware(c, n);
+        if let Some(f) = &n.fidelity {
+            check_fidelity(c, s, f);
+        }
     }
 }
 
@@ -91,6 +94,46 @@ fn check_noise_aware(c: &mut Checker, n: &NoiseAware) {
                 ),
             );
         }
+    }
+}
+
+fn check_fidelity(c: &mut Checker, s: &Study, f: &Fidelity) {
+    c.within(
+        "noise_aware.fidelity.fine_size",
+        f.fine_size,
+        Interval::open(0.0, 1.0),
+    );
+    if f.fine_points < 3 || u64::from(f.fine_points) > s.design.size {
+        c.fail(
+            "noise_aware.fidelity.fine_points",
+            f.fine_points.to_string(),
+            format!(
+                "must lie in [3, design.size = {}] (the fine points are design points; the \
+                 fine level's regression on the coarse one needs 3)",
+                s.design.size
+            ),
+        );
+    }
+    if f.fine_replicates < 2 {
+        c.fail(
+            "noise_aware.fidelity.fine_replicates",
+            f.fine_replicates.to_string(),
+            "must be at least 2 (a fine mean's noise is its replicates' variance)",
+        );
+    }
+    if s.coarse_graining.is_some() {
+        c.fail(
+            "noise_aware.fidelity",
+            "(present)".into(),
+            "needs a study without coarse_graining (the fine level scales the stated particle)",
+        );
+    }
+    if s.design.kind != DesignKind::Lhs && s.design.kind != DesignKind::LhsOptimised {
+        c.fail(
+            "noise_aware.fidelity",
+            "(present)".into(),
+            "needs a Latin-hypercube design (design.size is then its samples)",
+        );
     }
 }
 

@@ -1,0 +1,279 @@
+//! The two-level (multi-fidelity) calibration (issue 43) end to end on the
+//! smoke study with a fast fake runner whose angle depends on the particle
+//! size: the coarse level is 20 + 30 μ + 40 μr degrees and the fine level
+//! (radius × 0.75) is ρ·coarse + β with ρ = 0.8 and β = 8°, each with its
+//! own packing noise. The coarse design, the fine points chosen by the
+//! model, the two-level fit, the search on the fine level and the
+//! verification at the fine size run through the one pipeline; the stores
+//! are the same bytes with 1 and 2 workers.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use repose::exec::Executor;
+use repose::manifest::{parse_study, Experiment, SizeDistribution, Study};
+use repose::store::{RunDir, RunResult, Store};
+use repose::study::acceptance::Verdict;
+use repose::study::dir::StudyDir;
+use repose::study::fine::{fine, Choice, SPACE_FILLING_POINTS};
+use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome, NoiseAwareOptions};
+use repose::study::sample::SampleSettings;
+use repose::study::stages::{Stage, StudySpec};
+use repose::study::tolerance_search::SearchSettings;
+use repose::study::train::TrainOptions;
+use serde_json::{json, Value};
+
+/// Seed-to-seed sd of the fake angle at either size, degrees.
+const SIGMA: f64 = 0.5;
+/// The smoke study's particle radius (m) and the fine factor.
+const COARSE_RADIUS: f64 = 0.001;
+const FINE_SIZE: f64 = 0.75;
+/// The fine level's scale and shift of the coarse response.
+const RHO: f64 = 0.8;
+const BETA: f64 = 8.0;
+
+/// A fixed pseudo-random value of (seed, point) uniform on ±√3 σ.
+fn packing_noise(seed: u64, point: u64) -> f64 {
+    let mut x =
+        (seed ^ point.rotate_left(17)).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x5851_f42d_4c95_7f2d;
+    x ^= x >> 29;
+    x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x ^= x >> 32;
+    let u = (x >> 11) as f64 / (1u64 << 53) as f64;
+    (2.0 * u - 1.0) * 3f64.sqrt() * SIGMA
+}
+
+fn radius(e: &Experiment) -> f64 {
+    match &e.material.particle.size {
+        SizeDistribution::Monodisperse { radius_m } => *radius_m,
+        other => panic!("monodisperse expected, got {other:?}"),
+    }
+}
+
+fn is_fine(e: &Experiment) -> bool {
+    (radius(e) - COARSE_RADIUS * FINE_SIZE).abs() < 1e-12
+}
+
+fn coarse_mean(e: &Experiment) -> f64 {
+    let pp = e.contact.particle_particle;
+    20.0 + 30.0 * pp.static_friction + 40.0 * pp.rolling_friction
+}
+
+fn fake(e: &Experiment, _: &RunDir) -> Result<RunResult, std::io::Error> {
+    let (seed, point) = (e.seeds.packing_seed, e.seeds.sample_index);
+    let angle = if is_fine(e) {
+        RHO * coarse_mean(e) + BETA + packing_noise(seed ^ 0xf1ae, point)
+    } else {
+        assert!((radius(e) - COARSE_RADIUS).abs() < 1e-12, "a third size");
+        coarse_mean(e) + packing_noise(seed, point)
+    };
+    let mut r = RunResult::new(e, "fake");
+    r.headline_angle_deg = Some(angle);
+    Ok(r)
+}
+
+fn study(dir: &Path, fidelity: Value) -> (Study, PathBuf) {
+    let mut v = common::example("calibrate-smoke/study.json");
+    let block = json!({ "replicates": 2, "noise_seeds": 8, "min_probability": 0.5,
+        "verification_seeds": 5, "adaptive": { "batch": 2, "max_runs": 8 },
+        "fidelity": fidelity });
+    v = common::edit(v, "/noise_aware", Some(block));
+    let path = dir.join("study.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    (parse_study(&v.to_string()).unwrap(), path)
+}
+
+fn fidelity() -> Value {
+    json!({ "fine_size": FINE_SIZE, "fine_points": 5, "fine_replicates": 3 })
+}
+
+fn pool(jobs: usize) -> Executor {
+    Executor {
+        jobs,
+        progress: false,
+        limits: Default::default(),
+        max_runs: repose::exec::DEFAULT_MAX_RUNS,
+        slurm: None,
+    }
+}
+
+fn calibrate(root: &Path, study: &Study, path: &Path, jobs: usize) -> CalibrationOutcome {
+    let store = Store::open(root).unwrap();
+    let dir = StudyDir::new(root, study, path);
+    let options = NoiseAwareOptions {
+        candidates: 1,
+        adaptive: false,
+        sample: SampleSettings::default(),
+        train: TrainOptions::defaults(study),
+        search: SearchSettings::with_seed(study.design.seed),
+    };
+    calibrate_noise_aware(
+        &dir,
+        study,
+        &store,
+        &pool(jobs),
+        &options,
+        fake,
+        &mut |_| {},
+    )
+    .unwrap()
+}
+
+/// Every file of `root` but the timing records and the files that carry
+/// CPU or wall time (the noise floor's tables, the outcome, fine/cost.json,
+/// each with its lineage record).
+fn deterministic_files(root: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    common::snapshot(root)
+        .into_iter()
+        .filter(|(p, _)| {
+            let s = p.to_string_lossy();
+            !(s.contains("/noise/") || s.contains("outcome.json") || s.contains("cost.json"))
+        })
+        .collect()
+}
+
+#[test]
+fn a_two_level_calibration_verifies_at_the_fine_size_and_reproduces() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (study, path) = study(tmp.path(), fidelity());
+
+    // The stage list shows the fine stage and the fine-size verification.
+    let spec = StudySpec::calibration(&study, false, 1);
+    let names: Vec<&str> = spec.stages.iter().map(|s| s.name()).collect();
+    assert_eq!(
+        names,
+        ["noise", "design", "simulate", "fit", "fine", "search", "verify"]
+    );
+    assert!(spec.stages.iter().any(|s| matches!(
+        s,
+        Stage::Verify { size: Some(f), max_seeds: None, .. } if *f == FINE_SIZE
+    )));
+
+    let outcome = calibrate(&tmp.path().join("a"), &study, &path, 2);
+    let fine_record = outcome.fine.as_ref().expect("the fine stage ran");
+
+    // The fine points: 3 by space filling, then 2 by the model, all design
+    // points, none twice, 3 seeds each.
+    assert_eq!(fine_record.points.len(), 5);
+    for (k, p) in fine_record.points.iter().enumerate() {
+        let expected = if k < SPACE_FILLING_POINTS {
+            Choice::SpaceFilling
+        } else {
+            Choice::FineSd
+        };
+        assert_eq!(p.chosen_by, expected, "point {k}");
+        assert!(p.index < 12, "a design point");
+        assert_eq!(p.seeds, 3);
+        assert_eq!(p.predicted_sd_deg.is_some(), k >= SPACE_FILLING_POINTS);
+    }
+    let mut indices: Vec<u64> = fine_record.points.iter().map(|p| p.index).collect();
+    indices.dedup();
+    indices.sort_unstable();
+    indices.dedup();
+    assert_eq!(indices.len(), 5);
+    assert_eq!(outcome.runs.fine, 15);
+
+    // ρ and β are recovered within their 95 % intervals.
+    let (rho, rho_se) = fine_record.rho;
+    let (beta, beta_se) = fine_record.beta;
+    assert!(
+        (rho - RHO).abs() <= 1.96 * rho_se,
+        "rho {rho} ± {rho_se} against {RHO}"
+    );
+    assert!(
+        (beta - BETA).abs() <= 1.96 * beta_se,
+        "beta {beta} ± {beta_se} against {BETA}"
+    );
+
+    // The candidate is the fine level's: its true fine angle is in the band
+    // (30° ± 5 %), where the coarse angle at the same point is not.
+    let c = &outcome.candidates[0];
+    let mu = c.centre[0] * 30.0 + c.centre[1] * 40.0 + 20.0;
+    let fine_true = RHO * mu + BETA;
+    assert!((28.5..=31.5).contains(&fine_true), "fine {fine_true}");
+    assert!(!(28.5..=31.5).contains(&mu), "coarse {mu}");
+
+    // Verification ran at the fine size in every scene and passed the
+    // calibration scene.
+    let calibration = outcome
+        .verification
+        .iter()
+        .find(|r| r.scene == study.calibration.name)
+        .unwrap();
+    assert_eq!(calibration.seeds, 5);
+    assert_eq!(calibration.judgement.verdict, Verdict::Pass);
+    assert!(outcome.calibrated);
+    assert!(outcome.verification.iter().all(|r| r.seeds == 5));
+
+    // The same study on one worker: the same bytes.
+    calibrate(&tmp.path().join("b"), &study, &path, 1);
+    let (a, b) = (
+        deterministic_files(&tmp.path().join("a")),
+        deterministic_files(&tmp.path().join("b")),
+    );
+    assert_eq!(
+        a.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        b.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    for (x, y) in a.iter().zip(&b) {
+        assert!(
+            x.1 == y.1,
+            "{} differs between 1 and 2 workers",
+            x.0.display()
+        );
+    }
+    // Timing files exist for the cost: the fine runs cost something.
+    let cost: Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            StudyDir::new(&tmp.path().join("a"), &study, &path)
+                .path()
+                .join("fine/cost.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(cost["fine_runs"], 15);
+    assert_eq!(cost["coarse_runs"], 24);
+}
+
+#[test]
+fn the_fine_stage_says_what_is_wrong() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Fields out of range are named with their value and what is allowed.
+    let mut v = common::example("calibrate-smoke/study.json");
+    let block = json!({ "replicates": 2, "noise_seeds": 8, "min_probability": 0.5,
+        "verification_seeds": 5, "adaptive": { "batch": 2, "max_runs": 8 },
+        "fidelity": { "fine_size": 1.5, "fine_points": 40, "fine_replicates": 1 } });
+    v = common::edit(v, "/noise_aware", Some(block));
+    let err = parse_study(&v.to_string()).unwrap_err().to_string();
+    for field in [
+        "noise_aware.fidelity.fine_size",
+        "noise_aware.fidelity.fine_points",
+        "noise_aware.fidelity.fine_replicates",
+    ] {
+        assert!(err.contains(field), "{field} not named in: {err}");
+    }
+
+    // The stage before train: it names the stage to run first.
+    let (study, path) = study(tmp.path(), fidelity());
+    let store = Store::open(tmp.path()).unwrap();
+    let dir = StudyDir::new(tmp.path(), &study, &path);
+    let err = fine(&dir, &study, &store, &pool(1), &fake, &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("repose train"), "{err}");
+
+    // --adaptive is refused in a two-level study.
+    let options = NoiseAwareOptions {
+        candidates: 1,
+        adaptive: true,
+        sample: SampleSettings::default(),
+        train: TrainOptions::defaults(&study),
+        search: SearchSettings::with_seed(study.design.seed),
+    };
+    let err = calibrate_noise_aware(&dir, &study, &store, &pool(1), &options, fake, &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("--adaptive"), "{err}");
+}
