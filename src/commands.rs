@@ -31,6 +31,7 @@ use crate::study::dir::StudyDir;
 use crate::study::fidelity_pilot::{self, PilotSpec};
 use crate::study::fine::fine as run_fine;
 use crate::study::gp_train::train_gp;
+use crate::study::holdout;
 use crate::study::learning_curve;
 use crate::study::noise::noise as run_noise;
 use crate::study::pipeline::{
@@ -966,6 +967,33 @@ pub fn fine(
     })?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(out, "  outputs: {}", dir.stage(Stage::Fine).display())?;
+    Ok(())
+}
+
+/// `repose holdout STUDY --pilot FILE --pilot-study FILE`
+/// ([`crate::study::holdout`]); Markdown, or with `json` one object.
+pub fn holdout(
+    store_root: &Path,
+    study_path: &Path,
+    pilot: &Path,
+    pilot_study: &Path,
+    json: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let (study, dir) = open_study(store_root, study_path)?;
+    let reference = read_study(pilot_study)?;
+    let store = open_store(store_root)?;
+    let pilot = holdout::read_pilot(pilot)?;
+    let h = holdout::holdout(&dir, &study, &store, &pilot, &reference)?;
+    if json {
+        writeln!(
+            out,
+            "{}",
+            serde_json::to_string_pretty(&h).expect("serialises")
+        )?;
+    } else {
+        write!(out, "{}", holdout::markdown(&h))?;
+    }
     Ok(())
 }
 

@@ -216,6 +216,24 @@ enum Command {
         #[command(flatten)]
         exec: ExecArgs,
     },
+    /// How well a calibrated study predicts fine-size runs it never saw: its
+    /// fine-level predictor (two-level GP, or the GP of a study at the fine
+    /// size) at a pilot's held-out fine points; RMSE, mean z², coverage, and
+    /// the study's training runs and CPU-s.
+    Holdout {
+        /// Study manifest (after `repose train`, and `repose fine` for a
+        /// two-level study).
+        study: PathBuf,
+        /// The pilot's pilot.json (`repose pilot`).
+        #[arg(long)]
+        pilot: PathBuf,
+        /// The study the pilot ran on.
+        #[arg(long)]
+        pilot_study: PathBuf,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
     /// Measure what accuracy costs in time: sweep fidelity knobs around a scene
     /// manifest (one at a time, R replicates each) and tabulate angle error vs the
     /// finest setting against wall time, with the Pareto front.
@@ -1203,6 +1221,12 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             commands::CalibrateFlags { adaptive, json },
             &mut out,
         ),
+        Command::Holdout {
+            study,
+            pilot,
+            pilot_study,
+            json,
+        } => commands::holdout(&cli.store, &study, &pilot, &pilot_study, json, &mut out),
         Command::Fine { study, jobs, exec } => commands::fine(
             &cli.store,
             &study,

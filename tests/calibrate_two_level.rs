@@ -16,7 +16,9 @@ use repose::manifest::{parse_study, Experiment, SizeDistribution, Study};
 use repose::store::{RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
 use repose::study::dir::StudyDir;
-use repose::study::fine::{fine, Choice, SPACE_FILLING_POINTS};
+use repose::study::fidelity_pilot::{Pilot, PilotPoint};
+use repose::study::fine::{fine, load_two_level, Choice, SPACE_FILLING_POINTS};
+use repose::study::holdout::holdout;
 use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome, NoiseAwareOptions};
 use repose::study::sample::SampleSettings;
 use repose::study::stages::{Stage, StudySpec};
@@ -235,6 +237,96 @@ fn a_two_level_calibration_verifies_at_the_fine_size_and_reproduces() {
     .unwrap();
     assert_eq!(cost["fine_runs"], 15);
     assert_eq!(cost["coarse_runs"], 24);
+
+    // Held out: a pilot's fine points (built here from the fake's fine
+    // level, 3 seeds each) against the two-level prediction.
+    let root = tmp.path().join("a");
+    let dir = StudyDir::new(&root, &study, &path);
+    let store = Store::open(&root).unwrap();
+    let pilot = pilot_of(&study);
+    let h = holdout(&dir, &study, &store, &pilot, &study).unwrap();
+    let model = load_two_level(&dir).unwrap();
+    assert_eq!(h.model, "two_level");
+    assert_eq!(h.points.len(), pilot.points.len());
+    let mut ss = 0.0;
+    for (held, p) in h.points.iter().zip(&pilot.points) {
+        let unit: Vec<f64> = study
+            .parameters
+            .values()
+            .zip(&p.point)
+            .map(|(r, v)| (v - r.min) / (r.max - r.min))
+            .collect();
+        let pred = model.predict(&unit);
+        let observed = p.fine.iter().sum::<f64>() / p.fine.len() as f64;
+        assert_eq!(held.predicted, (pred.mean, pred.sd));
+        assert!((held.observed.0 - observed).abs() < 1e-12);
+        assert!((held.error - (pred.mean - observed)).abs() < 1e-12);
+        ss += held.error * held.error;
+        // The fake's fine level is what the model learned: within a degree.
+        assert!(
+            held.error.abs() < 1.0,
+            "error {} at {:?}",
+            held.error,
+            p.point
+        );
+    }
+    assert!((h.rmse - (ss / h.points.len() as f64).sqrt()).abs() < 1e-12);
+    assert_eq!(h.training_runs, 8 + 24 + 15);
+
+    // A one-level study is compared only when its particle is the pilot's
+    // fine one.
+    let (coarse_only, coarse_path) = {
+        let sub = tmp.path().join("one-level");
+        std::fs::create_dir_all(&sub).unwrap();
+        let mut v = common::example("calibrate-smoke/study.json");
+        v = common::edit(
+            v,
+            "/noise_aware",
+            Some(
+                json!({ "replicates": 2, "noise_seeds": 8, "min_probability": 0.5,
+                "verification_seeds": 5, "adaptive": { "batch": 2, "max_runs": 8 } }),
+            ),
+        );
+        let path = sub.join("study.json");
+        std::fs::write(&path, v.to_string()).unwrap();
+        (parse_study(&v.to_string()).unwrap(), path)
+    };
+    let one = StudyDir::new(&root, &coarse_only, &coarse_path);
+    let err = holdout(&one, &coarse_only, &store, &pilot, &study)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("fine one"), "{err}");
+}
+
+/// A pilot of 4 points off the design (sample indices 4e9 + i) with the
+/// fake's fine values at 3 seeds.
+fn pilot_of(study: &Study) -> Pilot {
+    let points = [[0.1, 0.3], [0.25, 0.5], [0.05, 0.7], [0.2, 0.2]];
+    Pilot {
+        scene: "drum".into(),
+        response: "headline angle".into(),
+        parameters: study.parameters.keys().cloned().collect(),
+        fine_factor: FINE_SIZE,
+        points: points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let index = 4_000_000_000 + i as u64;
+                let mean = RHO * (20.0 + 30.0 * p[1] + 40.0 * p[0]) + BETA;
+                PilotPoint {
+                    index,
+                    point: p.to_vec(),
+                    coarse: vec![],
+                    fine: (0..3)
+                        .map(|r| mean + packing_noise(r + 77, index))
+                        .collect(),
+                }
+            })
+            .collect(),
+        cpu_s: (None, None),
+        correlation: None,
+        fit: Err("not fitted".into()),
+    }
 }
 
 #[test]

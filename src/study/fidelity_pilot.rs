@@ -28,7 +28,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::convergence::plan::{scaled, SurfaceEnergyRule};
 use super::StudyError;
@@ -62,7 +62,7 @@ pub struct PilotSpec {
 }
 
 /// One design point at both levels.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct PilotPoint {
     /// Its `sample_index`.
     pub index: u64,
@@ -75,7 +75,7 @@ pub struct PilotPoint {
 }
 
 /// What the pilot measured and the two-level fit.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Pilot {
     /// The scene's name in the study.
     pub scene: String,
@@ -96,7 +96,7 @@ pub struct Pilot {
 }
 
 /// The two-level process's coefficients.
-#[derive(Debug, Clone, Copy, Serialize)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 pub struct TwoLevelFit {
     /// ρ and its standard error.
     pub rho: (f64, f64),

@@ -32,6 +32,8 @@
 //! - [`fine`]: the fine level of a two-level study (`noise_aware.fidelity`):
 //!   design points re-run at a finer size, chosen by the two-level Gaussian
 //!   process, which then carries the search and the verification.
+//! - [`holdout`]: a study's fine-level predictions against a pilot's
+//!   held-out fine runs, with the study's training CPU (`repose holdout`).
 //! - [`acceptance`]: the one acceptance rule of a candidate in a scene.
 //! - [`dir`]: where a study's outputs live and how they are written.
 //!
@@ -48,6 +50,7 @@ pub mod fidelity_pilot;
 pub mod fine;
 pub mod gp_surface;
 pub mod gp_train;
+pub mod holdout;
 pub mod learning_curve;
 pub mod noise;
 pub mod pipeline;
