@@ -70,7 +70,7 @@ use crate::exec::Executor;
 use crate::manifest::ContentId;
 use crate::manifest::{Experiment, Fidelity, Study};
 use crate::report::markdown::{Align, MarkdownTable};
-use crate::stats::gp::{GaussianProcess, GpHyper, GpSettings};
+use crate::stats::gp::{GaussianProcess, GpHyper, GpPrediction, GpSettings};
 use crate::stats::gp_two_level::{LevelData, TwoLevelGp};
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store, TimingRecord};
@@ -228,6 +228,41 @@ pub fn load_two_level(dir: &StudyDir) -> Result<TwoLevelGp, StudyError> {
         path,
         message: e.to_string(),
     })
+}
+
+/// The surrogate a study's search and verification answer to: the
+/// two-level process's fine level in a two-level study, the trained GP
+/// otherwise.
+#[derive(Debug, Clone)]
+pub enum FinePredictor {
+    /// A two-level study's fine level.
+    TwoLevel(Box<TwoLevelGp>),
+    /// A one-level study's GP.
+    OneLevel(GaussianProcess),
+}
+
+impl FinePredictor {
+    /// The study's predictor, read from its train (and fine) stage.
+    pub fn of(dir: &StudyDir, study: &Study) -> Result<FinePredictor, StudyError> {
+        Ok(if verified_size(study) != 1.0 {
+            FinePredictor::TwoLevel(Box::new(load_two_level(dir)?))
+        } else {
+            FinePredictor::OneLevel(read_gp(dir)?.process()?)
+        })
+    }
+
+    /// The predictive mean and latent sd at `x` in the unit cube (degrees).
+    pub fn predict(&self, x: &[f64]) -> GpPrediction {
+        match self {
+            FinePredictor::TwoLevel(m) => m.predict(x),
+            FinePredictor::OneLevel(gp) => gp.predict(x),
+        }
+    }
+
+    /// Whether it is a two-level study's.
+    pub fn is_two_level(&self) -> bool {
+        matches!(self, FinePredictor::TwoLevel(_))
+    }
 }
 
 /// The fine points with a mean, as the fine level's data.

@@ -31,13 +31,13 @@ use super::batch::replicates_path;
 use super::calibration::{parameter_names, to_unit, Stage};
 use super::dir::StudyDir;
 use super::fidelity_pilot::Pilot;
-use super::fine::{fidelity, load_two_level};
-use super::gp_train::read_gp;
+use super::fine::{fidelity, FinePredictor};
 use super::noise::noise_runs_path;
 use super::replicates::read_replicates_csv;
 use super::StudyError;
 use crate::manifest::{SizeDistribution, Study};
 use crate::report::markdown::{Align, MarkdownTable};
+use crate::stats::gp::GpPrediction;
 use crate::stats::summary::mean_ci;
 use crate::store::{Store, TimingRecord};
 
@@ -155,26 +155,14 @@ pub fn holdout(
         )));
     }
     check_ranges(study, pilot_study, own * own)?;
-    let predict: Box<dyn Fn(&[f64]) -> (f64, f64)> = if two_level {
-        let m = load_two_level(dir)?;
-        Box::new(move |x| {
-            let p = m.predict(x);
-            (p.mean, p.sd)
-        })
-    } else {
-        let gp = read_gp(dir)?.process()?;
-        Box::new(move |x| {
-            let p = gp.predict(x);
-            (p.mean, p.sd)
-        })
-    };
+    let model = FinePredictor::of(dir, study)?;
     let mut points = Vec::new();
     for p in &pilot.points {
         let Some(s) = mean_ci(&p.fine) else {
             continue;
         };
         let se = s.std / (s.n as f64).sqrt();
-        let (mean, sd) = predict(&to_unit(pilot_study, &p.point));
+        let GpPrediction { mean, sd } = model.predict(&to_unit(pilot_study, &p.point));
         let error = mean - s.mean;
         points.push(HeldOut {
             index: p.index,

@@ -44,7 +44,7 @@ use super::calibration::Stage;
 use super::dir::json_bytes;
 use super::dir::write_output;
 use super::dir::StudyDir;
-use super::fine::{load_two_level, two_level_path};
+use super::fine::{two_level_path, FinePredictor};
 use super::gp_train::{gp_path, read_gp};
 use super::noise::noise_aware;
 use super::tolerance_search::SearchSettings;
@@ -103,15 +103,8 @@ pub fn gp_search(
     let spec = noise_aware(study)?;
     let model = read_gp(dir)?;
     // A two-level study searches the fine level's prediction.
-    let two_level = match study.noise_aware.and_then(|n| n.fidelity) {
-        Some(_) => Some(load_two_level(dir)?),
-        None => None,
-    };
-    let coarse = model.process()?;
-    let predict = |u: &[f64]| match &two_level {
-        Some(t) => t.predict(u),
-        None => coarse.predict(u),
-    };
+    let predictor = FinePredictor::of(dir, study)?;
+    let predict = |u: &[f64]| predictor.predict(u);
     let names = parameter_names(study);
     let effects = &model.screening;
     let samples = settings.samples * RESAMPLE_FACTOR;
@@ -182,7 +175,7 @@ pub fn gp_search(
     let label = cluster_column(unit.len(), &kept, &clustering.labels);
     let out = dir.stage(Stage::Search);
     dir.prepare_stage(study, Stage::Search)?;
-    let surrogate = if two_level.is_some() {
+    let surrogate = if predictor.is_two_level() {
         "two_level_gp"
     } else {
         "gp"
@@ -197,7 +190,7 @@ pub fn gp_search(
                     "bandwidth_used": bandwidth }),
         )
         .with_input(dir.input("gp", &gp_path(dir))?);
-    if two_level.is_some() {
+    if predictor.is_two_level() {
         lineage = lineage.with_input(dir.input("two_level", &two_level_path(dir))?);
     }
     let mut header = vec!["point".to_string()];
