@@ -145,11 +145,28 @@ pub fn gp_search(
         let best = (0..unit.len())
             .max_by(|&a, &b| probability[a].total_cmp(&probability[b]))
             .unwrap_or(0);
+        let (model, remedy) = if predictor.is_two_level() {
+            (
+                "the two-level GP's fine level",
+                "more fine points (noise_aware.fidelity.fine_points)",
+            )
+        } else {
+            ("the GP", "more runs near the target (`--adaptive`)")
+        };
         return Err(StudyError::NothingKept(format!(
             "none of the {samples} resampled points has probability >= {} of an angle in \
-             {lo:.2}–{hi:.2} deg under the GP; the best has {:.3} (mean {:.2} ± {:.2} deg): \
-             more runs near the target (`--adaptive`) or a lower min_probability",
-            spec.min_probability, probability[best], predictions[best].mean, predictions[best].sd
+             {lo:.2}–{hi:.2} deg under {model}; the best has {:.3} (mean {:.2} ± {:.2} deg) at \
+             {}: {remedy} or a lower min_probability",
+            spec.min_probability,
+            probability[best],
+            predictions[best].mean,
+            predictions[best].sd,
+            to_physical(study, &unit[best])
+                .iter()
+                .zip(&names)
+                .map(|(v, n)| format!("{n} = {v:.4}"))
+                .collect::<Vec<_>>()
+                .join(", ")
         )));
     };
     let candidates: Vec<Candidate> = clustering
