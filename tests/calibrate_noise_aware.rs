@@ -9,7 +9,6 @@ mod common;
 
 use std::path::Path;
 
-use repose::exec::Executor;
 use repose::manifest::{parse_study, validate_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
@@ -38,13 +37,7 @@ const SIGMA: f64 = 0.5;
 /// independent between points, as a pile's chaotic history makes it even
 /// from the same packing.
 fn packing_noise(seed: u64, point: u64) -> f64 {
-    let mut x =
-        (seed ^ point.rotate_left(17)).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x5851_f42d_4c95_7f2d;
-    x ^= x >> 29;
-    x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x ^= x >> 32;
-    let u = (x >> 11) as f64 / (1u64 << 53) as f64;
-    (2.0 * u - 1.0) * 3f64.sqrt() * SIGMA
+    common::packing_noise(seed, point, SIGMA)
 }
 
 /// 20 + 30 μ + 40 μ_r degrees plus the packing noise.
@@ -78,16 +71,6 @@ fn study(dir: &Path, edits: &[(&str, Value)]) -> (Study, std::path::PathBuf) {
     (parse_study(&v.to_string()).unwrap(), path)
 }
 
-fn pool() -> Executor {
-    Executor {
-        jobs: 2,
-        progress: false,
-        limits: Default::default(),
-        max_runs: repose::exec::DEFAULT_MAX_RUNS,
-        slurm: None,
-    }
-}
-
 fn options(study: &Study, adaptive: bool) -> NoiseAwareOptions {
     NoiseAwareOptions {
         candidates: 1,
@@ -104,7 +87,7 @@ fn calibrate(dir: &StudyDir, study: &Study, store: &Store, adaptive: bool) -> Ca
         dir,
         study,
         store,
-        &pool(),
+        &common::executor(2),
         &options(study, adaptive),
         fake,
         &mut |_| {},
@@ -418,7 +401,7 @@ fn the_noise_stage_and_the_study_say_what_is_wrong() {
     let plain = parse_study(&v.to_string()).unwrap();
     let store = Store::open(tmp.path().join("s")).unwrap();
     let dir = StudyDir::new(&tmp.path().join("s"), &plain, Path::new("smoke.json"));
-    let err = noise(&dir, &plain, &store, &pool(), fake).unwrap_err();
+    let err = noise(&dir, &plain, &store, &common::executor(2), fake).unwrap_err();
     assert!(err.to_string().contains("no `noise_aware` block"), "{err}");
 
     // Bad noise-aware fields are named with their values.
@@ -440,7 +423,7 @@ fn the_noise_stage_and_the_study_say_what_is_wrong() {
     let (study, path) = study_with_response(tmp.path());
     let dir = StudyDir::new(&tmp.path().join("r"), &study, &path);
     let store = Store::open(tmp.path().join("r")).unwrap();
-    let err = noise(&dir, &study, &store, &pool(), fake).unwrap_err();
+    let err = noise(&dir, &study, &store, &common::executor(2), fake).unwrap_err();
     assert!(err.to_string().contains("angle_cone_deg"), "{err}");
 }
 
@@ -475,7 +458,7 @@ fn a_replicated_batch_counts_what_it_simulated() {
         }
     };
     let total = 24; // 12 samples x 2 replicates
-    let first = batch(&dir, &study, &store, &pool(), failing).unwrap();
+    let first = batch(&dir, &study, &store, &common::executor(2), failing).unwrap();
     assert_eq!(first.total, total);
     assert_eq!(first.cached, 0);
     assert_eq!(first.failures.len(), 2);
@@ -484,7 +467,7 @@ fn a_replicated_batch_counts_what_it_simulated() {
         total - 1,
         "every run but the failed one completed"
     );
-    let second = batch(&dir, &study, &store, &pool(), failing).unwrap();
+    let second = batch(&dir, &study, &store, &common::executor(2), failing).unwrap();
     assert_eq!(second.cached, total, "nothing simulated again");
     assert_eq!(second.computed, 0);
     assert_eq!(second.failures.len(), 2, "the failures are still reported");
@@ -646,9 +629,9 @@ fn a_noisier_half_of_the_design_gives_the_gp_per_point_noise() {
         r.headline_angle_deg = Some(fake_angle(e) + extra);
         Ok(r)
     };
-    noise(&dir, &study, &store, &pool(), runner).unwrap();
+    noise(&dir, &study, &store, &common::executor(2), runner).unwrap();
     sample(&dir, &study, &SampleSettings::default()).unwrap();
-    batch(&dir, &study, &store, &pool(), runner).unwrap();
+    batch(&dir, &study, &store, &common::executor(2), runner).unwrap();
     let out = train_gp(
         &dir,
         &study,

@@ -10,7 +10,6 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use repose::exec::Executor;
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::scenes::run_experiment;
 use repose::store::{Lineage, RunDir, RunResult, RunStatus, Store};
@@ -72,16 +71,6 @@ impl Fake {
         let mut r = RunResult::new(e, "fake");
         r.headline_angle_deg = Some(fake_angle(e));
         Ok(r)
-    }
-}
-
-fn settings(jobs: usize) -> Executor {
-    Executor {
-        jobs,
-        progress: false,
-        limits: Default::default(),
-        max_runs: repose::exec::DEFAULT_MAX_RUNS,
-        slurm: None,
     }
 }
 
@@ -172,7 +161,10 @@ fn batch_runs_every_sample_and_a_rerun_computes_nothing() {
     let dir = StudyDir::new(store.root(), &s, &path);
     sample(&dir, &s, &SampleSettings::default()).unwrap();
     let fake = Fake::new(&[]);
-    let out = batch(&dir, &s, &store, &settings(3), |e, d| fake.run(e, d)).unwrap();
+    let out = batch(&dir, &s, &store, &common::executor(3), |e, d| {
+        fake.run(e, d)
+    })
+    .unwrap();
     assert_eq!((out.total, out.cached, out.computed), (12, 0, 12));
     assert_eq!(fake.calls.load(Ordering::SeqCst), 12);
     let (_, rows) = read_angles(&dir, &s).unwrap();
@@ -190,7 +182,10 @@ fn batch_runs_every_sample_and_a_rerun_computes_nothing() {
 
     let before = common::snapshot(dir.path());
     let again = Fake::new(&[]);
-    let out = batch(&dir, &s, &store, &settings(1), |e, d| again.run(e, d)).unwrap();
+    let out = batch(&dir, &s, &store, &common::executor(1), |e, d| {
+        again.run(e, d)
+    })
+    .unwrap();
     assert_eq!((out.cached, out.computed), (12, 0));
     assert_eq!(again.calls.load(Ordering::SeqCst), 0);
     assert_eq!(
@@ -222,7 +217,7 @@ fn a_killed_batch_resumes_without_repeating_work() {
 
     let seen = Mutex::new(Vec::new());
     let resumed = Fake::new(&[]);
-    let out = batch(&dir, &s, &store, &settings(2), |e, d| {
+    let out = batch(&dir, &s, &store, &common::executor(2), |e, d| {
         seen.lock().unwrap().push(e.seeds.sample_index);
         resumed.run(e, d)
     })
@@ -248,7 +243,10 @@ fn failures_are_recorded_reported_and_retried_without_stopping_the_others() {
     let design = sample(&dir, &s, &SampleSettings::default()).unwrap();
     assert_eq!(design.points.len(), 12);
     let flaky = Fake::new(&[3, 8]);
-    let out = batch(&dir, &s, &store, &settings(2), |e, d| flaky.run(e, d)).unwrap();
+    let out = batch(&dir, &s, &store, &common::executor(2), |e, d| {
+        flaky.run(e, d)
+    })
+    .unwrap();
     assert_eq!(
         out.failures.iter().map(|f| f.index).collect::<Vec<_>>(),
         [3, 8]
@@ -277,7 +275,10 @@ fn failures_are_recorded_reported_and_retried_without_stopping_the_others() {
     }
     // The next batch retries exactly the two failures.
     let healthy = Fake::new(&[]);
-    let out = batch(&dir, &s, &store, &settings(2), |e, d| healthy.run(e, d)).unwrap();
+    let out = batch(&dir, &s, &store, &common::executor(2), |e, d| {
+        healthy.run(e, d)
+    })
+    .unwrap();
     assert_eq!((out.cached, out.computed, out.failures.len()), (10, 2, 0));
     assert_eq!(healthy.calls.load(Ordering::SeqCst), 2);
 }
@@ -290,7 +291,10 @@ fn train_and_search_recover_the_fake_response_and_rerun_byte_identically() {
     let dir = StudyDir::new(store.root(), &s, &path);
     sample(&dir, &s, &SampleSettings::default()).unwrap();
     let fake = Fake::new(&[]);
-    batch(&dir, &s, &store, &settings(2), |e, d| fake.run(e, d)).unwrap();
+    batch(&dir, &s, &store, &common::executor(2), |e, d| {
+        fake.run(e, d)
+    })
+    .unwrap();
     let options = TrainOptions {
         settings: TrainSettings::with_seed(7),
         train_fraction: DEFAULT_TRAIN_FRACTION,
@@ -338,7 +342,10 @@ fn train_and_search_recover_the_fake_response_and_rerun_byte_identically() {
     // study's verification scene (the drum at 15 rpm, target 28 deg). The fake
     // DEM's angle at a centre is known (it ignores the rpm), so the table's
     // simulated angle, relative error and verdict are checked against it.
-    let checked = verify(&dir, &s, &store, &settings(2), 2, |e, d| fake.run(e, d)).unwrap();
+    let checked = verify(&dir, &s, &store, &common::executor(2), 2, |e, d| {
+        fake.run(e, d)
+    })
+    .unwrap();
     let candidates = found.clusters.len().min(2);
     assert_eq!(checked.rows.len(), 2 * candidates);
     for (k, row) in checked.rows.iter().enumerate() {
@@ -362,7 +369,10 @@ fn train_and_search_recover_the_fake_response_and_rerun_byte_identically() {
     let first = common::snapshot(dir.path());
     train_study(&dir, &s, &options).unwrap();
     search(&dir, &s, &SearchSettings::with_seed(7)).unwrap();
-    verify(&dir, &s, &store, &settings(1), 2, |e, d| fake.run(e, d)).unwrap();
+    verify(&dir, &s, &store, &common::executor(1), 2, |e, d| {
+        fake.run(e, d)
+    })
+    .unwrap();
     assert_eq!(first, common::snapshot(dir.path()));
 }
 
@@ -373,7 +383,10 @@ fn each_stage_names_the_stage_to_run_first() {
     let store = Store::open(tmp.path().join("store")).unwrap();
     let dir = StudyDir::new(store.root(), &s, &path);
     let fake = Fake::new(&[]);
-    let err = batch(&dir, &s, &store, &settings(1), |e, d| fake.run(e, d)).unwrap_err();
+    let err = batch(&dir, &s, &store, &common::executor(1), |e, d| {
+        fake.run(e, d)
+    })
+    .unwrap_err();
     assert!(matches!(
         &err,
         StudyError::MissingStage { stage, .. } if stage == Stage::Sample.name()
@@ -405,7 +418,7 @@ fn a_real_drum_design_runs_end_to_end() {
     let store = Store::open(tmp.path().join("store")).unwrap();
     let dir = StudyDir::new(store.root(), &s, &path);
     sample(&dir, &s, &SampleSettings::default()).unwrap();
-    let out = batch(&dir, &s, &store, &settings(2), |e, d| {
+    let out = batch(&dir, &s, &store, &common::executor(2), |e, d| {
         run_experiment(e, Some(&d.mcap_path()))
     })
     .unwrap();
@@ -432,7 +445,10 @@ fn sampled_and_batched(tmp: &Path) -> (Study, Store, StudyDir) {
     let dir = StudyDir::new(store.root(), &s, &path);
     sample(&dir, &s, &SampleSettings::default()).unwrap();
     let fake = Fake::new(&[]);
-    batch(&dir, &s, &store, &settings(1), |e, d| fake.run(e, d)).unwrap();
+    batch(&dir, &s, &store, &common::executor(1), |e, d| {
+        fake.run(e, d)
+    })
+    .unwrap();
     (s, store, dir)
 }
 
@@ -464,7 +480,10 @@ fn an_edited_stage_output_is_refused_not_trusted() {
         "{err}"
     );
     assert!(err.contains("rerun `repose batch`"), "{err}");
-    batch(&dir, &s, &store, &settings(1), |e, d| fake.run(e, d)).unwrap();
+    batch(&dir, &s, &store, &common::executor(1), |e, d| {
+        fake.run(e, d)
+    })
+    .unwrap();
     assert_eq!(std::fs::read_to_string(&angles).unwrap(), original);
     train_study(&dir, &s, &options).unwrap();
 }
@@ -493,7 +512,7 @@ fn a_damaged_run_is_recomputed_by_the_next_batch_not_trusted() {
 
     let seen = Mutex::new(Vec::new());
     let again = Fake::new(&[]);
-    let out = batch(&dir, &s, &store, &settings(2), |e, d| {
+    let out = batch(&dir, &s, &store, &common::executor(2), |e, d| {
         seen.lock().unwrap().push(e.seeds.sample_index);
         again.run(e, d)
     })
@@ -528,7 +547,10 @@ fn a_verification_scene_that_cannot_measure_an_angle_is_a_failed_candidate() {
     let dir = StudyDir::new(store.root(), &s, &path);
     sample(&dir, &s, &SampleSettings::default()).unwrap();
     let fake = Fake::new(&[]);
-    batch(&dir, &s, &store, &settings(2), |e, d| fake.run(e, d)).unwrap();
+    batch(&dir, &s, &store, &common::executor(2), |e, d| {
+        fake.run(e, d)
+    })
+    .unwrap();
     let options = TrainOptions {
         settings: TrainSettings::with_seed(7),
         train_fraction: DEFAULT_TRAIN_FRACTION,
@@ -567,7 +589,7 @@ fn a_verification_scene_that_cannot_measure_an_angle_is_a_failed_candidate() {
         }
         Ok(fake.run(e, d).unwrap())
     };
-    let checked = verify(&dir, &s, &store, &settings(2), 2, runner).unwrap();
+    let checked = verify(&dir, &s, &store, &common::executor(2), 2, runner).unwrap();
     let candidates = found.clusters.len().min(2);
     assert_eq!(checked.rows.len(), 2 * candidates);
     let reason = "drum: static angle: not measurable: drum free surface has 2 \

@@ -11,7 +11,6 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use repose::exec::Executor;
 use repose::manifest::{parse_study, Experiment, SizeDistribution, Study};
 use repose::store::{RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
@@ -37,13 +36,7 @@ const BETA: f64 = 8.0;
 
 /// A fixed pseudo-random value of (seed, point) uniform on ±√3 σ.
 fn packing_noise(seed: u64, point: u64) -> f64 {
-    let mut x =
-        (seed ^ point.rotate_left(17)).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x5851_f42d_4c95_7f2d;
-    x ^= x >> 29;
-    x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x ^= x >> 32;
-    let u = (x >> 11) as f64 / (1u64 << 53) as f64;
-    (2.0 * u - 1.0) * 3f64.sqrt() * SIGMA
+    common::packing_noise(seed, point, SIGMA)
 }
 
 fn radius(e: &Experiment) -> f64 {
@@ -90,16 +83,6 @@ fn fidelity() -> Value {
     json!({ "fine_size": FINE_SIZE, "fine_points": 5, "fine_replicates": 3 })
 }
 
-fn pool(jobs: usize) -> Executor {
-    Executor {
-        jobs,
-        progress: false,
-        limits: Default::default(),
-        max_runs: repose::exec::DEFAULT_MAX_RUNS,
-        slurm: None,
-    }
-}
-
 fn calibrate(root: &Path, study: &Study, path: &Path, jobs: usize) -> CalibrationOutcome {
     let store = Store::open(root).unwrap();
     let dir = StudyDir::new(root, study, path);
@@ -114,7 +97,7 @@ fn calibrate(root: &Path, study: &Study, path: &Path, jobs: usize) -> Calibratio
         &dir,
         study,
         &store,
-        &pool(jobs),
+        &common::executor(jobs),
         &options,
         fake,
         &mut |_| {},
@@ -351,9 +334,16 @@ fn the_fine_stage_says_what_is_wrong() {
     let (study, path) = study(tmp.path(), fidelity());
     let store = Store::open(tmp.path()).unwrap();
     let dir = StudyDir::new(tmp.path(), &study, &path);
-    let err = fine(&dir, &study, &store, &pool(1), &fake, &mut |_| {})
-        .unwrap_err()
-        .to_string();
+    let err = fine(
+        &dir,
+        &study,
+        &store,
+        &common::executor(1),
+        &fake,
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
     assert!(err.contains("repose train"), "{err}");
 
     // --adaptive is refused in a two-level study.
@@ -364,8 +354,16 @@ fn the_fine_stage_says_what_is_wrong() {
         train: TrainOptions::defaults(&study),
         search: SearchSettings::with_seed(study.design.seed),
     };
-    let err = calibrate_noise_aware(&dir, &study, &store, &pool(1), &options, fake, &mut |_| {})
-        .unwrap_err()
-        .to_string();
+    let err = calibrate_noise_aware(
+        &dir,
+        &study,
+        &store,
+        &common::executor(1),
+        &options,
+        fake,
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
     assert!(err.contains("--adaptive"), "{err}");
 }

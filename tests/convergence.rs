@@ -13,16 +13,6 @@ use repose::store::Store;
 use repose::study::convergence::plan::plan;
 use repose::study::convergence::{sweep, Analysis};
 
-fn pool(jobs: usize) -> repose::exec::Executor {
-    repose::exec::Executor {
-        jobs,
-        progress: false,
-        limits: repose::scenes::plan::Limits::default(),
-        max_runs: repose::exec::DEFAULT_MAX_RUNS,
-        slurm: None,
-    }
-}
-
 const MANIFEST: &str = "experiments/tradeoff/drum_tiny.json";
 
 /// The CSV without the measured columns (CPU and wall seconds per run).
@@ -65,7 +55,7 @@ fn a_tiny_drum_over_three_sizes() {
             &manifest,
             &plan,
             &analysis,
-            &pool(jobs),
+            &common::executor(jobs),
             &out,
         )
         .unwrap();
@@ -109,7 +99,7 @@ fn a_tiny_drum_over_three_sizes() {
             &manifest,
             &plan,
             &analysis,
-            &pool(jobs),
+            &common::executor(jobs),
             &out,
         )
         .unwrap();

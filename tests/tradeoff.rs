@@ -12,16 +12,6 @@ use repose::study::tradeoff::{report, run, summarise};
 
 const GOLDEN: &str = "golden/tradeoff_drum_tiny.csv";
 
-fn pool(jobs: usize) -> repose::exec::Executor {
-    repose::exec::Executor {
-        jobs,
-        progress: false,
-        limits: repose::scenes::plan::Limits::default(),
-        max_runs: repose::exec::DEFAULT_MAX_RUNS,
-        slurm: None,
-    }
-}
-
 fn base() -> repose::manifest::Experiment {
     read_experiment(&common::root().join("experiments/tradeoff/drum_tiny.json")).unwrap()
 }
@@ -137,7 +127,7 @@ fn sweep_of_the_step_fraction_on_a_tiny_drum() {
             "rayleigh_fraction=0.2"
         ]
     );
-    let outcomes = run(&store, &points, &pool(2)).unwrap();
+    let outcomes = run(&store, &points, &common::executor(2)).unwrap();
     let rows = summarise(&points, &outcomes);
     for r in &rows {
         assert_eq!((r.replicates, r.healthy), (2, 2), "{r:?}");
@@ -161,7 +151,10 @@ fn sweep_of_the_step_fraction_on_a_tiny_drum() {
     assert!(rows.iter().any(|r| r.pareto));
 
     // Re-running the sweep computes nothing new (cached by id).
-    let again = summarise(&points, &run(&store, &points, &pool(1)).unwrap());
+    let again = summarise(
+        &points,
+        &run(&store, &points, &common::executor(1)).unwrap(),
+    );
     for (a, b) in rows.iter().zip(&again) {
         assert_eq!(a.ids, b.ids);
         assert_eq!(a.wall_time_s, b.wall_time_s, "a cached run kept its timing");

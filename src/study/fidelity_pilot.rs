@@ -41,7 +41,7 @@ use crate::scenes::run_logged;
 use crate::stats::gp::GpSettings;
 use crate::stats::gp_two_level::{LevelData, TwoLevelGp};
 use crate::stats::summary::{mean_ci, MeanCi};
-use crate::store::{InputRef, Lineage, Store, TimingRecord};
+use crate::store::{InputRef, Lineage, Store};
 use crate::streams::{rng, Stream};
 
 /// `sample_index` of the pilot's first point (no other stage reaches it).
@@ -229,10 +229,7 @@ pub fn pilot(
         RunOutcome::Complete(r) => super::replicates::response_of(r, target).ok(),
         _ => None,
     };
-    let cpu = |e: &Experiment| -> Option<f64> {
-        let t: TimingRecord = Store::read_json(&store.run_dir(&e.id()).timing_path()).ok()?;
-        Some(t.thread_cpu_s.unwrap_or(t.wall_time_s))
-    };
+    let cpu = |e: &Experiment| super::fine::cpu_s(store, &e.id());
     let mut outcomes = collected.outcomes.iter();
     let mut points = Vec::new();
     for planned_point in &planned {

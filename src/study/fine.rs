@@ -501,7 +501,7 @@ fn pool_noise(points: &mut [FinePoint], runs: &[Replicated]) {
 }
 
 /// CPU-s of run `id` (its thread's CPU, or its wall time without one).
-fn cpu_s(store: &Store, id: &ContentId) -> Option<f64> {
+pub(crate) fn cpu_s(store: &Store, id: &ContentId) -> Option<f64> {
     let t: TimingRecord = Store::read_json(&store.run_dir(id).timing_path()).ok()?;
     Some(t.thread_cpu_s.unwrap_or(t.wall_time_s))
 }

@@ -31,7 +31,7 @@ use super::batch::replicates_path;
 use super::calibration::{parameter_names, to_unit, Stage};
 use super::dir::StudyDir;
 use super::fidelity_pilot::Pilot;
-use super::fine::{fidelity, FinePredictor};
+use super::fine::{cpu_s, fidelity, FinePredictor};
 use super::noise::noise_runs_path;
 use super::replicates::read_replicates_csv;
 use super::StudyError;
@@ -39,7 +39,7 @@ use crate::manifest::{SizeDistribution, Study};
 use crate::report::markdown::{Align, MarkdownTable};
 use crate::stats::gp::GpPrediction;
 use crate::stats::summary::mean_ci;
-use crate::store::{Store, TimingRecord};
+use crate::store::Store;
 
 /// 97.5 % normal quantile.
 const Z95: f64 = 1.959_963_984_540_054;
@@ -212,9 +212,7 @@ fn training_cost(dir: &StudyDir, study: &Study, store: &Store) -> Result<(usize,
             .flat_map(|p| &p.runs)
         {
             runs += 1;
-            let t: Option<TimingRecord> =
-                Store::read_json(&store.run_dir(&r.id).timing_path()).ok();
-            cpu += t.map_or(0.0, |t| t.thread_cpu_s.unwrap_or(t.wall_time_s));
+            cpu += cpu_s(store, &r.id).unwrap_or(0.0);
         }
     }
     Ok((runs, cpu))

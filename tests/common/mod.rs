@@ -289,3 +289,29 @@ pub fn assert_figure(r: &repose::store::RunResult, name: &str, value: f64, unres
     assert_eq!(warned, unresolved, "{name}: {:?}", r.warnings);
     assert_eq!(figure.violation().is_some(), unresolved, "{name}");
 }
+
+/// A local executor of `jobs` workers without progress bars, default limits
+/// and run cap: how the study tests run their stages.
+pub fn executor(jobs: usize) -> repose::exec::Executor {
+    repose::exec::Executor {
+        jobs,
+        progress: false,
+        limits: Default::default(),
+        max_runs: repose::exec::DEFAULT_MAX_RUNS,
+        slurm: None,
+    }
+}
+
+/// The packing noise of a fake run: a fixed pseudo-random value of its
+/// packing seed and its point, uniform on ±√3 σ (so its standard deviation
+/// is `sigma`), independent between points as a pile's chaotic history makes
+/// it even from the same packing.
+pub fn packing_noise(seed: u64, point: u64, sigma: f64) -> f64 {
+    let mut x =
+        (seed ^ point.rotate_left(17)).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x5851_f42d_4c95_7f2d;
+    x ^= x >> 29;
+    x = x.wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x ^= x >> 32;
+    let u = (x >> 11) as f64 / (1u64 << 53) as f64;
+    (2.0 * u - 1.0) * 3f64.sqrt() * sigma
+}
