@@ -156,6 +156,8 @@ pub enum Stage {
         levels: u64,
         /// Seeds per level.
         replicates: u32,
+        /// Scenes each level runs in.
+        scenes: Vec<String>,
     },
     /// The design of experiments.
     Design {
@@ -267,8 +269,13 @@ impl Stage {
         match self {
             Stage::Noise { seeds } => u64::from(*seeds),
             Stage::Screen {
-                levels, replicates, ..
-            } => levels.saturating_mul(u64::from(*replicates)),
+                levels,
+                replicates,
+                scenes,
+                ..
+            } => levels
+                .saturating_mul(u64::from(*replicates))
+                .saturating_mul(scenes.len() as u64),
             Stage::Simulate {
                 scenes,
                 points,
@@ -435,6 +442,7 @@ impl StudySpec {
                 factors: s.factors.len(),
                 levels: s.factors.values().map(|f| f.levels.len() as u64).sum(),
                 replicates: s.replicates,
+                scenes: scenes.clone(),
             });
         }
         stages.push(Stage::Design {
@@ -576,9 +584,11 @@ impl StudySpec {
                     factors,
                     levels,
                     replicates,
+                    scenes,
                 } => format!(
-                    "{factors} factor(s) one at a time, {levels} level(s), {replicates} seed(s) \
-                     per level"
+                    "{factors} factor(s) one at a time, {levels} level(s) x scenes {} x \
+                     {replicates} seed(s) per level",
+                    scenes.join(", ")
                 ),
                 Stage::Design { design, factors } => {
                     format!("{} over {factors} factor(s)", word(design))
