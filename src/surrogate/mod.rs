@@ -8,6 +8,9 @@
 //!   algorithm then Levenberg–Marquardt (no predictive sd);
 //! - [`gp`]: a Gaussian process with a Matérn 5/2 kernel on the unit cube of
 //!   the ranges ([`crate::stats::gp`]); its sd is the latent (mean) sd;
+//! - [`two_level`]: the two-level (multi-fidelity) Gaussian process of the
+//!   fine level, given the coarse level's rows
+//!   ([`crate::stats::gp_two_level`]); its sd is the fine level's latent sd;
 //! - [`quadratic`]: the full quadratic response surface in coded units
 //!   ([`crate::stats::rsm`], cai2024) (no predictive sd);
 //! - [`power_law`]: yan2015's y = A·Πxⱼ^bⱼ by nonlinear least squares
@@ -24,6 +27,7 @@ pub mod ga_bp;
 pub mod gp;
 pub mod power_law;
 pub mod quadratic;
+pub mod two_level;
 
 /// The data a surrogate is fitted on: one row per design point.
 #[derive(Debug, Clone, Copy)]
@@ -223,5 +227,21 @@ mod tests {
         exercise::<quadratic::Quadratic>(&(), 0.25);
         exercise::<gp::Gp>(&crate::stats::gp::GpSettings::default(), 0.25);
         exercise::<ga_bp::Model>(&ga_bp::GaBpSettings::default(), 0.5);
+        // The two-level process's coarse level: 0.8 × the truth − 3 on a
+        // 9 × 9 grid, so the fine level is the coarse one rescaled (ρ =
+        // 1.25, β = 3.75) and δ = 0; it predicts the fine truth as closely
+        // as the one-level GP on the same fine grid.
+        let levels: Vec<f64> = (0..9).map(|i| 0.5 + 1.5 * i as f64 / 8.0).collect();
+        let coarse_x: Vec<Vec<f64>> = levels
+            .iter()
+            .flat_map(|&a| levels.iter().map(move |&b| vec![a, b]))
+            .collect();
+        let settings = two_level::TwoLevelSettings {
+            coarse_y: coarse_x.iter().map(|r| 0.8 * truth(r) - 3.0).collect(),
+            coarse_noise_var: vec![0.0; coarse_x.len()],
+            coarse_x,
+            gp: crate::stats::gp::GpSettings::default(),
+        };
+        exercise::<two_level::TwoLevel>(&settings, 0.25);
     }
 }
