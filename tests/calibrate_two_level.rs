@@ -153,15 +153,14 @@ fn a_two_level_calibration_verifies_at_the_fine_size_and_reproduces() {
         assert_eq!(p.predicted_sd_deg.is_some(), k >= SPACE_FILLING_POINTS);
     }
     let mut indices: Vec<u64> = fine_record.points.iter().map(|p| p.index).collect();
-    indices.dedup();
     indices.sort_unstable();
     indices.dedup();
     assert_eq!(indices.len(), 5);
     assert_eq!(outcome.runs.fine, 15);
 
     // ρ and β are recovered within their 95 % intervals.
-    let (rho, rho_se) = fine_record.rho;
-    let (beta, beta_se) = fine_record.beta;
+    let (rho, rho_se) = fine_record.fit.rho;
+    let (beta, beta_se) = fine_record.fit.beta;
     assert!(
         (rho - RHO).abs() <= 1.96 * rho_se,
         "rho {rho} ± {rho_se} against {RHO}"

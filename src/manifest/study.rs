@@ -278,6 +278,11 @@ impl Study {
         Ok(walls.into_iter().map(|wall| Slot { wall, field }).collect())
     }
 
+    /// The fine level of a two-level study (`noise_aware.fidelity`).
+    pub fn fidelity(&self) -> Option<Fidelity> {
+        self.noise_aware.and_then(|n| n.fidelity)
+    }
+
     /// Packing seeds per design point (1 without `noise_aware`).
     pub fn replicates(&self) -> u32 {
         self.noise_aware.map_or(1, |n| n.replicates)

@@ -142,6 +142,14 @@ pub struct GpHyper {
     pub mean: f64,
 }
 
+impl GpHyper {
+    /// Free parameters: the signal variance, one length scale per input and
+    /// the nugget when fitted.
+    pub fn parameter_count(&self) -> usize {
+        1 + self.length_scales.len() + usize::from(self.nugget_var > 0.0)
+    }
+}
+
 /// Prediction of the latent function at one input.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GpPrediction {

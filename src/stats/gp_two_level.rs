@@ -47,8 +47,10 @@
 //! across runs.
 
 use nalgebra::{DVector, Matrix2, Vector2};
+use serde::{Deserialize, Serialize};
 
 use super::gp::{GaussianProcess, GpError, GpHyper, GpPrediction, GpSettings};
+use super::summary::Z95;
 
 /// One level's data: points in the unit cube, outputs and their known noise
 /// variances (output units squared).
@@ -84,6 +86,36 @@ pub enum TwoLevelError {
         /// What made it singular.
         reason: String,
     },
+}
+
+/// A fitted two-level process's coefficients, for reports.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TwoLevelFit {
+    /// ρ and its standard error.
+    pub rho: (f64, f64),
+    /// β (δ's mean, response units) and its standard error.
+    pub beta: (f64, f64),
+    /// δ's prior standard deviation √σ_f² (response units).
+    pub delta_sd: f64,
+    /// The coarse process's prior standard deviation, for scale.
+    pub coarse_sd: f64,
+}
+
+impl TwoLevelFit {
+    /// One sentence: ρ and β with normal 95 % intervals, δ's prior sd
+    /// beside the coarse process's.
+    pub fn describe(&self) -> String {
+        format!(
+            "y_fine = ρ·y_coarse + δ: ρ = {:.3} ± {:.3} (95 %, normal, δ's hyperparameters as \
+             fitted), β = {:.2} ± {:.2}, δ's prior sd {:.2} against the coarse process's {:.2}.",
+            self.rho.0,
+            Z95 * self.rho.1,
+            self.beta.0,
+            Z95 * self.beta.1,
+            self.delta_sd,
+            self.coarse_sd
+        )
+    }
 }
 
 /// A fitted two-level process (see the module docs).
@@ -245,6 +277,18 @@ impl TwoLevelGp {
             self.coefficients_cov[(0, 0)].max(0.0).sqrt(),
             self.coefficients_cov[(1, 1)].max(0.0).sqrt(),
         )
+    }
+
+    /// ρ, β with their standard errors and both levels' prior sd.
+    pub fn summary(&self) -> TwoLevelFit {
+        let (se_rho, se_beta) = self.standard_errors();
+        let (coarse, delta) = self.hyper();
+        TwoLevelFit {
+            rho: (self.rho(), se_rho),
+            beta: (self.beta(), se_beta),
+            delta_sd: delta.signal_var.sqrt(),
+            coarse_sd: coarse.signal_var.sqrt(),
+        }
     }
 
     /// The hyperparameters of the coarse process and of δ (δ's mean is β).

@@ -67,6 +67,9 @@ pub struct MeanCi {
     pub half_width: f64,
 }
 
+/// z of a two-sided 95 % normal interval (the 97.5 % normal quantile).
+pub const Z95: f64 = 1.959_963_984_540_054;
+
 /// [`MeanCi`] of `values`; `None` for fewer than two values (no spread, so no
 /// interval).
 pub fn mean_ci(values: &[f64]) -> Option<MeanCi> {

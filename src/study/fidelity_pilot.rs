@@ -39,7 +39,7 @@ use crate::manifest::{ContentId, Experiment, Study};
 use crate::report::markdown::{Align, MarkdownTable};
 use crate::scenes::run_logged;
 use crate::stats::gp::GpSettings;
-use crate::stats::gp_two_level::{LevelData, TwoLevelGp};
+use crate::stats::gp_two_level::{LevelData, TwoLevelFit, TwoLevelGp};
 use crate::stats::summary::{mean_ci, MeanCi};
 use crate::store::{InputRef, Lineage, Store};
 use crate::streams::{rng, Stream};
@@ -93,19 +93,6 @@ pub struct Pilot {
     pub correlation: Option<f64>,
     /// The two-level fit, or why there is none.
     pub fit: Result<TwoLevelFit, String>,
-}
-
-/// The two-level process's coefficients.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
-pub struct TwoLevelFit {
-    /// ρ and its standard error.
-    pub rho: (f64, f64),
-    /// β (δ's mean, response units) and its standard error.
-    pub beta: (f64, f64),
-    /// δ's prior standard deviation √σ_f² (response units).
-    pub delta_sd: f64,
-    /// The coarse process's prior standard deviation, for scale.
-    pub coarse_sd: f64,
 }
 
 /// The target scene named `name` (`calibration` is the calibration scene).
@@ -358,14 +345,7 @@ fn fit(unit: &[Vec<f64>], points: &[PilotPoint], seed: u64) -> Result<TwoLevelFi
         &settings,
     )
     .map_err(|e| e.to_string())?;
-    let (se_rho, se_beta) = gp.standard_errors();
-    let (coarse, delta) = gp.hyper();
-    Ok(TwoLevelFit {
-        rho: (gp.rho(), se_rho),
-        beta: (gp.beta(), se_beta),
-        delta_sd: delta.signal_var.sqrt(),
-        coarse_sd: coarse.signal_var.sqrt(),
-    })
+    Ok(gp.summary())
 }
 
 fn cell(v: &[f64]) -> String {
@@ -406,18 +386,7 @@ pub fn markdown(p: &Pilot) -> String {
     );
     match &p.fit {
         Ok(f) => {
-            let _ = writeln!(
-                out,
-                "\ny_fine = ρ·y_coarse + δ: ρ = {:.3} ± {:.3} (95 %, normal, δ's hyperparameters \
-                 as fitted), β = {:.2} ± {:.2}, δ's prior sd {:.2} against the coarse process's \
-                 {:.2}.",
-                f.rho.0,
-                1.96 * f.rho.1,
-                f.beta.0,
-                1.96 * f.beta.1,
-                f.delta_sd,
-                f.coarse_sd
-            );
+            let _ = writeln!(out, "\n{}", f.describe());
         }
         Err(why) => {
             let _ = writeln!(out, "\nNo two-level fit: {why}");

@@ -71,7 +71,7 @@ use crate::manifest::ContentId;
 use crate::manifest::{Experiment, Fidelity, Study};
 use crate::report::markdown::{Align, MarkdownTable};
 use crate::stats::gp::{GaussianProcess, GpHyper, GpPrediction, GpSettings};
-use crate::stats::gp_two_level::{LevelData, TwoLevelGp};
+use crate::stats::gp_two_level::{LevelData, TwoLevelFit, TwoLevelGp};
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store, TimingRecord};
 
@@ -133,16 +133,11 @@ pub struct TwoLevelRecord {
     pub parameters: Vec<String>,
     /// The fine points in the order they were chosen.
     pub points: Vec<FinePoint>,
-    /// ρ and its standard error.
-    pub rho: (f64, f64),
-    /// β (degrees) and its standard error.
-    pub beta: (f64, f64),
+    /// ρ, β (degrees) and the levels' prior sd (degrees).
+    #[serde(flatten)]
+    pub fit: TwoLevelFit,
     /// δ's hyperparameters.
     pub delta: DeltaHyper,
-    /// δ's prior sd √σ_f² beside the coarse process's (degrees).
-    pub delta_sd_deg: f64,
-    /// The coarse process's prior sd (degrees).
-    pub coarse_sd_deg: f64,
 }
 
 /// `fine/cost.json`: CPU-s per level.
@@ -176,7 +171,7 @@ pub struct FineOutcome {
 
 /// The study's fidelity block, or why the stage cannot run.
 pub fn fidelity(study: &Study) -> Result<Fidelity, StudyError> {
-    study.noise_aware.and_then(|n| n.fidelity).ok_or_else(|| {
+    study.fidelity().ok_or_else(|| {
         StudyError::Settings(
             "the study has no noise_aware.fidelity block: the fine stage is for two-level \
                  studies"
@@ -188,10 +183,7 @@ pub fn fidelity(study: &Study) -> Result<Fidelity, StudyError> {
 /// The particle size factor of a study's search and verification: the fine
 /// level's when it has one, else 1.
 pub fn verified_size(study: &Study) -> f64 {
-    study
-        .noise_aware
-        .and_then(|n| n.fidelity)
-        .map_or(1.0, |f| f.fine_size)
+    study.fidelity().map_or(1.0, |f| f.fine_size)
 }
 
 /// `fine/two_level.json`.
@@ -244,7 +236,7 @@ pub enum FinePredictor {
 impl FinePredictor {
     /// The study's predictor, read from its train (and fine) stage.
     pub fn of(dir: &StudyDir, study: &Study) -> Result<FinePredictor, StudyError> {
-        Ok(if verified_size(study) != 1.0 {
+        Ok(if study.fidelity().is_some() {
             FinePredictor::TwoLevel(Box::new(load_two_level(dir)?))
         } else {
             FinePredictor::OneLevel(read_gp(dir)?.process()?)
@@ -407,8 +399,8 @@ where
             false,
         )?;
         for ((i, choice, sd), r) in round.into_iter().zip(done) {
-            let summary = mean_ci(&r.values());
-            let n = r.values().len();
+            let values = r.values();
+            let summary = mean_ci(&values);
             log(&format!(
                 "fine: design point {} ({choice:?}{}): {}",
                 r.index,
@@ -427,7 +419,7 @@ where
                 coarse_mean_deg: design[i].mean(),
                 seeds: r.runs.len(),
                 mean_deg: summary.as_ref().map(|m| m.mean),
-                measured: n,
+                measured: values.len(),
                 noise_var: None,
             });
             chosen.push(i);
@@ -441,21 +433,17 @@ where
             points.len()
         ))
     })?;
-    let (rho_se, beta_se) = fitted.standard_errors();
-    let (coarse_hyper, delta_hyper) = fitted.hyper();
+    let delta_hyper = fitted.hyper().1;
     let record = TwoLevelRecord {
         fidelity: spec,
         parameters: parameter_names(study),
         points,
-        rho: (fitted.rho(), rho_se),
-        beta: (fitted.beta(), beta_se),
+        fit: fitted.summary(),
         delta: DeltaHyper {
             signal_var: delta_hyper.signal_var,
             length_scales: delta_hyper.length_scales.clone(),
             nugget_var: delta_hyper.nugget_var,
         },
-        delta_sd_deg: delta_hyper.signal_var.sqrt(),
-        coarse_sd_deg: coarse_hyper.signal_var.sqrt(),
     };
     let cost = level_cost(store, &design, &runs);
     let markdown = markdown(&record, cost.coarse_runs);
@@ -562,15 +550,9 @@ fn markdown(r: &TwoLevelRecord, design_runs: usize) -> String {
     let fine_runs: usize = r.points.iter().map(|p| p.seeds).sum();
     let _ = write!(
         s,
-        "\nρ = {:.3} ± {:.3} (95 %), β = {:.2} ± {:.2}° (95 %); δ's prior sd {:.2}° against the \
-         coarse process's {:.2}°.\n\nRuns: {design_runs} coarse (the design), {fine_runs} fine; \
-         their CPU-s are in cost.json.\n",
-        r.rho.0,
-        1.96 * r.rho.1,
-        r.beta.0,
-        1.96 * r.beta.1,
-        r.delta_sd_deg,
-        r.coarse_sd_deg
+        "\n{}\n\nRuns: {design_runs} coarse (the design), {fine_runs} fine; their CPU-s are in \
+         cost.json.\n",
+        r.fit.describe()
     );
     s
 }

@@ -115,10 +115,8 @@ use crate::search::screen::{main_effects, MainEffect};
 use crate::stats::gp::{GaussianProcess, GpHyper, GpSettings};
 use crate::stats::homogeneity::bartlett;
 use crate::stats::metrics::{mse, noise_ceiling, r_squared, seeds_for_ceiling, NoiseCeiling};
+use crate::stats::summary::Z95;
 use crate::store::Store;
-
-/// z of a two-sided 95 % normal interval.
-const Z95: f64 = 1.959_963_984_540_054;
 
 /// Significance level of the homogeneity test below which the rows' noise
 /// becomes per point (see the module docs).

@@ -31,18 +31,15 @@ use super::batch::replicates_path;
 use super::calibration::{parameter_names, to_unit, Stage};
 use super::dir::StudyDir;
 use super::fidelity_pilot::Pilot;
-use super::fine::{cpu_s, fidelity, FinePredictor};
+use super::fine::{cpu_s, FinePredictor};
 use super::noise::noise_runs_path;
 use super::replicates::read_replicates_csv;
 use super::StudyError;
 use crate::manifest::{SizeDistribution, Study};
 use crate::report::markdown::{Align, MarkdownTable};
 use crate::stats::gp::GpPrediction;
-use crate::stats::summary::mean_ci;
+use crate::stats::summary::{mean_ci, Z95};
 use crate::store::Store;
-
-/// 97.5 % normal quantile.
-const Z95: f64 = 1.959_963_984_540_054;
 
 /// One held-out point.
 #[derive(Debug, Clone, Serialize)]
@@ -135,11 +132,9 @@ pub fn holdout(
     pilot_study: &Study,
 ) -> Result<Holdout, StudyError> {
     let (r_model, r_pilot) = (radius(study)?, radius(pilot_study)?);
-    let two_level = study.noise_aware.and_then(|n| n.fidelity).is_some();
     // The model study's stated particle relative to the pilot study's.
     let own = r_model / r_pilot;
-    if two_level {
-        let f = fidelity(study)?;
+    if let Some(f) = study.fidelity() {
         if (own - 1.0).abs() > 1e-9 || (f.fine_size - pilot.fine_factor).abs() > 1e-9 {
             return Err(StudyError::Settings(format!(
                 "{}: a two-level study is compared at the pilot's sizes: its particle must be \
@@ -184,7 +179,12 @@ pub fn holdout(
     let (training_runs, training_cpu_s) = training_cost(dir, study, store)?;
     Ok(Holdout {
         study: format!("{} ({})", study.name, dir.id().short(12)),
-        model: if two_level { "two_level" } else { "gp" }.into(),
+        model: if model.is_two_level() {
+            "two_level"
+        } else {
+            "gp"
+        }
+        .into(),
         points,
         rmse,
         mean_z2,

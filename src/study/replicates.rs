@@ -170,12 +170,9 @@ where
             let e = study
                 .replicate_experiment(&target.scene, &values, *index, r)
                 .map_err(invalid)?;
-            let e = if size == 1.0 {
-                e
-            } else {
-                scaled(&e, size, Some(SurfaceEnergyRule::ConstantBond)).map_err(invalid)?
-            };
-            experiments.push(e);
+            // Size 1 leaves the experiment as it is (same id).
+            experiments
+                .push(scaled(&e, size, Some(SurfaceEnergyRule::ConstantBond)).map_err(invalid)?);
         }
     }
     let retry = if retry_failed {

@@ -254,7 +254,7 @@ where
     // A two-level study verifies at the fine size, where the noise floor
     // (measured at the study's size) says nothing of the seeds needed.
     let size = verified_size(study);
-    let noise_sd = if size == 1.0 {
+    let noise_sd = if study.fidelity().is_none() {
         read_noise(dir).ok().and_then(|f| f.sd_deg)
     } else {
         None

@@ -37,16 +37,11 @@ impl Surrogate for Gp {
     }
 
     fn predict(&self, x: &[f64]) -> Prediction {
-        let p = self.process.predict(&to_unit(x, &self.ranges));
-        Prediction {
-            mean: p.mean,
-            sd: Some(p.sd),
-        }
+        self.process.predict(&to_unit(x, &self.ranges)).into()
     }
 
     /// Signal variance, one length scale per input, the nugget when fitted.
     fn parameter_count(&self) -> usize {
-        let h = self.process.hyper();
-        1 + h.length_scales.len() + usize::from(h.nugget_var > 0.0)
+        self.process.hyper().parameter_count()
     }
 }

@@ -111,6 +111,16 @@ pub struct Prediction {
     pub sd: Option<f64>,
 }
 
+impl From<crate::stats::gp::GpPrediction> for Prediction {
+    /// A Gaussian process's mean and latent sd.
+    fn from(p: crate::stats::gp::GpPrediction) -> Prediction {
+        Prediction {
+            mean: p.mean,
+            sd: Some(p.sd),
+        }
+    }
+}
+
 /// Why a surrogate could not be fitted.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SurrogateError {

@@ -75,20 +75,13 @@ impl Surrogate for TwoLevel {
     }
 
     fn predict(&self, x: &[f64]) -> Prediction {
-        let p = self.process.predict(&to_unit(x, &self.ranges));
-        Prediction {
-            mean: p.mean,
-            sd: Some(p.sd),
-        }
+        self.process.predict(&to_unit(x, &self.ranges)).into()
     }
 
     /// Each level's signal variance, length scales and fitted nugget, and
     /// ρ and β.
     fn parameter_count(&self) -> usize {
         let (coarse, delta) = self.process.hyper();
-        let count = |h: &crate::stats::gp::GpHyper| {
-            1 + h.length_scales.len() + usize::from(h.nugget_var > 0.0)
-        };
-        count(coarse) + count(delta) + 2
+        coarse.parameter_count() + delta.parameter_count() + 2
     }
 }
