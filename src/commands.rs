@@ -26,7 +26,7 @@ use crate::store::{
 };
 use crate::study::batch::batch as run_batch;
 use crate::study::calibration::Stage;
-use crate::study::convergence::{self, plan::plan as size_plan, SurfaceEnergyRule};
+use crate::study::convergence;
 use crate::study::dir::StudyDir;
 use crate::study::fidelity_pilot::{self, PilotSpec};
 use crate::study::fine::fine as run_fine;
@@ -39,7 +39,7 @@ use crate::study::pipeline::{
 };
 use crate::study::probability_search::gp_search;
 use crate::study::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
-use crate::study::spec::{is_design_study, parse_design_study, read_design_study, DesignStudy};
+use crate::study::spec::{is_design_study, parse_design_study, DesignStudy};
 use crate::study::stages::{
     default_candidates, Analysis, Method, Stage as ClassicStage, StudyFile, StudySpec,
 };
@@ -253,8 +253,13 @@ fn manifest_error(path: &Path) -> impl FnOnce(ManifestError) -> CommandError + '
 /// (the scene-and-physics rules of [`crate::scenes::plan`]).
 fn read_checked(path: &Path, kind: KindArg) -> Result<Document, ManifestError> {
     let doc = read_document(path, kind.kind())?;
-    if let Document::Experiment(e) = &doc {
-        plan_run(e).map_err(ManifestError::Invalid)?;
+    match &doc {
+        Document::Experiment(e) => {
+            plan_run(e).map_err(ManifestError::Invalid)?;
+        }
+        Document::Study(s) => {
+            StudyFile::Calibration(s.clone()).spec(None, false)?;
+        }
     }
     Ok(doc)
 }
@@ -270,7 +275,7 @@ fn read_planned(path: &Path) -> Result<(Experiment, RunPlan), CommandError> {
 /// `repose hash FILE`: prints the content id of a valid manifest.
 pub fn hash(path: &Path, kind: KindArg, out: &mut dyn Write) -> Result<(), CommandError> {
     if kind != KindArg::Experiment && is_design_study_file(path) {
-        let study = read_design_study(path).map_err(manifest_error(path))?;
+        let study = StudyFile::read(path).map_err(manifest_error(path))?;
         writeln!(out, "{}", study.id())?;
         return Ok(());
     }
@@ -311,7 +316,7 @@ pub fn validate(
 fn validate_one(path: &Path, kind: KindArg) -> Result<String, String> {
     let ok = |kind: &str, id: ContentId| format!("ok {kind} {id} {}", path.display());
     if kind != KindArg::Experiment && is_design_study_file(path) {
-        return read_design_study(path)
+        return StudyFile::read(path)
             .map(|study| ok("design-study", study.id()))
             .map_err(|error| describe(path, &error));
     }
@@ -635,19 +640,8 @@ pub fn tradeoff(
 /// Options of `repose convergence`.
 #[derive(Debug, Clone)]
 pub struct ConvergenceOptions {
-    /// Size factors relative to the base's particle (1 = the base).
-    pub factors: Vec<f64>,
-    /// Replicates (packing seeds) per size, ≥ 2.
-    pub replicates: usize,
-    /// How Γ follows the size for a base without coarse graining.
-    pub rule: Option<SurfaceEnergyRule>,
-    /// The real particle's radius, m, for a base without coarse graining.
-    pub real_radius_m: Option<f64>,
-    /// Responses and tolerance.
-    pub analysis: convergence::Analysis,
-    /// Output directory (default `<store>/convergence/<first 12 hex of the
-    /// base id>`).
-    pub out_dir: Option<PathBuf>,
+    /// The sweep.
+    pub request: convergence::SweepRequest,
     /// Print the analysis as JSON instead of Markdown.
     pub json: bool,
 }
@@ -663,38 +657,9 @@ pub fn convergence(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
-    let plan = size_plan(
-        &base,
-        &options.factors,
-        options.replicates,
-        options.rule,
-        options.real_radius_m,
-    )
-    .map_err(|e| CommandError::Usage(e.to_string()))?;
-    let levels = plan.levels.len() as u64;
-    StudySpec::convergence(
-        &manifest.display().to_string(),
-        base.id(),
-        levels,
-        options.replicates as u64,
-    )
-    .check_runs(exec.max_runs)
-    .map_err(CommandError::Usage)?;
     let store = open_store(store_root)?;
-    let out_dir = options
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| convergence::default_dir(&store, &base));
-    let pool = exec.in_study(&out_dir);
-    let done = convergence::sweep(
-        &store,
-        &base,
-        manifest,
-        &plan,
-        &options.analysis,
-        &pool,
-        &out_dir,
-    )?;
+    let (done, out_dir) =
+        convergence::plan_and_sweep(&store, &base, manifest, &options.request, exec)?;
     if options.json {
         return print_json(&done.convergence, out);
     }
@@ -765,10 +730,15 @@ pub fn learning_curve(
     Ok(())
 }
 
-/// Reads and validates a study manifest.
+/// Reads and validates a study manifest, with the stages it spells.
 fn read_study(path: &Path) -> Result<Study, CommandError> {
     match read_document(path, Some(DocumentKind::Study)).map_err(manifest_error(path))? {
-        Document::Study(study) => Ok(study),
+        Document::Study(study) => {
+            StudyFile::Calibration(study.clone())
+                .spec(None, false)
+                .map_err(manifest_error(path))?;
+            Ok(study)
+        }
         Document::Experiment(_) => unreachable!("read as a study"),
     }
 }
@@ -1197,13 +1167,15 @@ fn is_design_study_file(path: &Path) -> bool {
 /// ([`crate::study::stages::StudySpec`]), as text or JSON.
 pub fn stages(
     path: &Path,
-    analysis: Analysis,
+    analysis: Option<Analysis>,
     adaptive: bool,
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let document = StudyFile::read(path).map_err(manifest_error(path))?;
-    let spec = StudySpec::of(&document, analysis, adaptive);
+    let spec = document
+        .spec(analysis, adaptive)
+        .map_err(manifest_error(path))?;
     if json {
         return print_json(&spec, out);
     }
@@ -1323,7 +1295,9 @@ fn open_design_run(
     exec: &Executor,
 ) -> Result<(DesignStudy, Store, Executor), CommandError> {
     let (study, store) = open_design_study(store_root, path)?;
-    StudySpec::design(&study, analysis)
+    StudyFile::Design(study.clone())
+        .spec(Some(analysis), false)
+        .map_err(manifest_error(path))?
         .check_runs(exec.max_runs)
         .map_err(CommandError::Usage)?;
     let exec = exec.in_study(&study::dir::StudyDir::path_in(store_root, &study));
@@ -1346,6 +1320,9 @@ fn open_design_study(store_root: &Path, path: &Path) -> Result<(DesignStudy, Sto
         )));
     }
     let study = parse_design_study(&text).map_err(manifest_error(path))?;
+    StudyFile::Design(study.clone())
+        .spec(None, false)
+        .map_err(manifest_error(path))?;
     let store = open_store(store_root)?;
     sweep_old_temps(&study::dir::StudyDir::path_in(store_root, &study))?;
     set_quiet(true);
@@ -1517,28 +1494,23 @@ pub fn calibrate(
         None => write_default_study(store_root, flags.json, out)?,
     };
     let study = read_study(&path)?;
-    let candidates_or_default = candidates.unwrap_or_else(|| default_candidates(&study));
-    StudySpec::calibration(&study, flags.adaptive, candidates_or_default)
+    // `adaptive` among the file's stages is `--adaptive`.
+    let adaptive = flags.adaptive || study.stages.iter().any(|s| s == "adaptive");
+    let flags = CalibrateFlags { adaptive, ..flags };
+    let candidates = candidates.unwrap_or_else(|| default_candidates(&study));
+    StudySpec::calibration(&study, adaptive, candidates)
         .check_runs(exec.max_runs)
         .map_err(CommandError::Usage)?;
-    if Method::of_calibration(&study) == Method::He2019NoiseAware {
-        let candidates = candidates.unwrap_or(1);
-        return calibrate_noise_aware(store_root, &path, exec, candidates, flags, out);
-    }
-    if flags.adaptive || flags.json {
-        return Err(CommandError::Usage(format!(
+    match Method::of_calibration(&study) {
+        Method::He2019NoiseAware => {
+            calibrate_noise_aware(store_root, &path, exec, candidates, flags, out)
+        }
+        _ if adaptive || flags.json => Err(CommandError::Usage(format!(
             "--adaptive and --json need a noise-aware study (a `noise_aware` block); {} has none",
             path.display()
-        )));
+        ))),
+        _ => calibrate_classic(store_root, &path, &study, exec, candidates, out),
     }
-    calibrate_classic(
-        store_root,
-        &path,
-        &study,
-        exec,
-        candidates.unwrap_or(3),
-        out,
-    )
 }
 
 /// `repose calibrate` on a classic he2019 study: its stage list, each stage

@@ -17,6 +17,7 @@ use repose::scenes::plan::Limits;
 use repose::search::meanshift::Kernel;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
 use repose::study::convergence::plan::{SurfaceEnergyRule, RULE_NAMES};
+use repose::study::convergence::SweepRequest;
 use repose::study::sample::SampleSettings;
 use repose::study::stages::Analysis;
 use repose::study::tolerance_search::SearchSettings;
@@ -371,9 +372,10 @@ enum Command {
         /// Study manifest (he2019 or design study).
         study: PathBuf,
         /// How a design study is analysed: rsm (response surfaces) or
-        /// sensitivity (yan2015).
-        #[arg(long, value_enum, default_value = "rsm")]
-        analysis: AnalysisArg,
+        /// sensitivity (yan2015) [default: the analysis the file's
+        /// `stages` spell, else rsm].
+        #[arg(long, value_enum)]
+        analysis: Option<AnalysisArg>,
         /// Include the adaptive rounds of a noise-aware calibration.
         #[arg(long)]
         adaptive: bool,
@@ -925,15 +927,17 @@ impl ConvergenceArgs {
             return Err(format!("--tolerance {t}: must be a number > 0 (degrees)"));
         }
         Ok(ConvergenceOptions {
-            factors: self.sizes.clone(),
-            replicates: self.replicates,
-            rule,
-            real_radius_m: self.real_radius,
-            analysis: repose::study::convergence::Analysis {
-                responses: self.responses.clone(),
-                tolerance: self.tolerance,
+            request: SweepRequest {
+                factors: self.sizes.clone(),
+                replicates: self.replicates,
+                rule,
+                real_radius_m: self.real_radius,
+                analysis: repose::study::convergence::Analysis {
+                    responses: self.responses.clone(),
+                    tolerance: self.tolerance,
+                },
+                out_dir: self.out.clone(),
             },
-            out_dir: self.out.clone(),
             json: self.json,
         })
     }
@@ -1304,10 +1308,10 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             adaptive,
             json,
         } => {
-            let analysis = match analysis {
+            let analysis = analysis.map(|a| match a {
                 AnalysisArg::Rsm => Analysis::ResponseSurface,
                 AnalysisArg::Sensitivity => Analysis::Sensitivity,
-            };
+            });
             commands::stages(&study, analysis, adaptive, json, &mut out)
         }
         Command::Runs {

@@ -301,21 +301,6 @@ pub const PAIR_PARAM_FIELDS: [&str; 4] = [
     "surface_energy_j_m2",
 ];
 
-impl PairParams {
-    /// Sets the field named `field`; returns false when there is no such field.
-    pub fn set(&mut self, field: &str, value: f64) -> bool {
-        let slot = match field {
-            "restitution" => &mut self.restitution,
-            "static_friction" => &mut self.static_friction,
-            "rolling_friction" => &mut self.rolling_friction,
-            "surface_energy_j_m2" => &mut self.surface_energy_j_m2,
-            _ => return false,
-        };
-        *slot = value;
-        true
-    }
-}
-
 /// Coarse graining and modulus reduction: the manifest states the real particle
 /// (size, Young's modulus, surface energies) and this block says how the simulated
 /// one differs. Radii are multiplied by `size_factor`, the particle Young's modulus by

@@ -6,6 +6,7 @@
 //! column), then [`validate`] checks every physical field and reports all violations
 //! together. Only validated manifests get an id.
 
+pub mod address;
 pub mod canonical;
 pub mod experiment;
 pub mod scene;
@@ -17,6 +18,7 @@ use std::path::{Path, PathBuf};
 use serde::de::DeserializeOwned;
 use serde_json::Value;
 
+pub use address::ExperimentDoc;
 pub use canonical::{canonical_json, content_id, ContentId};
 pub use experiment::{
     AtRest, ClumpMember, CoarseGraining, CoarseGrainingRule, Contact, ContactModel, Experiment,

@@ -17,7 +17,7 @@ use super::experiment::{
 };
 use super::scene::Scene;
 use super::validate::{validate_experiment, FieldError, ValidationErrors};
-use super::{PHYSICS_VERSION, SCHEMA_VERSION};
+use super::{ExperimentDoc, PHYSICS_VERSION, SCHEMA_VERSION};
 
 /// A calibration study.
 ///
@@ -68,6 +68,12 @@ pub struct Study {
     /// search and the multi-seed verification (see [`NoiseAware`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise_aware: Option<NoiseAware>,
+    /// The stages the study runs, spelled out in order (absent: the list
+    /// its blocks give; `repose stages FILE` prints it). When present it
+    /// must be that list, and naming `adaptive` adds the adaptive rounds
+    /// as `--adaptive` does (see `crate::study::stages`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stages: Vec<String>,
 }
 
 /// How a noise-aware calibration treats the packing noise of its runs.
@@ -232,6 +238,15 @@ pub struct Slot {
     pub field: &'static str,
 }
 
+impl Slot {
+    /// The slot's address in an experiment ([`crate::manifest::address`]):
+    /// `contact.particle_particle.<field>` or
+    /// `contact.particle_wall.<wall>.<field>`.
+    pub fn address(&self) -> String {
+        format!("contact.{self}")
+    }
+}
+
 impl fmt::Display for Slot {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match &self.wall {
@@ -354,20 +369,7 @@ impl Study {
             surface_energy_j_m2: 0.0,
         };
         let used: Vec<&str> = scene.wall_materials().into_iter().map(|(_, w)| w).collect();
-        let mut particle_particle = zero;
-        let mut particle_wall: BTreeMap<String, PairParams> =
-            used.iter().map(|w| (w.to_string(), zero)).collect();
-        for (address, value) in self.fixed.iter().chain(point.iter()) {
-            for slot in self.resolve_address(address).unwrap_or_default() {
-                let params = match &slot.wall {
-                    None => Some(&mut particle_particle),
-                    Some(w) => particle_wall.get_mut(w),
-                };
-                if let Some(params) = params {
-                    params.set(slot.field, *value);
-                }
-            }
-        }
+        let particle_wall = used.iter().map(|w| (w.to_string(), zero)).collect();
         let experiment = Experiment {
             schema_version: SCHEMA_VERSION,
             physics_version: PHYSICS_VERSION,
@@ -376,7 +378,7 @@ impl Study {
             material: self.material.clone(),
             contact: Contact {
                 model: self.contact_model,
-                particle_particle,
+                particle_particle: zero,
                 particle_wall,
             },
             seeds: Seeds {
@@ -390,6 +392,21 @@ impl Study {
             coarse_graining: self.coarse_graining,
             at_rest: AtRest::default(),
         };
+        // Every slot of a wall the scene uses (unused walls stay out of the id).
+        let mut doc = ExperimentDoc::of(&experiment);
+        for (address, value) in self.fixed.iter().chain(point.iter()) {
+            let slots = self.resolve_address(address).unwrap_or_default();
+            for slot in slots
+                .iter()
+                .filter(|s| s.wall.as_deref().is_none_or(|w| used.contains(&w)))
+            {
+                doc.set(&slot.address(), *value)
+                    .expect("a resolved slot of a used wall is a number of the experiment");
+            }
+        }
+        let experiment = doc
+            .into_experiment()
+            .expect("numbers written into an experiment keep it an experiment");
         validate_experiment(&experiment)?;
         Ok(experiment)
     }

@@ -11,14 +11,11 @@
 //!
 //! Every run is the `base` block with one of the study's `scenes`, the seeds
 //! `{design_seed: seed, sample_index: point, packing_seed}` and the factor
-//! values written into it by address. An address is the dotted JSON path of
-//! a number in the experiment: `contact.particle_particle.static_friction`,
-//! `contact.particle_wall.stainless_steel.rolling_friction` (`*` in place of
-//! a map key sets every entry: `contact.particle_wall.*.restitution`),
-//! `material.particle.youngs_modulus_pa`, `coarse_graining.size_factor`,
-//! `scene.rpm` (set in the scenes that have the field; at least one must).
-//! One derived address: `material.particle.shear_modulus_pa` sets the Young's
-//! modulus E = 2G(1 + ν) from the base Poisson ratio (cai2024 varies G).
+//! values written into it by address ([`crate::manifest::address`], the one
+//! addressing every study uses): the dotted JSON path of a number in the
+//! experiment, such as `contact.particle_particle.static_friction`,
+//! `contact.particle_wall.*.restitution` or `scene.rpm` (a scene field is
+//! set in the scenes that have it; at least one must).
 //!
 //! # Seeds
 //!
@@ -36,8 +33,9 @@ use serde_json::Value;
 
 use crate::manifest::validate::number;
 use crate::manifest::{
-    validate_experiment, AtRest, CoarseGraining, Contact, ContentId, Experiment, FieldError,
-    Material, Profile, Scene, Seeds, TimeStep, ValidationErrors, PHYSICS_VERSION, SCHEMA_VERSION,
+    validate_experiment, AtRest, CoarseGraining, Contact, ContentId, Experiment, ExperimentDoc,
+    FieldError, Material, Profile, Scene, Seeds, TimeStep, ValidationErrors, PHYSICS_VERSION,
+    SCHEMA_VERSION,
 };
 use crate::scenes::responses::catalogue;
 #[cfg(doc)]
@@ -83,6 +81,13 @@ pub struct DesignStudy {
     /// Re-simulation of the optimum and of named points (`repose verify`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub verification: Option<Verification>,
+    /// The stages the study runs, spelled out in order (absent: the list
+    /// its blocks give for the command that runs it). When present it must
+    /// be one of those lists, and it chooses the analysis: `search` for
+    /// response surfaces (`repose rsm`), `sensitivity` for yan2015's levels
+    /// (`repose sensitivity`); see `crate::study::stages`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stages: Vec<String>,
 }
 
 /// What every generated experiment shares (an experiment without its scene
@@ -310,16 +315,16 @@ impl DesignStudy {
             coarse_graining: self.base.coarse_graining,
             at_rest: self.base.at_rest,
         };
-        let mut json = serde_json::to_value(&experiment).expect("experiments serialise");
+        let mut doc = ExperimentDoc::of(&experiment);
         for (address, value) in values {
-            match set_address(&mut json, address, *value) {
+            match doc.set(address, *value) {
                 Ok(()) => {}
                 // A scene knob applies to the scenes that have it.
                 Err(_) if address.starts_with("scene.") => {}
                 Err(rule) => return Err(reject(address.to_string(), number(*value), rule)),
             }
         }
-        let experiment: Experiment = serde_json::from_value(json).map_err(|e| {
+        let experiment: Experiment = doc.into_experiment().map_err(|e| {
             reject(
                 format!("scenes.{scene}"),
                 "(generated experiment)".into(),
@@ -684,8 +689,7 @@ impl DesignStudy {
         for name in self.scenes.keys() {
             let e = self.experiment(name, &[], 0, 0);
             let Ok(e) = e else { return Ok(()) }; // reported by the centre check
-            let mut json = serde_json::to_value(&e).expect("experiments serialise");
-            match set_address(&mut json, address, 1.0) {
+            match ExperimentDoc::of(&e).set(address, 1.0) {
                 Ok(()) => found += 1,
                 Err(rule) if !address.starts_with("scene.") => return Err(rule),
                 Err(_) => {}
@@ -740,56 +744,6 @@ fn check_levels(levels: &[f64], range: Option<(f64, f64)>) -> Result<(), String>
         }
     }
     Ok(())
-}
-
-/// Writes `value` at the dotted `address` of an experiment's JSON (see the
-/// module docs); an error says why the address does not name a number.
-fn set_address(json: &mut Value, address: &str, value: f64) -> Result<(), String> {
-    if address == "material.particle.shear_modulus_pa" {
-        let particle = &mut json["material"]["particle"];
-        let nu = particle["poisson_ratio"].as_f64().unwrap_or(0.0);
-        particle["youngs_modulus_pa"] = Value::from(2.0 * value * (1.0 + nu));
-        return Ok(());
-    }
-    let parts: Vec<&str> = address.split('.').collect();
-    if parts.iter().any(|p| p.is_empty()) {
-        return Err(
-            "must be a dotted path such as contact.particle_particle.static_friction".into(),
-        );
-    }
-    set_at(json, &parts, value, address)
-}
-
-fn set_at(node: &mut Value, parts: &[&str], value: f64, address: &str) -> Result<(), String> {
-    let Some((head, rest)) = parts.split_first() else {
-        return if node.is_number() {
-            *node = Value::from(value);
-            Ok(())
-        } else {
-            Err(format!("`{address}` names {node}, not a number"))
-        };
-    };
-    let Value::Object(map) = node else {
-        return Err(format!(
-            "`{address}`: `{head}` is below a value that has no fields"
-        ));
-    };
-    if *head == "*" {
-        if map.is_empty() {
-            return Err(format!("`{address}`: `*` matches nothing"));
-        }
-        for child in map.values_mut() {
-            set_at(child, rest, value, address)?;
-        }
-        return Ok(());
-    }
-    match map.get_mut(*head) {
-        Some(child) => set_at(child, rest, value, address),
-        None => Err(format!(
-            "`{address}`: no field `{head}` here; fields: {}",
-            map.keys().cloned().collect::<Vec<_>>().join(", ")
-        )),
-    }
 }
 
 /// Reads and validates a design study.

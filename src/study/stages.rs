@@ -28,7 +28,9 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::spec::{is_design_study, parse_design_study, DesignSpec, DesignStudy, FitChoice};
-use crate::manifest::{parse_study, ContentId, DesignKind, ManifestError, Study};
+use crate::manifest::{
+    parse_study, ContentId, DesignKind, FieldError, ManifestError, Study, ValidationErrors,
+};
 
 /// A study file, read and validated once.
 #[derive(Debug, Clone)]
@@ -41,17 +43,115 @@ pub enum StudyFile {
 
 impl StudyFile {
     /// Reads and validates the study file at `path` (a design study when it
-    /// has a `factors` object).
+    /// has a `factors` object), including the stages it spells out
+    /// ([`StudyFile::spec`]).
     pub fn read(path: &Path) -> Result<StudyFile, ManifestError> {
         let text = std::fs::read_to_string(path).map_err(|source| ManifestError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        if is_design_study(&text) {
+        let file = if is_design_study(&text) {
             parse_design_study(&text).map(StudyFile::Design)
         } else {
             parse_study(&text).map(StudyFile::Calibration)
+        }?;
+        file.spec(None, false)?;
+        Ok(file)
+    }
+
+    /// The study's content id.
+    pub fn id(&self) -> ContentId {
+        match self {
+            StudyFile::Calibration(s) => s.id(),
+            StudyFile::Design(s) => s.id(),
         }
+    }
+
+    /// The stages the file spells out (empty: none).
+    pub fn spelled(&self) -> &[String] {
+        match self {
+            StudyFile::Calibration(s) => &s.stages,
+            StudyFile::Design(s) => &s.stages,
+        }
+    }
+
+    /// The analysis a design study's spelled stages choose: `sensitivity`
+    /// names yan2015's levels, any other list a response surface.
+    pub fn spelled_analysis(&self) -> Option<Analysis> {
+        let spelled = self.spelled();
+        match self {
+            StudyFile::Design(_) if !spelled.is_empty() => {
+                Some(if spelled.iter().any(|s| s == "sensitivity") {
+                    Analysis::Sensitivity
+                } else {
+                    Analysis::ResponseSurface
+                })
+            }
+            _ => None,
+        }
+    }
+
+    /// Whether the spelled stages name the adaptive rounds.
+    pub fn spells_adaptive(&self) -> bool {
+        self.spelled().iter().any(|s| s == "adaptive")
+    }
+
+    /// The study's stage list, run with `analysis` (a command's, or the
+    /// file's own when `None`; a response surface when neither says) and
+    /// `adaptive` rounds (or the file's own `adaptive` stage). A file that
+    /// spells its stages must spell exactly this list, and a command's
+    /// analysis must be the one it spells; each error names `stages`, what
+    /// it holds and the list the study's blocks give.
+    pub fn spec(
+        &self,
+        analysis: Option<Analysis>,
+        adaptive: bool,
+    ) -> Result<StudySpec, ManifestError> {
+        let invalid = |rule: String| {
+            ManifestError::Invalid(ValidationErrors(vec![FieldError {
+                path: "stages".into(),
+                value: format!("[{}]", self.spelled().join(", ")),
+                rule,
+            }]))
+        };
+        let analysis = match (analysis, self.spelled_analysis()) {
+            (Some(asked), Some(spelled)) if asked != spelled => {
+                return Err(invalid(format!(
+                    "spells a {} study; run it with `repose {}`",
+                    word(&spelled).replace('_', " "),
+                    command_of(spelled)
+                )))
+            }
+            (asked, spelled) => asked.or(spelled).unwrap_or(Analysis::ResponseSurface),
+        };
+        let spec = StudySpec::of(self, analysis, adaptive || self.spells_adaptive());
+        let names: Vec<&str> = spec.stages.iter().map(Stage::name).collect();
+        if self.spelled().is_empty() || self.spelled() == names.as_slice() {
+            return Ok(spec);
+        }
+        let mut allowed = format!(
+            "must be the stages the study's blocks give: [{}]",
+            names.join(", ")
+        );
+        match self {
+            StudyFile::Calibration(s) if s.noise_aware.is_some() && s.fidelity().is_none() => {
+                allowed.push_str(", with `adaptive` after `fit` for the adaptive rounds")
+            }
+            StudyFile::Design(_) => allowed.push_str(
+                " for a response surface, or with `fit` then `sensitivity` in place of \
+                 `search` (and no `screen`) for yan2015's sensitivity levels",
+            ),
+            StudyFile::Calibration(_) => {}
+        }
+        Err(invalid(allowed))
+    }
+}
+
+/// The subcommand that runs a design study's analysis.
+fn command_of(analysis: Analysis) -> &'static str {
+    match analysis {
+        Analysis::ResponseSurface => "rsm",
+        Analysis::Sensitivity => "sensitivity",
     }
 }
 

@@ -47,6 +47,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
+use super::stages::StudySpec;
 use super::tradeoff::{self, Outcome};
 use super::StudyError;
 use crate::exec::{ExecError, Executor};
@@ -209,6 +210,67 @@ pub struct Analysis {
     pub responses: Vec<String>,
     /// Tolerance for the standard size (units of the responses).
     pub tolerance: Option<f64>,
+}
+
+/// What `repose convergence` asks for.
+#[derive(Debug, Clone)]
+pub struct SweepRequest {
+    /// Size factors relative to the base's particle (1 = the base).
+    pub factors: Vec<f64>,
+    /// Replicates (packing seeds) per size, ≥ 2.
+    pub replicates: usize,
+    /// How Γ follows the size for a base without coarse graining.
+    pub rule: Option<SurfaceEnergyRule>,
+    /// The real particle's radius, m, for a base without coarse graining.
+    pub real_radius_m: Option<f64>,
+    /// Responses and tolerance.
+    pub analysis: Analysis,
+    /// Output directory (default [`default_dir`]).
+    pub out_dir: Option<PathBuf>,
+}
+
+/// Plans the sweep of `base` (the manifest at `manifest`), refuses one that
+/// may start more than `exec.max_runs` runs before anything is built (the
+/// one-stage study [`StudySpec::convergence`]), then [`sweep`]s it; returns
+/// what it did and where it wrote.
+pub fn plan_and_sweep(
+    store: &Store,
+    base: &Experiment,
+    manifest: &Path,
+    request: &SweepRequest,
+    exec: &Executor,
+) -> Result<(SizeSweep, PathBuf), StudyError> {
+    let plan = plan::plan(
+        base,
+        &request.factors,
+        request.replicates,
+        request.rule,
+        request.real_radius_m,
+    )
+    .map_err(|e| StudyError::Settings(e.to_string()))?;
+    StudySpec::convergence(
+        &manifest.display().to_string(),
+        base.id(),
+        plan.levels.len() as u64,
+        request.replicates as u64,
+    )
+    .check_runs(exec.max_runs)
+    .map_err(StudyError::Settings)?;
+    let out_dir = request
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| default_dir(store, base));
+    let pool = exec.in_study(&out_dir);
+    let done = sweep(
+        store,
+        base,
+        manifest,
+        &plan,
+        &request.analysis,
+        &pool,
+        &out_dir,
+    )?;
+    Ok((done, out_dir))
 }
 
 /// What [`sweep`] did.

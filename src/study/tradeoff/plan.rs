@@ -9,11 +9,13 @@
 //! mistaken for numerical error. Every point is an ordinary experiment:
 //! validated, hashed, cached and resumable.
 
-use crate::streams::SeedRule;
+use crate::study::seed_noise::with_packing_offset;
 use crate::study::stages::StudySpec;
-use serde_json::json;
 
-use crate::manifest::{Experiment, ValidationErrors};
+use crate::manifest::{
+    validate_experiment, CoarseGraining, CoarseGrainingRule, Experiment, ExperimentDoc,
+    ValidationErrors,
+};
 
 /// A fidelity knob: what it changes and the values it takes, finest first.
 #[derive(Debug, Clone, PartialEq)]
@@ -206,84 +208,70 @@ pub fn plan(base: &Experiment, knobs: &[Knob], replicates: usize) -> Result<Vec<
     Ok(points)
 }
 
-/// `e` with packing seeds base, base + 1, ...
+/// `e` with packing seeds base, base + 1, ... (the replicate convention of
+/// one experiment's studies, [`with_packing_offset`]).
 pub(crate) fn replicate(e: &Experiment, n: usize) -> Vec<Experiment> {
-    (0..n as u64)
-        .map(|r| {
-            let mut x = e.clone();
-            x.seeds.packing_seed = SeedRule::Offset {
-                base: e.seeds.packing_seed,
-            }
-            .packing_seed(r);
-            x
-        })
-        .collect()
+    (0..n as u64).map(|r| with_packing_offset(e, r)).collect()
 }
 
-/// `e` with knob `name` set to `value` (factors relative to `base`), validated.
+/// `e` with knob `name` set to `value` (factors relative to `base`),
+/// written at the knob's one address ([`crate::manifest::address`]) and
+/// validated. A size or modulus knob on an experiment without coarse
+/// graining first adds the identity block (factors 1, the cohesion-number
+/// rule).
 fn apply(
     e: &Experiment,
     base: &Experiment,
     name: &'static str,
     value: f64,
 ) -> Result<Experiment, PlanError> {
-    let mut doc = serde_json::to_value(e).expect("experiments serialise");
-    let base_cg = base.coarse_graining;
-    match name {
-        "rayleigh_fraction" => doc["time_step"]["rayleigh_fraction"] = json!(value),
-        "youngs_modulus_factor" | "size_factor" => {
-            let (size, modulus, rule) = match base_cg {
-                Some(cg) => (
-                    cg.size_factor,
-                    cg.youngs_modulus_factor,
-                    serde_json::to_value(cg.rule).expect("rule serialises"),
-                ),
-                None => (1.0, 1.0, json!("cohesion_number")),
-            };
-            let cg = doc
-                .as_object_mut()
-                .expect("experiment is an object")
-                .entry("coarse_graining")
-                .or_insert_with(
-                    || json!({"size_factor": size, "youngs_modulus_factor": modulus, "rule": rule}),
-                );
+    let not_applicable = |why: String| PlanError::NotApplicable { knob: name, why };
+    let mut e = e.clone();
+    let (address, absolute) = match name {
+        "rayleigh_fraction" => ("time_step.rayleigh_fraction", value),
+        "size_factor" | "youngs_modulus_factor" => {
+            let cg = base.coarse_graining.unwrap_or(CoarseGraining {
+                size_factor: 1.0,
+                youngs_modulus_factor: 1.0,
+                rule: CoarseGrainingRule::CohesionNumber,
+            });
+            e.coarse_graining.get_or_insert(cg);
             if name == "size_factor" {
-                cg["size_factor"] = json!(size * value);
+                ("coarse_graining.size_factor", cg.size_factor * value)
             } else {
-                cg["youngs_modulus_factor"] = json!(modulus * value);
+                (
+                    "coarse_graining.youngs_modulus_factor",
+                    cg.youngs_modulus_factor * value,
+                )
             }
         }
         "periodic_slices" => {
-            let slice = base_slice(base).ok_or_else(|| PlanError::NotApplicable {
-                knob: name,
-                why: "only a drum with `periodic_slice_m` has a slice to vary".into(),
+            let slice = base_slice(base).ok_or_else(|| {
+                not_applicable("only a drum with `periodic_slice_m` has a slice to vary".into())
             })?;
-            doc["scene"]["periodic_slice_m"] = json!(slice * value);
+            ("scene.periodic_slice_m", slice * value)
         }
-        "stop_threshold" => {
-            let fraction = base.at_rest.kinetic_energy_fraction * value;
-            doc["at_rest"]["kinetic_energy_fraction"] = json!(fraction);
-        }
-        "stop_hold" => doc["at_rest"]["hold_s"] = json!(base.at_rest.hold_s * value),
+        "stop_threshold" => (
+            "at_rest.kinetic_energy_fraction",
+            base.at_rest.kinetic_energy_fraction * value,
+        ),
+        "stop_hold" => ("at_rest.hold_s", base.at_rest.hold_s * value),
         _ => {
-            return Err(PlanError::NotApplicable {
-                knob: name,
-                why: format!("unknown knob; known: {}", KNOB_NAMES.join(", ")),
-            })
+            return Err(not_applicable(format!(
+                "unknown knob; known: {}",
+                KNOB_NAMES.join(", ")
+            )))
         }
-    }
-    let text = doc.to_string();
-    crate::manifest::parse_experiment(&text).map_err(|e| match e {
-        crate::manifest::ManifestError::Invalid(errors) => PlanError::Invalid {
-            knob: name,
-            value,
-            errors,
-        },
-        other => PlanError::NotApplicable {
-            knob: name,
-            why: other.to_string(),
-        },
-    })
+    };
+    let mut doc = ExperimentDoc::of(&e);
+    doc.set(address, absolute).map_err(not_applicable)?;
+    let e = doc.into_experiment().map_err(not_applicable)?;
+    validate_experiment(&e).map_err(|errors| PlanError::Invalid {
+        knob: name,
+        value,
+        errors,
+    })?;
+    Ok(e)
 }
 
 fn base_slice(base: &Experiment) -> Option<f64> {
