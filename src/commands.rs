@@ -39,7 +39,7 @@ use crate::study::pipeline::{
 };
 use crate::study::probability_search::gp_search;
 use crate::study::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
-use crate::study::spec::{is_design_study, parse_design_study, DesignStudy};
+use crate::study::spec::{is_design_study, DesignStudy};
 use crate::study::stages::{
     default_candidates, Analysis, Method, Stage as ClassicStage, StudyFile, StudySpec,
 };
@@ -490,20 +490,19 @@ pub fn diff(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let diff = tracking::diff::diff(&open_store(store_root)?, a, b)?;
-    if json {
-        return print_json(&diff, out);
-    }
-    Ok(out.write_all(diff.text().as_bytes())?)
+    print_as(&diff, json, |d| d.text(), out)
 }
 
 /// `repose studies`: every study of the store with its method, stages, run
 /// counts, verdicts and last change ([`crate::tracking::studies`]).
 pub fn studies(store_root: &Path, json: bool, out: &mut dyn Write) -> Result<(), CommandError> {
     let entries = tracking::studies::list_studies(&open_store(store_root)?)?;
-    if json {
-        return print_json(&entries, out);
-    }
-    Ok(out.write_all(tracking::studies::studies_text(&entries, store_root).as_bytes())?)
+    print_as(
+        &entries,
+        json,
+        |e| tracking::studies::studies_text(e, store_root),
+        out,
+    )
 }
 
 /// `repose runs show PREFIX`: the run whose id starts with PREFIX (which must be
@@ -730,16 +729,16 @@ pub fn learning_curve(
     Ok(())
 }
 
-/// Reads and validates a study manifest, with the stages it spells.
+/// Reads and validates a calibration study manifest, with the stages it
+/// spells ([`StudyFile::read`]).
 fn read_study(path: &Path) -> Result<Study, CommandError> {
-    match read_document(path, Some(DocumentKind::Study)).map_err(manifest_error(path))? {
-        Document::Study(study) => {
-            StudyFile::Calibration(study.clone())
-                .spec(None, false)
-                .map_err(manifest_error(path))?;
-            Ok(study)
-        }
-        Document::Experiment(_) => unreachable!("read as a study"),
+    match StudyFile::read(path).map_err(manifest_error(path))? {
+        StudyFile::Calibration(study) => Ok(study),
+        StudyFile::Design(_) => Err(CommandError::Usage(format!(
+            "{}: a design study (it has a `factors` object); it runs with `repose rsm`, \
+             `repose sensitivity` or `repose screen`, not as a calibration study",
+            path.display()
+        ))),
     }
 }
 
@@ -761,9 +760,16 @@ fn open_sized_study(
 /// leftover temp files removed, [`sweep_old_temps`]).
 fn open_study(store_root: &Path, path: &Path) -> Result<(Study, StudyDir), CommandError> {
     let study = read_study(path)?;
-    let dir = StudyDir::new(store_root, &study, path);
-    sweep_old_temps(dir.path())?;
+    let dir = study_dir(store_root, &study, path)?;
     Ok((study, dir))
+}
+
+/// The output directory of `study` (read from `path`), its killed writers'
+/// leftover temp files removed.
+fn study_dir(store_root: &Path, study: &Study, path: &Path) -> Result<StudyDir, CommandError> {
+    let dir = StudyDir::new(store_root, study, path);
+    sweep_old_temps(dir.path())?;
+    Ok(dir)
 }
 
 /// Removes the temp files a killed process left in a study's tree (older
@@ -864,16 +870,17 @@ pub struct CalibrateFlags {
 fn calibrate_noise_aware(
     store_root: &Path,
     path: &Path,
+    study: &Study,
     exec: &Executor,
     candidates: usize,
     flags: CalibrateFlags,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, dir) = open_study(store_root, path)?;
+    let dir = study_dir(store_root, study, path)?;
     let store = open_store(store_root)?;
     let pool = exec.in_study(dir.path());
     set_quiet(true);
-    let options = NoiseAwareOptions::defaults(&study, candidates, flags.adaptive);
+    let options = NoiseAwareOptions::defaults(study, candidates, flags.adaptive);
     // Stage reports as they come: on `out`, or on stderr with `--json`.
     let outcome = {
         let mut err = io::stderr();
@@ -881,7 +888,7 @@ fn calibrate_noise_aware(
         let mut log = |line: &str| {
             let _ = writeln!(sink, "{line}");
         };
-        calibrate_noise_aware_stages(&dir, &study, &store, &pool, &options, run_logged, &mut log)?
+        calibrate_noise_aware_stages(&dir, study, &store, &pool, &options, run_logged, &mut log)?
     };
     if flags.json {
         return print_json(&outcome, out);
@@ -987,12 +994,7 @@ pub fn scene_noise(
     let exec = exec.in_study(&store_root.join("noise").join(base.id().short(12)));
     set_quiet(true);
     let noise = study::seed_noise::scene_noise(&base, seeds, &store, &exec, &run_logged)?;
-    if json {
-        print_json(&noise, out)
-    } else {
-        write!(out, "{}", study::seed_noise::markdown(&noise))?;
-        Ok(())
-    }
+    print_as(&noise, json, study::seed_noise::markdown, out)
 }
 
 /// `repose batch STUDY`: runs every sampled experiment not yet complete
@@ -1176,11 +1178,7 @@ pub fn stages(
     let spec = document
         .spec(analysis, adaptive)
         .map_err(manifest_error(path))?;
-    if json {
-        return print_json(&spec, out);
-    }
-    write!(out, "{}", spec.describe())?;
-    Ok(())
+    print_as(&spec, json, StudySpec::describe, out)
 }
 
 /// `repose status STUDY`: where every run the study handed to Slurm stands
@@ -1305,28 +1303,41 @@ fn open_design_run(
 }
 
 fn open_design_study(store_root: &Path, path: &Path) -> Result<(DesignStudy, Store), CommandError> {
-    let text = std::fs::read_to_string(path).map_err(|source| {
-        manifest_error(path)(ManifestError::Io {
-            path: path.to_path_buf(),
-            source,
-        })
-    })?;
-    if serde_json::from_str::<serde_json::Value>(&text).is_ok() && !is_design_study(&text) {
-        return Err(CommandError::Usage(format!(
+    let not_design = || {
+        CommandError::Usage(format!(
             "{}: not a design study (it has no `factors` object); screen, rsm and \
              design-study verify need one (see experiments/cai2024-quick/study.json); \
              he2019 calibration studies run with `repose calibrate`",
             path.display()
-        )));
+        ))
+    };
+    // Said before any validation error of the other format.
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    if serde_json::from_str::<serde_json::Value>(&text).is_ok() && !is_design_study(&text) {
+        return Err(not_design());
     }
-    let study = parse_design_study(&text).map_err(manifest_error(path))?;
-    StudyFile::Design(study.clone())
-        .spec(None, false)
-        .map_err(manifest_error(path))?;
+    let StudyFile::Design(study) = StudyFile::read(path).map_err(manifest_error(path))? else {
+        return Err(not_design());
+    };
     let store = open_store(store_root)?;
     sweep_old_temps(&study::dir::StudyDir::path_in(store_root, &study))?;
     set_quiet(true);
     Ok((study, store))
+}
+
+/// Prints `value` as pretty JSON with `json`, else the text `text` makes
+/// of it.
+fn print_as<T: serde::Serialize>(
+    value: &T,
+    json: bool,
+    text: impl FnOnce(&T) -> String,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    if json {
+        print_json(value, out)
+    } else {
+        Ok(out.write_all(text(value).as_bytes())?)
+    }
 }
 
 fn print_json<T: serde::Serialize>(value: &T, out: &mut dyn Write) -> Result<(), CommandError> {
@@ -1377,12 +1388,7 @@ pub fn verdict_table(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let verdicts = study::verdict_table::judge_table(path, spec)?;
-    if json {
-        print_json(&verdicts, out)
-    } else {
-        write!(out, "{}", study::verdict_table::markdown(&verdicts))?;
-        Ok(())
-    }
+    print_as(&verdicts, json, study::verdict_table::markdown, out)
 }
 
 /// `repose rsm --table FILE`: the response-surface analysis of any CSV table.
@@ -1503,7 +1509,7 @@ pub fn calibrate(
         .map_err(CommandError::Usage)?;
     match Method::of_calibration(&study) {
         Method::He2019NoiseAware => {
-            calibrate_noise_aware(store_root, &path, exec, candidates, flags, out)
+            calibrate_noise_aware(store_root, &path, &study, exec, candidates, flags, out)
         }
         _ if adaptive || flags.json => Err(CommandError::Usage(format!(
             "--adaptive and --json need a noise-aware study (a `noise_aware` block); {} has none",
