@@ -712,16 +712,15 @@ pub fn learning_curve(
 ) -> Result<(), CommandError> {
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
     if !design_path(&dir).is_file() {
-        sample(
-            store_root,
-            study_path,
+        sample_stage(
+            &study,
+            &dir,
             &SampleSettings::default(),
-            exec.max_runs,
             out,
             &mut io::stderr(),
         )?;
     }
-    batch_leaving_out_failures(store_root, study_path, exec, out)?;
+    batch_leaving_out_failures(store_root, (&study, &dir), exec, out)?;
     let store = open_store(store_root)?;
     let outcome = learning_curve::learning_curve(&dir, &study, &store, sizes)?;
     write!(out, "\n{}", outcome.markdown)?;
@@ -755,6 +754,10 @@ fn open_sized_study(
     spec.check_runs(max_runs).map_err(CommandError::Usage)?;
     Ok((study, dir))
 }
+
+/// A calibration study read once and its output directory: what the
+/// stages of `repose calibrate` share.
+type Opened<'a> = (&'a Study, &'a StudyDir);
 
 /// The study and its output directory in the store (its killed writers'
 /// leftover temp files removed, [`sweep_old_temps`]).
@@ -813,7 +816,18 @@ pub fn sample(
     err: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_sized_study(store_root, study_path, max_runs)?;
-    let outcome = run_sample(&dir, &study, settings)?;
+    sample_stage(&study, &dir, settings, out, err)
+}
+
+/// The design stage of an opened study ([`sample`]).
+fn sample_stage(
+    study: &Study,
+    dir: &StudyDir,
+    settings: &SampleSettings,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let outcome = run_sample(dir, study, settings)?;
     writeln!(
         out,
         "sampled {} points of {} parameter(s) for study {} ({})",
@@ -1008,7 +1022,8 @@ pub fn batch(
     exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (failed, total) = run_batch_and_report(store_root, study_path, exec, out)?;
+    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
+    let (failed, total) = run_batch_and_report(store_root, (&study, &dir), exec, out)?;
     if failed > 0 {
         return Err(CommandError::BatchIncomplete { failed, total });
     }
@@ -1021,11 +1036,11 @@ pub fn batch(
 /// retries them.
 fn batch_leaving_out_failures(
     store_root: &Path,
-    study_path: &Path,
+    opened: Opened<'_>,
     exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (failed, total) = run_batch_and_report(store_root, study_path, exec, out)?;
+    let (failed, total) = run_batch_and_report(store_root, opened, exec, out)?;
     if failed > 0 {
         writeln!(
             out,
@@ -1040,15 +1055,14 @@ fn batch_leaving_out_failures(
 /// returns (failed runs, samples).
 fn run_batch_and_report(
     store_root: &Path,
-    study_path: &Path,
+    (study, dir): Opened<'_>,
     exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(usize, usize), CommandError> {
-    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
     let store = open_store(store_root)?;
     let settings = exec.in_study(dir.path());
     set_quiet(true);
-    let outcome = run_batch(&dir, &study, &store, &settings, run_logged)?;
+    let outcome = run_batch(dir, study, &store, &settings, run_logged)?;
     write!(out, "{}", outcome.text())?;
     Ok((outcome.failures.len(), outcome.total))
 }
@@ -1066,17 +1080,28 @@ pub fn train(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
+    train_stage((&study, &dir), options, seed, selection, out)
+}
+
+/// The fit stage of an opened study ([`train`]).
+fn train_stage(
+    (study, dir): Opened<'_>,
+    options: &TrainOptions,
+    seed: Option<u64>,
+    selection: Option<Selection>,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
     let mut options = *options;
     options.settings.seed = seed.unwrap_or(study.design.seed);
-    options.settings.selection = selection.unwrap_or_else(|| TrainOptions::selection(&study));
-    let outcome = train_study(&dir, &study, &options)?;
+    options.settings.selection = selection.unwrap_or_else(|| TrainOptions::selection(study));
+    let outcome = train_study(dir, study, &options)?;
     write!(out, "{}", outcome.text())?;
-    if Method::of_calibration(&study) == Method::He2019NoiseAware {
+    if Method::of_calibration(study) == Method::He2019NoiseAware {
         let model = load_model(&dir.stage(Stage::Train).join("model.json"))?;
         let net = |x: &[f64]| model.predict(x);
         let gp = train_gp(
-            &dir,
-            &study,
+            dir,
+            study,
             options.train_fraction,
             options.settings.seed,
             Some(&net),
@@ -1109,14 +1134,24 @@ pub fn search(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
+    search_stage((&study, &dir), settings, seed, out)
+}
+
+/// The search stage of an opened study ([`search`]).
+fn search_stage(
+    (study, dir): Opened<'_>,
+    settings: &SearchSettings,
+    seed: Option<u64>,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
     let mut settings = *settings;
     settings.seed = seed.unwrap_or(study.design.seed);
-    if Method::of_calibration(&study) == Method::He2019NoiseAware {
-        let found = gp_search(&dir, &study, &settings)?;
+    if Method::of_calibration(study) == Method::He2019NoiseAware {
+        let found = gp_search(dir, study, &settings)?;
         write!(out, "{}", found.markdown)?;
         return Ok(());
     }
-    let outcome = run_search(&dir, &study, &settings)?;
+    let outcome = run_search(dir, study, &settings)?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(
         out,
@@ -1144,10 +1179,21 @@ pub fn verify(
         return rsm(store_root, study_path, exec, false, out);
     }
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
+    verify_stage(store_root, (&study, &dir), exec, candidates, out)
+}
+
+/// The verify stage of an opened study ([`verify`]).
+fn verify_stage(
+    store_root: &Path,
+    (study, dir): Opened<'_>,
+    exec: &Executor,
+    candidates: usize,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
     let store = open_store(store_root)?;
     let settings = exec.in_study(dir.path());
     set_quiet(true);
-    let outcome = run_verify(&dir, &study, &store, &settings, candidates, run_logged)?;
+    let outcome = run_verify(dir, study, &store, &settings, candidates, run_logged)?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(out, "  table: {}", outcome.table.display())?;
     if outcome.failed_runs > 0 {
@@ -1530,6 +1576,7 @@ fn calibrate_classic(
     candidates: usize,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
+    let dir = study_dir(store_root, study, path)?;
     let spec = StudySpec::calibration(study, false, candidates);
     let total = spec.stages.len();
     for (i, stage) in spec.stages.iter().enumerate() {
@@ -1539,7 +1586,7 @@ fn calibrate_classic(
             _ => String::new(),
         };
         writeln!(out, "\n== {}/{total} {}{how}", i + 1, stage.name())?;
-        run_classic_stage(store_root, path, study, stage, exec, candidates, out)?;
+        run_classic_stage(store_root, (study, &dir), stage, exec, candidates, out)?;
     }
     Ok(())
 }
@@ -1568,40 +1615,32 @@ fn write_default_study(
 /// training, the `candidates` largest clusters are verified).
 fn run_classic_stage(
     store_root: &Path,
-    path: &Path,
-    study: &Study,
+    opened: Opened<'_>,
     stage: &ClassicStage,
     exec: &Executor,
     candidates: usize,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let seed = study.design.seed;
+    let (study, dir) = opened;
     match stage {
-        ClassicStage::Design { .. } => sample(
-            store_root,
-            path,
+        ClassicStage::Design { .. } => sample_stage(
+            study,
+            dir,
             &SampleSettings::default(),
-            exec.max_runs,
             out,
             &mut io::stderr(),
         ),
-        ClassicStage::Simulate { .. } => batch_leaving_out_failures(store_root, path, exec, out),
-        ClassicStage::Fit { .. } => train(
-            store_root,
-            path,
-            &TrainOptions::defaults(study),
-            None,
-            None,
-            out,
-        ),
-        ClassicStage::Search { .. } => search(
-            store_root,
-            path,
-            &SearchSettings::with_seed(seed),
+        ClassicStage::Simulate { .. } => batch_leaving_out_failures(store_root, opened, exec, out),
+        ClassicStage::Fit { .. } => {
+            train_stage(opened, &TrainOptions::defaults(study), None, None, out)
+        }
+        ClassicStage::Search { .. } => search_stage(
+            opened,
+            &SearchSettings::with_seed(study.design.seed),
             None,
             out,
         ),
-        ClassicStage::Verify { .. } => verify(store_root, path, exec, candidates, out),
+        ClassicStage::Verify { .. } => verify_stage(store_root, opened, exec, candidates, out),
         other => Err(CommandError::Usage(format!(
             "stage `{}` is not part of he2019's classic method",
             other.name()
