@@ -755,6 +755,18 @@ fn open_sized_study(
     Ok((study, dir))
 }
 
+/// The store and the executor for a study's runs (their Slurm ledger in
+/// `study_dir`), with the runs' own progress lines silenced for the bar.
+fn runs_in(
+    store_root: &Path,
+    study_dir: &Path,
+    exec: &Executor,
+) -> Result<(Store, Executor), CommandError> {
+    let store = open_store(store_root)?;
+    set_quiet(true);
+    Ok((store, exec.in_study(study_dir)))
+}
+
 /// A calibration study read once and its output directory: what the
 /// stages of `repose calibrate` share.
 type Opened<'a> = (&'a Study, &'a StudyDir);
@@ -891,9 +903,7 @@ fn calibrate_noise_aware(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let dir = study_dir(store_root, study, path)?;
-    let store = open_store(store_root)?;
-    let pool = exec.in_study(dir.path());
-    set_quiet(true);
+    let (store, pool) = runs_in(store_root, dir.path(), exec)?;
     let options = NoiseAwareOptions::defaults(study, candidates, flags.adaptive);
     // Stage reports as they come: on `out`, or on stderr with `--json`.
     let outcome = {
@@ -932,9 +942,7 @@ pub fn noise(
         )));
     }
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    let store = open_store(store_root)?;
-    let pool = exec.in_study(dir.path());
-    set_quiet(true);
+    let (store, pool) = runs_in(store_root, dir.path(), exec)?;
     let outcome = run_noise(&dir, &study, &store, &pool, run_logged)?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(out, "  outputs: {}", dir.stage(Stage::Noise).display())?;
@@ -950,9 +958,7 @@ pub fn fine(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    let store = open_store(store_root)?;
-    let pool = exec.in_study(dir.path());
-    set_quiet(true);
+    let (store, pool) = runs_in(store_root, dir.path(), exec)?;
     let outcome = run_fine(&dir, &study, &store, &pool, &run_logged, &mut |m| {
         eprintln!("{m}")
     })?;
@@ -1059,9 +1065,7 @@ fn run_batch_and_report(
     exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(usize, usize), CommandError> {
-    let store = open_store(store_root)?;
-    let settings = exec.in_study(dir.path());
-    set_quiet(true);
+    let (store, settings) = runs_in(store_root, dir.path(), exec)?;
     let outcome = run_batch(dir, study, &store, &settings, run_logged)?;
     write!(out, "{}", outcome.text())?;
     Ok((outcome.failures.len(), outcome.total))
@@ -1190,9 +1194,7 @@ fn verify_stage(
     candidates: usize,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let store = open_store(store_root)?;
-    let settings = exec.in_study(dir.path());
-    set_quiet(true);
+    let (store, settings) = runs_in(store_root, dir.path(), exec)?;
     let outcome = run_verify(dir, study, &store, &settings, candidates, run_logged)?;
     write!(out, "{}", outcome.markdown)?;
     writeln!(out, "  table: {}", outcome.table.display())?;

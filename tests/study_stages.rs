@@ -185,7 +185,7 @@ fn a_study_file_may_spell_its_stages() {
 #[test]
 fn spelled_stages_that_differ_from_the_blocks_are_refused_naming_the_list() {
     let tmp = tempfile::tempdir().unwrap();
-    let cases: [(&str, &[&str], &str); 4] = [
+    let cases: [(&str, &[&str], &str); 5] = [
         // Out of order.
         (
             "experiments/he2019-quick/study.json",
@@ -211,6 +211,12 @@ fn spelled_stages_that_differ_from_the_blocks_are_refused_naming_the_list() {
                 "noise", "design", "simulate", "fit", "adaptive", "fine", "search", "verify",
             ],
             "[noise, design, simulate, fit, fine, search, verify]",
+        ),
+        // A sensitivity list missing its verification.
+        (
+            "experiments/yan2015-smoke/study.json",
+            &["design", "simulate", "fit", "sensitivity"],
+            "[design, simulate, fit, sensitivity, verify] for yan2015's sensitivity levels",
         ),
     ];
     for (study, stages, allowed) in cases {

@@ -137,9 +137,14 @@ impl StudyFile {
             StudyFile::Calibration(s) if s.noise_aware.is_some() && s.fidelity().is_none() => {
                 allowed.push_str(", with `adaptive` after `fit` for the adaptive rounds")
             }
+            StudyFile::Design(_) if analysis == Analysis::Sensitivity => allowed.push_str(
+                " for yan2015's sensitivity levels, or with `search` in place of \
+                 `sensitivity` (and `screen` first when the study screens) for a response \
+                 surface",
+            ),
             StudyFile::Design(_) => allowed.push_str(
-                " for a response surface, or with `fit` then `sensitivity` in place of \
-                 `search` (and no `screen`) for yan2015's sensitivity levels",
+                " for a response surface, or with `sensitivity` in place of `search` (and no \
+                 `screen`) for yan2015's sensitivity levels",
             ),
             StudyFile::Calibration(_) => {}
         }

@@ -60,7 +60,7 @@ use crate::stats::trend::{weighted_line, LineFit, LinePrediction};
 /// Lack-of-fit p-value below which a line is not trusted to extrapolate:
 /// its levels' means stray from it by more than their runs' scatter allows.
 pub const LACK_OF_FIT_ALPHA: f64 = 0.05;
-use crate::store::{InputRef, Lineage, RunStatus, Store, TimingRecord};
+use crate::store::{InputRef, Lineage, Store, TimingRecord};
 pub use plan::{Level, SizePlan, SurfaceEnergyRule};
 
 /// The resolution figures that measure the device across, in particle
@@ -294,19 +294,7 @@ pub fn sweep(
     out_dir: &Path,
 ) -> Result<SizeSweep, StudyError> {
     let points: Vec<_> = plan.levels.iter().map(|l| l.point.clone()).collect();
-    let total: usize = points.iter().map(|p| p.replicates.len()).sum();
-    let done = points
-        .iter()
-        .flat_map(|p| &p.replicates)
-        .filter(|e| store.status(&e.id()) == RunStatus::Complete)
-        .count();
-    eprintln!(
-        "convergence: {} sizes x {} replicates = {total} runs ({done} already complete) on {} \
-         thread(s)",
-        plan.levels.len(),
-        points.first().map_or(0, |p| p.replicates.len()),
-        pool.jobs
-    );
+    tradeoff::announce("convergence", "sizes", store, &points, pool);
     let outcomes = run(store, &points, pool)?;
     let rows = summarise(store, base, plan, &outcomes, &analysis.responses);
     let done = analyse(base, &manifest.display().to_string(), plan, rows, analysis);

@@ -44,6 +44,25 @@ pub fn default_dir(store: &Store, base: &Experiment) -> PathBuf {
     store.root().join("tradeoff").join(base.id().short(12))
 }
 
+/// Says on stderr what a sweep of `points` (each `unit`) will run and how
+/// much of it the store already holds: `<what>: 3 points x 5 replicates =
+/// 15 runs (4 already complete) on 2 thread(s)`.
+pub(crate) fn announce(what: &str, unit: &str, store: &Store, points: &[Point], pool: &Executor) {
+    let total: usize = points.iter().map(|p| p.replicates.len()).sum();
+    let done = points
+        .iter()
+        .flat_map(|p| &p.replicates)
+        .filter(|e| store.status(&e.id()) == RunStatus::Complete)
+        .count();
+    let replicates = points.first().map_or(0, |p| p.replicates.len());
+    eprintln!(
+        "{what}: {} {unit} x {replicates} replicates = {total} runs ({done} already complete) on \
+         {} thread(s)",
+        points.len(),
+        pool.jobs
+    );
+}
+
 /// `repose tradeoff`: runs the planned `points` (see [`run`]), summarises
 /// them and writes tradeoff.csv / .md / .svg with one lineage record beside
 /// each (the knobs, the replicates, the base manifest file and every run id)
@@ -57,18 +76,8 @@ pub fn sweep(
     pool: &Executor,
     out_dir: Option<PathBuf>,
 ) -> Result<Sweep, StudyError> {
-    let total: usize = points.iter().map(|p| p.replicates.len()).sum();
-    let done = points
-        .iter()
-        .flat_map(|p| &p.replicates)
-        .filter(|e| store.status(&e.id()) == RunStatus::Complete)
-        .count();
+    announce("tradeoff", "points", store, points, pool);
     let replicates = points.first().map_or(0, |p| p.replicates.len());
-    eprintln!(
-        "tradeoff: {} points x {replicates} replicates = {total} runs ({done} already complete) on {} thread(s)",
-        points.len(),
-        pool.jobs
-    );
     let outcomes = run(store, points, pool)?;
     let rows = summarise(points, &outcomes);
     let dir = out_dir.unwrap_or_else(|| default_dir(store, base));
