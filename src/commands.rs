@@ -41,7 +41,8 @@ use crate::study::probability_search::gp_search;
 use crate::study::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
 use crate::study::spec::{is_design_study, DesignStudy};
 use crate::study::stages::{
-    default_candidates, Analysis, Method, Stage as ClassicStage, StudyFile, StudySpec,
+    default_candidates, names_adaptive, Analysis, Method, Stage as ClassicStage, StudyFile,
+    StudySpec,
 };
 use crate::study::tolerance_search::load_model;
 use crate::study::tolerance_search::{search as run_search, SearchSettings};
@@ -713,8 +714,7 @@ pub fn learning_curve(
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
     if !design_path(&dir).is_file() {
         sample_stage(
-            &study,
-            &dir,
+            (&study, &dir),
             &SampleSettings::default(),
             out,
             &mut io::stderr(),
@@ -828,13 +828,12 @@ pub fn sample(
     err: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_sized_study(store_root, study_path, max_runs)?;
-    sample_stage(&study, &dir, settings, out, err)
+    sample_stage((&study, &dir), settings, out, err)
 }
 
 /// The design stage of an opened study ([`sample`]).
 fn sample_stage(
-    study: &Study,
-    dir: &StudyDir,
+    (study, dir): Opened<'_>,
     settings: &SampleSettings,
     out: &mut dyn Write,
     err: &mut dyn Write,
@@ -1359,12 +1358,17 @@ fn open_design_study(store_root: &Path, path: &Path) -> Result<(DesignStudy, Sto
             path.display()
         ))
     };
+    let text = std::fs::read_to_string(path).map_err(|source| {
+        manifest_error(path)(ManifestError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    })?;
     // Said before any validation error of the other format.
-    let text = std::fs::read_to_string(path).unwrap_or_default();
     if serde_json::from_str::<serde_json::Value>(&text).is_ok() && !is_design_study(&text) {
         return Err(not_design());
     }
-    let StudyFile::Design(study) = StudyFile::read(path).map_err(manifest_error(path))? else {
+    let StudyFile::Design(study) = StudyFile::parse(&text).map_err(manifest_error(path))? else {
         return Err(not_design());
     };
     let store = open_store(store_root)?;
@@ -1548,8 +1552,7 @@ pub fn calibrate(
         None => write_default_study(store_root, flags.json, out)?,
     };
     let study = read_study(&path)?;
-    // `adaptive` among the file's stages is `--adaptive`.
-    let adaptive = flags.adaptive || study.stages.iter().any(|s| s == "adaptive");
+    let adaptive = flags.adaptive || names_adaptive(&study.stages);
     let flags = CalibrateFlags { adaptive, ..flags };
     let candidates = candidates.unwrap_or_else(|| default_candidates(&study));
     StudySpec::calibration(&study, adaptive, candidates)
@@ -1623,15 +1626,11 @@ fn run_classic_stage(
     candidates: usize,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, dir) = opened;
+    let study = opened.0;
     match stage {
-        ClassicStage::Design { .. } => sample_stage(
-            study,
-            dir,
-            &SampleSettings::default(),
-            out,
-            &mut io::stderr(),
-        ),
+        ClassicStage::Design { .. } => {
+            sample_stage(opened, &SampleSettings::default(), out, &mut io::stderr())
+        }
         ClassicStage::Simulate { .. } => batch_leaving_out_failures(store_root, opened, exec, out),
         ClassicStage::Fit { .. } => {
             train_stage(opened, &TrainOptions::defaults(study), None, None, out)

@@ -50,10 +50,15 @@ impl StudyFile {
             path: path.to_path_buf(),
             source,
         })?;
-        let file = if is_design_study(&text) {
-            parse_design_study(&text).map(StudyFile::Design)
+        StudyFile::parse(&text)
+    }
+
+    /// [`StudyFile::read`] of a study file's text.
+    pub fn parse(text: &str) -> Result<StudyFile, ManifestError> {
+        let file = if is_design_study(text) {
+            parse_design_study(text).map(StudyFile::Design)
         } else {
-            parse_study(&text).map(StudyFile::Calibration)
+            parse_study(text).map(StudyFile::Calibration)
         }?;
         file.spec(None, false)?;
         Ok(file)
@@ -93,7 +98,7 @@ impl StudyFile {
 
     /// Whether the spelled stages name the adaptive rounds.
     pub fn spells_adaptive(&self) -> bool {
-        self.spelled().iter().any(|s| s == "adaptive")
+        names_adaptive(self.spelled())
     }
 
     /// The study's stage list, run with `analysis` (a command's, or the
@@ -150,6 +155,12 @@ impl StudyFile {
         }
         Err(invalid(allowed))
     }
+}
+
+/// Whether a spelled stage list names the adaptive rounds (they then run
+/// as with `--adaptive`).
+pub fn names_adaptive(stages: &[String]) -> bool {
+    stages.iter().any(|s| s == "adaptive")
 }
 
 /// The subcommand that runs a design study's analysis.
