@@ -25,8 +25,8 @@ use crate::store::{
     write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, Store, StoreError,
 };
 use crate::study::batch::batch as run_batch;
-use crate::study::calibration::Stage;
 use crate::study::convergence;
+use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
 use crate::study::fidelity_pilot::{self, PilotSpec};
 use crate::study::fine::fine as run_fine;
@@ -38,7 +38,7 @@ use crate::study::pipeline::{
     calibrate_noise_aware as calibrate_noise_aware_stages, NoiseAwareOptions,
 };
 use crate::study::probability_search::gp_search;
-use crate::study::sample::{design_path, diagnose_table, sample as run_sample, SampleSettings};
+use crate::study::sample::{diagnose_table, sample as run_sample, SampleSettings};
 use crate::study::spec::{is_design_study, DesignStudy};
 use crate::study::stages::{
     default_candidates, names_adaptive, Analysis, Method, Stage as ClassicStage, StudyFile,
@@ -712,7 +712,7 @@ pub fn learning_curve(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    if !design_path(&dir).is_file() {
+    if !dir.design_path().is_file() {
         sample_stage(
             (&study, &dir),
             &SampleSettings::default(),

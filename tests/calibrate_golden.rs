@@ -21,7 +21,7 @@ use repose::commands::{calibrate, CalibrateFlags};
 use repose::exec::Executor;
 use repose::manifest::parse_study;
 use repose::scenes::plan::Limits;
-use repose::study::calibration::Stage;
+use repose::study::dir::Stage;
 use repose::study::dir::StudyDir;
 
 const STUDY: &str = "experiments/calibrate-smoke/study.json";

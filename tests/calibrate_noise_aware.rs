@@ -13,16 +13,16 @@ use repose::manifest::{parse_study, validate_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
 use repose::study::adaptive::{Stop, ADAPTIVE_INDEX, ROUND_STRIDE};
-use repose::study::calibration::Stage;
+use repose::study::calibration::acceptance;
+use repose::study::dir::Stage;
 use repose::study::dir::StudyDir;
-use repose::study::gp_train::adaptive_path;
 use repose::study::noise::{noise, NOISE_INDEX};
 use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome, NoiseAwareOptions};
 use repose::study::replicates::read_replicates_csv;
 use repose::study::sample::SampleSettings;
 use repose::study::tolerance_search::SearchSettings;
 use repose::study::train::TrainOptions;
-use repose::study::verify_clusters::{acceptance, VERIFY_INDEX};
+use repose::study::verify_clusters::VERIFY_INDEX;
 use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use serde_json::{json, Value};
 
@@ -373,7 +373,7 @@ fn adaptive_rounds_stop_at_a_passing_candidate_or_the_budget() {
     assert_eq!(outcome.runs.adaptive, a.runs);
     // The table holds each round's candidate with 5 seeds and its explorer
     // with 2, in round order.
-    let per_index: Vec<(u64, usize)> = read_replicates_csv(&adaptive_path(&dir), &study)
+    let per_index: Vec<(u64, usize)> = read_replicates_csv(&dir.adaptive_path(), &study)
         .unwrap()
         .iter()
         .map(|p| (p.index, p.runs.len()))
@@ -609,7 +609,7 @@ fn screening_fixes_a_parameter_below_the_noise_at_its_centre() {
 /// freedom per point says little, see `stats::homogeneity`.)
 #[test]
 fn a_noisier_half_of_the_design_gives_the_gp_per_point_noise() {
-    use repose::study::batch::{batch, replicates_path};
+    use repose::study::batch::batch;
     use repose::study::gp_train::{train_gp, NoiseModel, PRIOR_DF};
     use repose::study::sample::sample;
     let tmp = tempfile::tempdir().unwrap();
@@ -649,7 +649,7 @@ fn a_noisier_half_of_the_design_gives_the_gp_per_point_noise() {
     assert_eq!(out.model.nugget_var, 0.0);
     // Each design row's noise is (ν₀σ² + Σ(y − ȳ)²)/(ν₀ + n − 1)/n of its
     // own replicates, and the noisy half's is larger on average.
-    let design = read_replicates_csv(&replicates_path(&dir), &study).unwrap();
+    let design = read_replicates_csv(&dir.replicates_path(), &study).unwrap();
     let sigma2 = noise_model.pooled_variance_deg2;
     let (mut loud, mut quiet) = (Vec::new(), Vec::new());
     let data = &out.model.data;

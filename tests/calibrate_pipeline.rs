@@ -14,10 +14,10 @@ use repose::manifest::{parse_study, Experiment, Study};
 use repose::scenes::run_experiment;
 use repose::store::{Lineage, RunDir, RunResult, RunStatus, Store};
 use repose::study::acceptance::Verdict;
-use repose::study::batch::{angles_path, batch, read_angles};
-use repose::study::calibration::Stage;
+use repose::study::batch::{batch, read_angles};
+use repose::study::dir::Stage;
 use repose::study::dir::StudyDir;
-use repose::study::sample::{design_path, experiment_path, sample, SampleSettings};
+use repose::study::sample::{sample, SampleSettings};
 use repose::study::tolerance_search::{search, SearchSettings};
 use repose::study::train::{train_study, TrainOptions};
 use repose::study::verify_clusters::{verify, VERIFY_INDEX};
@@ -85,12 +85,12 @@ fn sample_writes_one_valid_manifest_per_point_and_reruns_byte_identically() {
     let dir = StudyDir::new(&tmp.path().join("store"), &s, &path);
     let out = sample(&dir, &s, &SampleSettings::default()).unwrap();
     assert_eq!(out.points.len(), 12);
-    let design = std::fs::read_to_string(design_path(&dir)).unwrap();
+    let design = std::fs::read_to_string(dir.design_path()).unwrap();
     let mut strata: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); 2];
     for (i, line) in design.lines().skip(1).enumerate() {
         let cells: Vec<&str> = line.split(',').collect();
         assert_eq!(cells[0], i.to_string());
-        let manifest = experiment_path(&dir, i);
+        let manifest = dir.experiment_path(i);
         // The manifest is canonical JSON: its sha256 is the listed id.
         assert_eq!(sha256(&manifest), cells[3]);
         let e = repose::manifest::read_experiment(&manifest).unwrap();
@@ -113,7 +113,7 @@ fn sample_writes_one_valid_manifest_per_point_and_reruns_byte_identically() {
     for s in &strata {
         assert_eq!(s.len(), 12, "one sample per stratum in every column");
     }
-    let lineage = Lineage::read_beside(&design_path(&dir)).unwrap();
+    let lineage = Lineage::read_beside(&dir.design_path()).unwrap();
     assert_eq!(lineage.stage, "sample");
     assert_eq!(lineage.inputs[0].sha256, s.id().to_string());
     assert_eq!(sha256(&dir.study_file()), s.id().to_string());
@@ -169,13 +169,13 @@ fn batch_runs_every_sample_and_a_rerun_computes_nothing() {
     assert_eq!(fake.calls.load(Ordering::SeqCst), 12);
     let (_, rows) = read_angles(&dir, &s).unwrap();
     for row in &rows {
-        let e = repose::manifest::read_experiment(&experiment_path(&dir, row.index)).unwrap();
+        let e = repose::manifest::read_experiment(&dir.experiment_path(row.index)).unwrap();
         assert_eq!(row.angle_deg, Some(fake_angle(&e)));
     }
     // Lineage: the design and every result, by sha256.
-    let lineage = Lineage::read_beside(&angles_path(&dir)).unwrap();
+    let lineage = Lineage::read_beside(&dir.angles_path()).unwrap();
     assert_eq!(lineage.inputs.len(), 2 + 12);
-    assert_eq!(lineage.inputs[1].sha256, sha256(&design_path(&dir)));
+    assert_eq!(lineage.inputs[1].sha256, sha256(&dir.design_path()));
     for input in &lineage.inputs[2..] {
         assert_eq!(input.sha256, sha256(&store.root().join(&input.id_or_path)));
     }
@@ -206,10 +206,10 @@ fn a_killed_batch_resumes_without_repeating_work() {
     // and manifest, no result), the rest untouched.
     let earlier = Fake::new(&[]);
     for i in 0..5 {
-        let e = repose::manifest::read_experiment(&experiment_path(&dir, i)).unwrap();
+        let e = repose::manifest::read_experiment(&dir.experiment_path(i)).unwrap();
         store.run_cached(&e, |e, d| earlier.run(e, d)).unwrap();
     }
-    let e5 = repose::manifest::read_experiment(&experiment_path(&dir, 5)).unwrap();
+    let e5 = repose::manifest::read_experiment(&dir.experiment_path(5)).unwrap();
     let d5 = store.run_dir(&e5.id());
     std::fs::create_dir_all(d5.path()).unwrap();
     std::fs::write(d5.manifest_path(), repose::manifest::canonical_json(&e5)).unwrap();
@@ -255,7 +255,7 @@ fn failures_are_recorded_reported_and_retried_without_stopping_the_others() {
     assert!(out.failures[0]
         .message
         .contains("injected failure of sample 3"));
-    let table = std::fs::read_to_string(angles_path(&dir)).unwrap();
+    let table = std::fs::read_to_string(dir.angles_path()).unwrap();
     let statuses: Vec<&str> = table
         .lines()
         .skip(1)
@@ -425,7 +425,7 @@ fn a_real_drum_design_runs_end_to_end() {
     assert!(out.failures.is_empty(), "{:?}", out.failures);
     let (_, rows) = read_angles(&dir, &s).unwrap();
     for row in &rows {
-        let e = repose::manifest::read_experiment(&experiment_path(&dir, row.index)).unwrap();
+        let e = repose::manifest::read_experiment(&dir.experiment_path(row.index)).unwrap();
         let result = store.load_result(&e.id()).unwrap().unwrap();
         assert_eq!(row.angle_deg, result.headline_angle_deg);
         let a = row.angle_deg.unwrap();
@@ -497,8 +497,8 @@ fn a_damaged_run_is_recomputed_by_the_next_batch_not_trusted() {
     let (s, store, dir) = sampled_and_batched(tmp.path());
     let before = common::snapshot(dir.path());
 
-    let e3 = repose::manifest::read_experiment(&experiment_path(&dir, 3)).unwrap();
-    let e7 = repose::manifest::read_experiment(&experiment_path(&dir, 7)).unwrap();
+    let e3 = repose::manifest::read_experiment(&dir.experiment_path(3)).unwrap();
+    let e7 = repose::manifest::read_experiment(&dir.experiment_path(7)).unwrap();
     std::fs::write(store.run_dir(&e3.id()).result_path(), b"").unwrap();
     let r7 = store.run_dir(&e7.id()).result_path();
     let text = std::fs::read_to_string(&r7).unwrap();

@@ -13,7 +13,7 @@ use repose::manifest::{parse_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
 use repose::study::batch::{batch, read_design};
 use repose::study::calibration::parameter_names;
-use repose::study::calibration::Stage;
+use repose::study::dir::Stage;
 use repose::study::dir::StudyDir;
 use repose::study::learning_curve::{csv_header, learning_curve};
 use repose::study::sample::{sample, SampleSettings};

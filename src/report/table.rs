@@ -217,6 +217,21 @@ pub fn text_cell(s: &str) -> String {
     }
 }
 
+/// `text` as a CSV cell of [`Cell::Text`]: commas become semicolons, quotes
+/// apostrophes and line breaks spaces (an error message such as "has 1 surface
+/// points, at least 3 are needed" would otherwise split its row). The Markdown
+/// table quotes the message as it is.
+pub fn csv_word(text: &str) -> String {
+    text.chars()
+        .map(|c| match c {
+            ',' => ';',
+            '"' => '\'',
+            '\n' | '\r' => ' ',
+            c => c,
+        })
+        .collect()
+}
+
 /// A finite number, or `None`.
 pub fn parse_number(cell: &str) -> Option<f64> {
     cell.trim().parse::<f64>().ok().filter(|v| v.is_finite())

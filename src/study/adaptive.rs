@@ -20,7 +20,7 @@
 //! its acceptance record (`adaptive/acceptance.json`, the rule, the seeds
 //! and α) before its first round, with α = 0.05 divided by every round the
 //! budget allows plus the search candidates verification will judge
-//! ([`max_rounds`], [`super::verify_clusters::comparisons`]; Bonferroni), the same
+//! ([`super::calibration::max_rounds`], [`super::calibration::comparisons`]; Bonferroni), the same
 //! record verification then writes: stopping at the first pass keeps the
 //! chance of any wrong pass ≤ 0.05.
 //!
@@ -38,20 +38,19 @@
 use serde::Serialize;
 use serde_json::json;
 
-use super::calibration::parameter_names;
 use super::calibration::to_physical;
-use super::calibration::Stage;
+use super::calibration::{acceptance, comparisons, parameter_names, round_runs};
 use super::dir::json_bytes;
 use super::dir::write_output;
+use super::dir::Stage;
 use super::dir::StudyDir;
-use super::gp_train::{adaptive_path, fit_model};
+use super::gp_train::fit_model;
 use super::noise::read_noise;
 use super::replicates::{read_replicates_csv, replicates_csv, run_replicated, Replicated};
-use super::verify_clusters::{acceptance, comparisons};
 use super::StudyError;
 use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::exec::Executor;
-use crate::manifest::{Experiment, NoiseAware, Study};
+use crate::manifest::{Experiment, Study};
 use crate::search::acquisition::probability_in_band;
 use crate::store::{RunDir, RunResult, Store};
 use crate::streams::{rng, Stream};
@@ -134,28 +133,12 @@ pub fn passing_candidate(
     study: &Study,
     rule: &Record,
 ) -> Result<Option<Hit>, StudyError> {
-    let path = adaptive_path(dir);
+    let path = dir.adaptive_path();
     if !path.is_file() {
         return Ok(None);
     }
     let points = read_replicates_csv(&path, study)?;
     Ok(passing(&points, rule))
-}
-
-/// Runs one round takes: the candidate's pre-registered seeds in the
-/// calibration scene and `replicates` for each other point of the batch.
-fn round_runs(n: &NoiseAware, candidate_seeds: usize) -> usize {
-    candidate_seeds + (n.adaptive.batch as usize).saturating_sub(1) * n.replicates as usize
-}
-
-/// The most rounds the adaptive budget allows: the rounds the acceptance
-/// rule counts as comparisons before the first one runs. They are counted
-/// at the fewest seeds a candidate may run (`verification_seeds`), so the
-/// count bounds the rounds whatever the power calculation picks.
-pub fn max_rounds(study: &Study) -> usize {
-    study.noise_aware.as_ref().map_or(0, |n| {
-        n.adaptive.max_runs as usize / round_runs(n, n.verification_seeds as usize).max(1)
-    })
 }
 
 /// Runs the adaptive rounds (see the module docs), seeded by `seed`, for a
@@ -176,7 +159,7 @@ where
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
     let spec = super::noise::noise_aware(study)?;
-    let path = adaptive_path(dir);
+    let path = dir.adaptive_path();
     let mut points: Vec<Replicated> = if path.is_file() {
         read_replicates_csv(&path, study)?
     } else {

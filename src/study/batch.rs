@@ -12,11 +12,10 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::calibration::parameter_names;
-use super::calibration::Stage;
 use super::dir::write_output;
+use super::dir::Stage;
 use super::dir::StudyDir;
 use super::replicates::{replicates_csv, run_replicated};
-use super::sample::{design_path, experiment_path};
 use super::StudyError;
 use crate::exec::outcomes::{run_collect, Retry, RunOutcome};
 use crate::exec::Executor;
@@ -92,14 +91,9 @@ impl BatchOutcome {
     }
 }
 
-/// `batch/angles.csv`.
-pub fn angles_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Batch).join("angles.csv")
-}
-
 /// Reads `sample/design.csv`, checking its columns against the study.
 pub fn read_design(dir: &StudyDir, study: &Study) -> Result<Vec<DesignRow>, StudyError> {
-    let path = dir.require(design_path(dir), Stage::Sample)?;
+    let path = dir.require(dir.design_path(), Stage::Sample)?;
     let table = Table::read(&path)?;
     let names = parameter_names(study);
     let mut expected = vec!["index".to_string()];
@@ -142,7 +136,7 @@ pub fn read_design(dir: &StudyDir, study: &Study) -> Result<Vec<DesignRow>, Stud
 
 /// Loads the manifest of a design row and checks that it hashes to the row's id.
 fn load_experiment(dir: &StudyDir, row: &DesignRow) -> Result<Experiment, StudyError> {
-    let path = experiment_path(dir, row.index);
+    let path = dir.experiment_path(row.index);
     let experiment = read_experiment(&path).map_err(|e| StudyError::Inconsistent {
         path: path.clone(),
         message: format!("{e}: rerun `repose sample`"),
@@ -226,7 +220,7 @@ fn write_angles(
     let mut csv = CsvWriter::new(&header);
     let mut lineage = dir
         .lineage(Stage::Batch, json!({ "angle": "headline_angle_deg" }))
-        .with_input(dir.input("design", &design_path(dir))?);
+        .with_input(dir.input("design", &dir.design_path())?);
     for (row, outcome) in design.iter().zip(outcomes) {
         let angle = match outcome.result() {
             Some(result) => {
@@ -243,7 +237,7 @@ fn write_angles(
         cells.push(Cell::Text(outcome.status().to_string()));
         csv.row(&cells);
     }
-    let path = angles_path(dir);
+    let path = dir.angles_path();
     super::calibration::create_dir(&dir.stage(Stage::Batch))?;
     write_output(&path, csv.finish().as_bytes(), &lineage)?;
     Ok(path)
@@ -262,7 +256,7 @@ pub struct AngleRow {
 
 /// Reads `batch/angles.csv` for `study`.
 pub fn read_angles(dir: &StudyDir, study: &Study) -> Result<(PathBuf, Vec<AngleRow>), StudyError> {
-    let path = dir.require(angles_path(dir), Stage::Batch)?;
+    let path = dir.require(dir.angles_path(), Stage::Batch)?;
     let table = Table::read(&path)?;
     let names = parameter_names(study);
     let index = table.numbers(&path, "index")?;
@@ -279,11 +273,6 @@ pub fn read_angles(dir: &StudyDir, study: &Study) -> Result<(PathBuf, Vec<AngleR
         })
         .collect();
     Ok((path, rows))
-}
-
-/// `batch/replicates.csv`: every replicate run of a noise-aware study.
-pub fn replicates_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Batch).join("replicates.csv")
 }
 
 /// The batch of a noise-aware study: `replicates` packing seeds per design
@@ -320,7 +309,7 @@ where
     for (row, p) in design.iter().zip(&runs) {
         if p.runs[0].id != row.id {
             return Err(StudyError::Inconsistent {
-                path: super::sample::design_path(dir),
+                path: dir.design_path(),
                 message: format!(
                     "sample {}: replicate 0 hashes to {}, the design lists {}: rerun `repose sample`",
                     row.index, p.runs[0].id, row.id
@@ -362,7 +351,7 @@ where
                         .unwrap_or_else(|| "headline_angle_deg".into()),
                     "replicates": replicates, "value": "mean of the measured replicates" }),
         )
-        .with_input(dir.input("design", &design_path(dir))?);
+        .with_input(dir.input("design", &dir.design_path())?);
     for p in &runs {
         for r in &p.runs {
             let file = store.run_dir(&r.id).result_path();
@@ -390,11 +379,11 @@ where
     }
     super::calibration::create_dir(&dir.stage(Stage::Batch))?;
     write_output(
-        &replicates_path(dir),
+        &dir.replicates_path(),
         replicates_csv(study, &[(&study.calibration.name, &runs)]).as_bytes(),
         &lineage,
     )?;
-    let table = angles_path(dir);
+    let table = dir.angles_path();
     write_output(&table, csv.finish().as_bytes(), &lineage)?;
     Ok(BatchOutcome {
         total,

@@ -89,90 +89,13 @@
 //! Randomness comes from ChaCha8 streams of the study's design seed (or a seed
 //! given on the command line), one stream per purpose ([`crate::streams::Stream`]).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+use crate::manifest::NoiseAware;
 use crate::manifest::Study;
 use crate::store::{write_atomic, StoreError};
-use crate::study::dir::StageName;
-
-/// The stages, in pipeline order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stage {
-    /// `repose sample`.
-    Sample,
-    /// `repose batch`.
-    Batch,
-    /// `repose train`.
-    Train,
-    /// `repose search`.
-    Search,
-    /// `repose verify`.
-    Verify,
-    /// `repose learning-curve` (reads the batch; not part of `calibrate`).
-    LearningCurve,
-    /// `repose noise`: the noise floor of a noise-aware study.
-    Noise,
-    /// The adaptive rounds of `repose calibrate --adaptive`.
-    Adaptive,
-    /// `repose fine`: the fine level of a two-level study.
-    Fine,
-}
-
-impl Stage {
-    /// The stage's name (its subcommand and its directory).
-    pub fn name(self) -> &'static str {
-        match self {
-            Stage::Sample => "sample",
-            Stage::Batch => "batch",
-            Stage::Train => "train",
-            Stage::Search => "search",
-            Stage::Verify => "verify",
-            Stage::LearningCurve => "learning-curve",
-            Stage::Noise => "noise",
-            Stage::Adaptive => "adaptive",
-            Stage::Fine => "fine",
-        }
-    }
-}
-
-use crate::study::dir::StudyDir;
+use crate::study::acceptance::{comparison_alpha, AcceptedTarget, Record};
 use crate::study::StudyError;
-
-impl StageName for Stage {
-    fn stage_name(&self) -> &str {
-        self.name()
-    }
-}
-
-impl StudyDir {
-    /// `path` if it exists with the bytes its stage wrote (the sha256 in its
-    /// lineage record, when the record has one), else the error telling which
-    /// stage to run: an output edited since its stage ran is never read.
-    pub(super) fn require(&self, path: PathBuf, stage: Stage) -> Result<PathBuf, StudyError> {
-        if path.is_file() {
-            let bytes = std::fs::read(&path).map_err(StoreError::io(&path))?;
-            if let Ok(lineage) = crate::store::Lineage::read_beside(&path) {
-                if !lineage.describes(&bytes) {
-                    return Err(StudyError::Inconsistent {
-                        path,
-                        message: format!(
-                            "changed since its stage wrote it (sha256 in its lineage record): \
-                             rerun `repose {}`",
-                            stage.name()
-                        ),
-                    });
-                }
-            }
-            Ok(path)
-        } else {
-            Err(StudyError::MissingStage {
-                missing: path,
-                stage: stage.name().to_string(),
-                study: self.source().to_path_buf(),
-            })
-        }
-    }
-}
 
 pub(super) fn create_dir(path: &Path) -> Result<(), StudyError> {
     std::fs::create_dir_all(path).map_err(|source| {
@@ -231,4 +154,68 @@ pub fn to_unit(study: &Study, physical: &[f64]) -> Vec<f64> {
         .zip(physical)
         .map(|(r, x)| (x - r.min) / (r.max - r.min))
         .collect()
+}
+
+/// Fewest packing seeds per candidate and scene: a noise-aware study's
+/// `verification_seeds`; one (he2019's Table 3) for the classic method.
+pub fn verification_seeds(study: &Study) -> u32 {
+    study
+        .noise_aware
+        .as_ref()
+        .map_or(1, |n| n.verification_seeds)
+}
+
+/// The study's acceptance record for `comparisons` candidates (see the
+/// module docs); `noise_sd_deg` is the calibration scene's σ from the noise
+/// floor, when measured, from which the calibration scene's seeds are
+/// chosen by power within [`verification_seeds`, `max_verification_seeds`].
+pub fn acceptance(study: &Study, noise_sd_deg: Option<f64>, comparisons: usize) -> Record {
+    let seeds = verification_seeds(study) as usize;
+    let cap = study
+        .noise_aware
+        .as_ref()
+        .and_then(|n| n.max_verification_seeds)
+        .map_or(seeds, |c| c as usize);
+    let alpha = comparison_alpha(comparisons);
+    let targets = std::iter::once(&study.calibration)
+        .chain(&study.verification)
+        .enumerate()
+        .map(|(k, t)| {
+            let target = AcceptedTarget::new(
+                &t.name,
+                t.response.as_deref().unwrap_or("headline_angle_deg"),
+                t.target_angle_deg,
+                t.tolerance_fraction,
+                seeds,
+            );
+            match noise_sd_deg.filter(|s| *s > 0.0) {
+                Some(sigma) if k == 0 => target.with_power(sigma, cap, alpha),
+                _ => target,
+            }
+        })
+        .collect();
+    Record::new(comparisons, targets)
+}
+
+/// Candidates a calibration judges, K of the acceptance rule: the search's
+/// `candidates` and, when the adaptive stage runs, every round its budget
+/// allows (each round's candidate is a chance of a wrong pass).
+pub fn comparisons(study: &Study, candidates: usize, adaptive: bool) -> usize {
+    candidates + if adaptive { max_rounds(study) } else { 0 }
+}
+
+/// Runs one round takes: the candidate's pre-registered seeds in the
+/// calibration scene and `replicates` for each other point of the batch.
+pub fn round_runs(n: &NoiseAware, candidate_seeds: usize) -> usize {
+    candidate_seeds + (n.adaptive.batch as usize).saturating_sub(1) * n.replicates as usize
+}
+
+/// The most rounds the adaptive budget allows: the rounds the acceptance
+/// rule counts as comparisons before the first one runs. They are counted
+/// at the fewest seeds a candidate may run (`verification_seeds`), so the
+/// count bounds the rounds whatever the power calculation picks.
+pub fn max_rounds(study: &Study) -> usize {
+    study.noise_aware.as_ref().map_or(0, |n| {
+        n.adaptive.max_runs as usize / round_runs(n, n.verification_seeds as usize).max(1)
+    })
 }

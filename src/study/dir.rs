@@ -175,6 +175,148 @@ impl StudyDir {
     }
 }
 
+/// The stages, in pipeline order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// `repose sample`.
+    Sample,
+    /// `repose batch`.
+    Batch,
+    /// `repose train`.
+    Train,
+    /// `repose search`.
+    Search,
+    /// `repose verify`.
+    Verify,
+    /// `repose learning-curve` (reads the batch; not part of `calibrate`).
+    LearningCurve,
+    /// `repose noise`: the noise floor of a noise-aware study.
+    Noise,
+    /// The adaptive rounds of `repose calibrate --adaptive`.
+    Adaptive,
+    /// `repose fine`: the fine level of a two-level study.
+    Fine,
+}
+
+impl Stage {
+    /// The stage's name (its subcommand and its directory).
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Sample => "sample",
+            Stage::Batch => "batch",
+            Stage::Train => "train",
+            Stage::Search => "search",
+            Stage::Verify => "verify",
+            Stage::LearningCurve => "learning-curve",
+            Stage::Noise => "noise",
+            Stage::Adaptive => "adaptive",
+            Stage::Fine => "fine",
+        }
+    }
+}
+
+impl StageName for Stage {
+    fn stage_name(&self) -> &str {
+        self.name()
+    }
+}
+
+impl StudyDir {
+    /// `path` if it exists with the bytes its stage wrote (the sha256 in its
+    /// lineage record, when the record has one), else the error telling which
+    /// stage to run: an output edited since its stage ran is never read.
+    pub(crate) fn require(&self, path: PathBuf, stage: Stage) -> Result<PathBuf, StudyError> {
+        if path.is_file() {
+            let bytes = std::fs::read(&path).map_err(StoreError::io(&path))?;
+            if let Ok(lineage) = crate::store::Lineage::read_beside(&path) {
+                if !lineage.describes(&bytes) {
+                    return Err(StudyError::Inconsistent {
+                        path,
+                        message: format!(
+                            "changed since its stage wrote it (sha256 in its lineage record): \
+                             rerun `repose {}`",
+                            stage.name()
+                        ),
+                    });
+                }
+            }
+            Ok(path)
+        } else {
+            Err(StudyError::MissingStage {
+                missing: path,
+                stage: stage.name().to_string(),
+                study: self.source().to_path_buf(),
+            })
+        }
+    }
+}
+
+/// Every he2019 stage output that another stage or command reads: the one
+/// place a file's path is decided, so a reader never imports its writer.
+impl StudyDir {
+    /// `sample/experiments/<index>.json`: one sample's experiment manifest.
+    pub fn experiment_path(&self, index: usize) -> PathBuf {
+        self.stage(Stage::Sample)
+            .join("experiments")
+            .join(format!("{index:04}.json"))
+    }
+
+    /// `sample/design.csv`: the sampled parameter sets.
+    pub fn design_path(&self) -> PathBuf {
+        self.stage(Stage::Sample).join("design.csv")
+    }
+
+    /// `noise/noise.csv`: the noise floor's runs.
+    pub fn noise_runs_path(&self) -> PathBuf {
+        self.stage(Stage::Noise).join("noise.csv")
+    }
+
+    /// `noise/noise.json`: the noise floor.
+    pub fn noise_path(&self) -> PathBuf {
+        self.stage(Stage::Noise).join("noise.json")
+    }
+
+    /// `batch/angles.csv`: each design point's (replicate-mean) angle.
+    pub fn angles_path(&self) -> PathBuf {
+        self.stage(Stage::Batch).join("angles.csv")
+    }
+
+    /// `batch/replicates.csv`: every replicate run of the design.
+    pub fn replicates_path(&self) -> PathBuf {
+        self.stage(Stage::Batch).join("replicates.csv")
+    }
+
+    /// `train/gp.json`: the trained Gaussian process.
+    pub fn gp_path(&self) -> PathBuf {
+        self.stage(Stage::Train).join("gp.json")
+    }
+
+    /// `adaptive/replicates.csv`: the points the adaptive rounds ran.
+    pub fn adaptive_path(&self) -> PathBuf {
+        self.stage(Stage::Adaptive).join("replicates.csv")
+    }
+
+    /// `fine/two_level.json`: the two-level Gaussian process.
+    pub fn two_level_path(&self) -> PathBuf {
+        self.stage(Stage::Fine).join("two_level.json")
+    }
+
+    /// `search/clusters.csv`: the search's candidates.
+    pub fn clusters_path(&self) -> PathBuf {
+        self.stage(Stage::Search).join("clusters.csv")
+    }
+
+    /// `verify/verification.csv`: each candidate's verdict in every scene.
+    pub fn verification_path(&self) -> PathBuf {
+        self.stage(Stage::Verify).join("verification.csv")
+    }
+
+    /// `verify/acceptance.json`: the acceptance record, written before the runs.
+    pub fn acceptance_path(&self) -> PathBuf {
+        self.stage(Stage::Verify).join("acceptance.json")
+    }
+}
+
 pub(crate) fn create_dir(path: &Path) -> Result<(), StoreError> {
     std::fs::create_dir_all(path).map_err(StoreError::io(path))
 }

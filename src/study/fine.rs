@@ -53,15 +53,14 @@
 //! every other output of the stage is the same bytes on any executor.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::batch::replicates_path;
-use super::calibration::{parameter_names, to_unit, Stage};
+use super::calibration::{parameter_names, to_unit};
+use super::dir::Stage;
 use super::dir::{json_bytes, write_output, StudyDir};
-use super::gp_train::{gp_path, read_gp};
+use super::gp_train::read_gp;
 use super::replicates::{
     pooled_variance, read_replicates_csv, replicates_csv, run_replicated_at, Replicated,
 };
@@ -186,16 +185,11 @@ pub fn verified_size(study: &Study) -> f64 {
     study.fidelity().map_or(1.0, |f| f.fine_size)
 }
 
-/// `fine/two_level.json`.
-pub fn two_level_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Fine).join("two_level.json")
-}
-
 /// The two-level process the fine stage fitted, rebuilt from `gp.json` (the
 /// coarse level) and `two_level.json` (δ and the fine data).
 pub fn load_two_level(dir: &StudyDir) -> Result<TwoLevelGp, StudyError> {
     let coarse = read_gp(dir)?.process()?;
-    let path = dir.require(two_level_path(dir), Stage::Fine)?;
+    let path = dir.require(dir.two_level_path(), Stage::Fine)?;
     let record: TwoLevelRecord = Store::read_json(&path).map_err(|e| StudyError::Inconsistent {
         path: path.clone(),
         message: format!("{e}: rerun `repose fine`"),
@@ -342,7 +336,7 @@ where
     let spec = fidelity(study)?;
     let model = read_gp(dir)?;
     let coarse = model.process()?;
-    let design_file = dir.require(replicates_path(dir), Stage::Batch)?;
+    let design_file = dir.require(dir.replicates_path(), Stage::Batch)?;
     let design: Vec<Replicated> = read_replicates_csv(&design_file, study)?;
     let unit: Vec<Vec<f64>> = design.iter().map(|r| to_unit(study, &r.point)).collect();
     let wanted = (spec.fine_points as usize).min(design.len());
@@ -450,7 +444,7 @@ where
     dir.prepare_stage(study, Stage::Fine)?;
     let mut lineage = dir
         .lineage(Stage::Fine, json!({ "fidelity": spec }))
-        .with_input(dir.input("gp", &gp_path(dir))?)
+        .with_input(dir.input("gp", &dir.gp_path())?)
         .with_input(dir.input("design", &design_file)?);
     for r in runs.iter().flat_map(|p| &p.runs) {
         let file = store.run_dir(&r.id).result_path();
@@ -465,7 +459,7 @@ where
         replicates_csv(study, &[(scene, runs.as_slice())]).as_bytes(),
         &lineage,
     )?;
-    write_output(&two_level_path(dir), &json_bytes(&record), &lineage)?;
+    write_output(&dir.two_level_path(), &json_bytes(&record), &lineage)?;
     write_output(&out.join("fine.md"), markdown.as_bytes(), &lineage)?;
     write_output(&out.join("cost.json"), &json_bytes(&cost), &lineage)?;
     Ok(FineOutcome {

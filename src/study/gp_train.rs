@@ -97,13 +97,11 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use super::batch::replicates_path;
 use super::calibration::to_unit;
-use super::calibration::Stage;
 use super::dir::json_bytes;
 use super::dir::write_output;
+use super::dir::Stage;
 use super::dir::StudyDir;
-use super::noise::noise_runs_path;
 use super::replicates::{pooled_variance, read_replicates_csv, Replicated};
 use super::StudyError;
 use crate::doe::lhs::Placement;
@@ -125,16 +123,6 @@ pub const HOMOGENEITY_ALPHA: f64 = 0.05;
 /// Prior degrees of freedom ν₀ of the pooled variance in a point's shrunk
 /// variance (see the module docs for why 2).
 pub const PRIOR_DF: f64 = 2.0;
-
-/// `adaptive/replicates.csv`.
-pub fn adaptive_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Adaptive).join("replicates.csv")
-}
-
-/// `train/gp.json`.
-pub fn gp_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Train).join("gp.json")
-}
 
 /// The surrogate's training rows.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -345,15 +333,15 @@ pub type Predictor<'a> = &'a dyn Fn(&[f64]) -> f64;
 
 /// Reads every replicates table the study has, with the files read.
 fn gather(dir: &StudyDir, study: &Study) -> Result<(Sourced, Vec<PathBuf>), StudyError> {
-    let design_file = dir.require(replicates_path(dir), Stage::Batch)?;
+    let design_file = dir.require(dir.replicates_path(), Stage::Batch)?;
     let mut rows: Vec<(String, Replicated)> = read_replicates_csv(&design_file, study)?
         .into_iter()
         .map(|r| ("design".to_string(), r))
         .collect();
     let mut files = vec![design_file];
     for (source, path) in [
-        ("noise", noise_runs_path(dir)),
-        ("adaptive", adaptive_path(dir)),
+        ("noise", dir.noise_runs_path()),
+        ("adaptive", dir.adaptive_path()),
     ] {
         if path.is_file() {
             rows.extend(
@@ -605,7 +593,7 @@ pub fn train_gp(
     )?;
     write_output(&out.join("surrogates.md"), markdown.as_bytes(), &lineage)?;
     write_output(&out.join("surrogates.json"), &json_bytes(&table), &lineage)?;
-    write_output(&gp_path(dir), &json_bytes(&model), &lineage)?;
+    write_output(&dir.gp_path(), &json_bytes(&model), &lineage)?;
     Ok(GpOutcome {
         model,
         metrics: table,
@@ -764,7 +752,7 @@ fn noise_sentence(n: &NoiseCeiling, sigma2: f64, metrics: &[SurrogateMetrics]) -
 
 /// Reads `train/gp.json`.
 pub fn read_gp(dir: &StudyDir) -> Result<GpModel, StudyError> {
-    let path = dir.require(gp_path(dir), Stage::Train)?;
+    let path = dir.require(dir.gp_path(), Stage::Train)?;
     Store::read_json(&path).map_err(|e| StudyError::Inconsistent {
         path,
         message: format!("{e}: rerun `repose train`"),

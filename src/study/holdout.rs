@@ -27,12 +27,11 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::batch::replicates_path;
-use super::calibration::{parameter_names, to_unit, Stage};
+use super::calibration::{parameter_names, to_unit};
+use super::dir::Stage;
 use super::dir::StudyDir;
 use super::fidelity_pilot::Pilot;
 use super::fine::{cpu_s, FinePredictor};
-use super::noise::noise_runs_path;
 use super::replicates::read_replicates_csv;
 use super::StudyError;
 use crate::manifest::{SizeDistribution, Study};
@@ -200,8 +199,8 @@ fn training_cost(dir: &StudyDir, study: &Study, store: &Store) -> Result<(usize,
     let mut runs = 0;
     let mut cpu = 0.0;
     for path in [
-        noise_runs_path(dir),
-        dir.require(replicates_path(dir), Stage::Batch)?,
+        dir.noise_runs_path(),
+        dir.require(dir.replicates_path(), Stage::Batch)?,
         dir.stage(Stage::Fine).join("runs.csv"),
     ] {
         if !path.is_file() {

@@ -39,8 +39,8 @@ use serde_json::json;
 
 use super::batch::{read_angles, read_design, AngleRow};
 use super::calibration::parameter_names;
-use super::calibration::Stage;
 use super::dir::write_output;
+use super::dir::Stage;
 use super::dir::StudyDir;
 use super::tolerance_search::{find, SearchSettings};
 use super::train::input_scales;
@@ -183,7 +183,7 @@ pub fn learning_curve(
                     "train": TrainSettings::with_seed(study.design.seed),
                     "search": SearchSettings::with_seed(study.design.seed) }),
         )
-        .with_input(dir.input("design", &super::sample::design_path(dir))?)
+        .with_input(dir.input("design", &dir.design_path())?)
         .with_input(dir.input("angles", &angles_file)?);
     let names = parameter_names(study);
     let markdown = markdown(study, &names, &rows, capacity, design.len() - capacity);

@@ -16,15 +16,14 @@
 //! itself.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use super::calibration::to_physical;
-use super::calibration::Stage;
 use super::dir::json_bytes;
 use super::dir::write_output;
+use super::dir::Stage;
 use super::dir::StudyDir;
 use super::replicates::{replicates_csv, run_replicated, Replicated};
 use super::StudyError;
@@ -72,16 +71,6 @@ pub struct NoiseOutcome {
     pub runs: Replicated,
     /// The Markdown report (also noise.md).
     pub markdown: String,
-}
-
-/// `noise/noise.csv` (the runs, in the replicates table format).
-pub fn noise_runs_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Noise).join("noise.csv")
-}
-
-/// `noise/noise.json`.
-pub fn noise_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Noise).join("noise.json")
 }
 
 /// The noise-aware block of `study`, or the error saying the stage needs it.
@@ -158,7 +147,7 @@ where
     let markdown = markdown(study, &floor);
     write_output(&out.join("noise.md"), markdown.as_bytes(), &lineage)?;
     write_output(
-        &noise_runs_path(dir),
+        &dir.noise_runs_path(),
         replicates_csv(
             study,
             &[(&study.calibration.name, std::slice::from_ref(&runs))],
@@ -166,7 +155,7 @@ where
         .as_bytes(),
         &lineage,
     )?;
-    write_output(&noise_path(dir), &json_bytes(&floor), &lineage)?;
+    write_output(&dir.noise_path(), &json_bytes(&floor), &lineage)?;
     Ok(NoiseOutcome {
         floor,
         runs,
@@ -176,7 +165,7 @@ where
 
 /// Reads `noise/noise.json`.
 pub fn read_noise(dir: &StudyDir) -> Result<NoiseFloor, StudyError> {
-    let path = dir.require(noise_path(dir), Stage::Noise)?;
+    let path = dir.require(dir.noise_path(), Stage::Noise)?;
     Store::read_json(&path).map_err(|e| StudyError::Inconsistent {
         path,
         message: format!("{e}: rerun `repose noise`"),

@@ -28,9 +28,9 @@ use serde_json::json;
 
 use super::adaptive::{adaptive, AdaptiveOutcome};
 use super::batch::batch;
-use super::calibration::Stage;
 use super::dir::json_bytes;
 use super::dir::write_output;
+use super::dir::Stage;
 use super::dir::StudyDir;
 use super::fine::{fine, TwoLevelRecord};
 use super::gp_train::{train_gp, SurrogateMetrics};

@@ -40,15 +40,14 @@ use serde_json::json;
 
 use super::calibration::parameter_names;
 use super::calibration::to_physical;
-use super::calibration::Stage;
 use super::dir::json_bytes;
 use super::dir::write_output;
+use super::dir::Stage;
 use super::dir::StudyDir;
-use super::fine::{two_level_path, FinePredictor};
-use super::gp_train::{gp_path, read_gp};
+use super::fine::FinePredictor;
+use super::gp_train::read_gp;
 use super::noise::noise_aware;
 use super::tolerance_search::SearchSettings;
-use super::verify_clusters::clusters_path;
 use super::StudyError;
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
@@ -206,9 +205,9 @@ pub fn gp_search(
                         .map(|e| e.parameter.clone()).collect::<Vec<_>>(),
                     "bandwidth_used": bandwidth }),
         )
-        .with_input(dir.input("gp", &gp_path(dir))?);
+        .with_input(dir.input("gp", &dir.gp_path())?);
     if predictor.is_two_level() {
-        lineage = lineage.with_input(dir.input("two_level", &two_level_path(dir))?);
+        lineage = lineage.with_input(dir.input("two_level", &dir.two_level_path())?);
     }
     let mut header = vec!["point".to_string()];
     header.extend(names.iter().cloned());
@@ -264,7 +263,7 @@ pub fn gp_search(
     write_output(&out.join("scatter.svg"), svg.as_bytes(), &lineage)?;
     write_output(&out.join("family.json"), &json_bytes(&family), &lineage)?;
     write_output(&out.join("clusters.md"), markdown.as_bytes(), &lineage)?;
-    write_output(&clusters_path(dir), clusters.finish().as_bytes(), &lineage)?;
+    write_output(&dir.clusters_path(), clusters.finish().as_bytes(), &lineage)?;
     Ok(GpSearchOutcome {
         candidates,
         family,

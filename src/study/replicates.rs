@@ -269,7 +269,7 @@ pub fn replicates_csv(study: &Study, scenes: &[(&str, &[Replicated])]) -> String
                 r.value
                     .as_ref()
                     .err()
-                    .map_or(String::new(), |m| super::verify_clusters::csv_word(m)),
+                    .map_or(String::new(), |m| crate::report::table::csv_word(m)),
             ));
             csv.row(&cells);
         }

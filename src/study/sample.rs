@@ -21,9 +21,9 @@ use super::calibration::parameter_names;
 use super::calibration::serde_name;
 use super::calibration::to_physical;
 use super::calibration::write_file;
-use super::calibration::Stage;
 use super::dir::json_bytes;
 use super::dir::write_output;
+use super::dir::Stage;
 use super::dir::StudyDir;
 use super::StudyError;
 use crate::doe::diagnostics::{diagnose, unit_scaled, Diagnostics};
@@ -92,18 +92,6 @@ struct DiagnosticsRecord<'a> {
     diagnostics: &'a Diagnostics,
 }
 
-/// The manifest of sample `index` inside the sample stage's directory.
-pub fn experiment_path(dir: &StudyDir, index: usize) -> PathBuf {
-    dir.stage(Stage::Sample)
-        .join("experiments")
-        .join(format!("{index:04}.json"))
-}
-
-/// `sample/design.csv`.
-pub fn design_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Sample).join("design.csv")
-}
-
 /// Runs the sample stage.
 pub fn sample(
     dir: &StudyDir,
@@ -157,7 +145,7 @@ pub fn sample(
                 scene: study.calibration.name.clone(),
                 errors,
             })?;
-        let path = experiment_path(dir, index);
+        let path = dir.experiment_path(index);
         write_file(&path, canonical_json(&experiment).as_bytes())?;
         written.push(path);
         let mut row = vec![Cell::Integer(index as u64)];
@@ -183,7 +171,7 @@ pub fn sample(
         &json_bytes(&record),
         &lineage,
     )?;
-    let design_file = design_path(dir);
+    let design_file = dir.design_path();
     write_output(&design_file, design.finish().as_bytes(), &lineage)?;
     Ok(SampleOutcome {
         points,

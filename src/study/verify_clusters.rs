@@ -17,7 +17,7 @@
 //! verification run — from the study (whose id fixes them), the noise floor
 //! and the number of candidates, so they cannot be chosen after the result
 //! is seen; the verification table's lineage names that file.
-//! - **Seeds.** Each scene runs [`verification_seeds`] (a noise-aware
+//! - **Seeds.** Each scene runs [`super::calibration::verification_seeds`] (a noise-aware
 //!   study's `verification_seeds`, 1 for the classic method). Where the
 //!   noise floor has measured the calibration scene's σ, that scene's seeds
 //!   are chosen by the power calculation instead: the fewest that give TOST
@@ -25,7 +25,7 @@
 //!   most `max_verification_seeds` (the record shows the power reached when
 //!   the cap binds). The other scenes' noise is not measured, so no power
 //!   can be computed for them.
-//! - **α.** 0.05 divided by the candidates judged ([`comparisons`]: the
+//! - **α.** 0.05 divided by the candidates judged ([`super::calibration::comparisons`]: the
 //!   search's `--candidates`, plus every round the adaptive budget allows
 //!   when the adaptive stage ran), so a calibration that tries several
 //!   candidates keeps a ≤ 5 % chance of passing any wrongly.
@@ -65,12 +65,12 @@ use serde_json::json;
 
 use super::adaptive::passing_candidate;
 use super::calibration::parameter_names;
-use super::calibration::Stage;
+use super::calibration::{acceptance, comparisons};
 use super::dir::json_bytes;
 use super::dir::write_output;
+use super::dir::Stage;
 use super::dir::StudyDir;
 use super::fine::verified_size;
-use super::gp_train::adaptive_path;
 use super::noise::read_noise;
 use super::replicates::{replicates_csv, run_replicated_at, Replicated};
 use super::StudyError;
@@ -80,7 +80,7 @@ use crate::report::markdown::MarkdownTable;
 use crate::report::table::{Cell, CsvWriter, Table};
 use crate::scenes::resolution::unresolved_figures;
 use crate::store::{RunDir, RunResult, RunStatus, Store};
-use crate::study::acceptance::{comparison_alpha, AcceptedTarget, Judgement, Record};
+use crate::study::acceptance::{Judgement, Record};
 
 /// One candidate in one scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -138,64 +138,6 @@ pub struct VerifyOutcome {
 /// start at 0), the noise floor's and the adaptive points'.
 pub const VERIFY_INDEX: u64 = 3_000_000_000;
 
-/// Fewest packing seeds per candidate and scene: a noise-aware study's
-/// `verification_seeds`; one (he2019's Table 3) for the classic method.
-pub fn verification_seeds(study: &Study) -> u32 {
-    study
-        .noise_aware
-        .as_ref()
-        .map_or(1, |n| n.verification_seeds)
-}
-
-/// The study's acceptance record for `comparisons` candidates (see the
-/// module docs); `noise_sd_deg` is the calibration scene's σ from the noise
-/// floor, when measured, from which the calibration scene's seeds are
-/// chosen by power within [`verification_seeds`, `max_verification_seeds`].
-pub fn acceptance(study: &Study, noise_sd_deg: Option<f64>, comparisons: usize) -> Record {
-    let seeds = verification_seeds(study) as usize;
-    let cap = study
-        .noise_aware
-        .as_ref()
-        .and_then(|n| n.max_verification_seeds)
-        .map_or(seeds, |c| c as usize);
-    let alpha = comparison_alpha(comparisons);
-    let targets = std::iter::once(&study.calibration)
-        .chain(&study.verification)
-        .enumerate()
-        .map(|(k, t)| {
-            let target = AcceptedTarget::new(
-                &t.name,
-                t.response.as_deref().unwrap_or("headline_angle_deg"),
-                t.target_angle_deg,
-                t.tolerance_fraction,
-                seeds,
-            );
-            match noise_sd_deg.filter(|s| *s > 0.0) {
-                Some(sigma) if k == 0 => target.with_power(sigma, cap, alpha),
-                _ => target,
-            }
-        })
-        .collect();
-    Record::new(comparisons, targets)
-}
-
-/// Candidates a calibration judges, K of the acceptance rule: the search's
-/// `candidates` and, when the adaptive stage runs, every round its budget
-/// allows (each round's candidate is a chance of a wrong pass).
-pub fn comparisons(study: &Study, candidates: usize, adaptive: bool) -> usize {
-    candidates
-        + if adaptive {
-            super::adaptive::max_rounds(study)
-        } else {
-            0
-        }
-}
-
-/// `search/clusters.csv` (written by the network's and the GP's search).
-pub fn clusters_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Search).join("clusters.csv")
-}
-
 /// Cluster centres to verify: (group, physical point in parameter order).
 pub(crate) type Centres = Vec<(u64, Vec<f64>)>;
 
@@ -211,7 +153,7 @@ pub(crate) fn read_candidates(
             "--candidates = 0: must be >= 1".into(),
         ));
     }
-    let clusters_file = dir.require(clusters_path(dir), Stage::Search)?;
+    let clusters_file = dir.require(dir.clusters_path(), Stage::Search)?;
     let table = Table::read(&clusters_file)?;
     let groups = table.numbers(&clusters_file, "group")?;
     let columns = parameter_names(study)
@@ -225,16 +167,6 @@ pub(crate) fn read_candidates(
         .map(|(row, g)| (*g as u64, columns.iter().map(|c| c[row]).collect()))
         .collect();
     Ok((clusters_file, points))
-}
-
-/// `verify/verification.csv`.
-pub fn verification_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Verify).join("verification.csv")
-}
-
-/// `verify/acceptance.json`.
-pub fn acceptance_path(dir: &StudyDir) -> PathBuf {
-    dir.stage(Stage::Verify).join("acceptance.json")
 }
 
 /// Runs the verification (see the module docs) on at most `candidates`
@@ -259,7 +191,7 @@ where
     } else {
         None
     };
-    let ran_adaptive = adaptive_path(dir).is_file();
+    let ran_adaptive = dir.adaptive_path().is_file();
     let rule = acceptance(
         study,
         noise_sd,
@@ -281,9 +213,9 @@ where
         .lineage(Stage::Verify, json!({ "record": "acceptance rule" }))
         .with_input(dir.input("clusters", &clusters_file)?);
     if adaptive.is_some() {
-        rule_lineage = rule_lineage.with_input(dir.input("adaptive", &adaptive_path(dir))?);
+        rule_lineage = rule_lineage.with_input(dir.input("adaptive", &dir.adaptive_path())?);
     }
-    write_output(&acceptance_path(dir), &json_bytes(&rule), &rule_lineage)?;
+    write_output(&dir.acceptance_path(), &json_bytes(&rule), &rule_lineage)?;
 
     let targets: Vec<_> = std::iter::once(&study.calibration)
         .chain(&study.verification)
@@ -341,7 +273,7 @@ where
     let mut lineage = dir
         .lineage(Stage::Verify, json!({ "candidates": candidates }))
         .with_input(dir.input("clusters", &clusters_file)?)
-        .with_input(dir.input("acceptance", &acceptance_path(dir))?);
+        .with_input(dir.input("acceptance", &dir.acceptance_path())?);
     for runs in &per_scene {
         for r in runs.iter().flat_map(|p| &p.runs) {
             let file = store.run_dir(&r.id).result_path();
@@ -363,7 +295,7 @@ where
     )?;
     let markdown = markdown(&rule, &rows);
     write_output(&out.join("verification.md"), markdown.as_bytes(), &lineage)?;
-    let table = verification_path(dir);
+    let table = dir.verification_path();
     write_output(&table, csv(&rows).as_bytes(), &lineage)?;
     let all_runs = || per_scene.iter().flatten().flat_map(|p| &p.runs);
     let failed_runs = all_runs()
@@ -501,19 +433,4 @@ fn markdown(rule: &Record, rows: &[VerifyRow]) -> String {
         }
     }
     out
-}
-
-/// `text` as a CSV cell of [`Cell::Text`]: commas become semicolons, quotes
-/// apostrophes and line breaks spaces (an error message such as "has 1 surface
-/// points, at least 3 are needed" would otherwise split its row). The Markdown
-/// table quotes the message as it is.
-pub(crate) fn csv_word(text: &str) -> String {
-    text.chars()
-        .map(|c| match c {
-            ',' => ';',
-            '"' => '\'',
-            '\n' | '\r' => ' ',
-            c => c,
-        })
-        .collect()
 }
