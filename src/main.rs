@@ -18,7 +18,9 @@ use repose::search::meanshift::Kernel;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
 use repose::study::convergence::plan::{SurfaceEnergyRule, RULE_NAMES};
 use repose::study::convergence::SweepRequest;
+use repose::study::fidelity_pilot::PilotSpec;
 use repose::study::sample::SampleSettings;
+use repose::study::sensitivity::Levels;
 use repose::study::stages::Analysis;
 use repose::study::tolerance_search::SearchSettings;
 use repose::study::tradeoff::plan::{Knob, KNOB_NAMES};
@@ -985,6 +987,15 @@ enum AnalysisArg {
     Sensitivity,
 }
 
+impl From<AnalysisArg> for Analysis {
+    fn from(arg: AnalysisArg) -> Analysis {
+        match arg {
+            AnalysisArg::Rsm => Analysis::ResponseSurface,
+            AnalysisArg::Sensitivity => Analysis::Sensitivity,
+        }
+    }
+}
+
 /// Rolling-resistance model on the command line.
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum RollingArg {
@@ -1093,123 +1104,101 @@ impl ListArgs {
     }
 }
 
+/// What every command shares: the run store, the limits of one run and
+/// the most runs a command may start.
+struct Ctx {
+    store: PathBuf,
+    limits: Limits,
+    max_runs: u64,
+}
+
+impl Ctx {
+    /// The executor of a command's `--executor`/`--jobs` options.
+    fn exec(&self, exec: &ExecArgs, jobs: Option<usize>) -> Result<Executor, CommandError> {
+        exec.executor(default_jobs(jobs), self.limits, self.max_runs)
+    }
+}
+
 fn dispatch(cli: Cli) -> Result<(), CommandError> {
     repose::scenes::protocol::set_quiet(cli.quiet);
-    let mut out = io::stdout().lock();
-    let limits = Limits {
-        max_particles: cli.max_particles,
-        max_particle_steps: cli.max_particle_steps,
-        max_log_bytes: cli.max_log_bytes,
+    let out = &mut io::stdout().lock();
+    let c = Ctx {
+        store: cli.store,
+        limits: Limits {
+            max_particles: cli.max_particles,
+            max_particle_steps: cli.max_particle_steps,
+            max_log_bytes: cli.max_log_bytes,
+        },
+        max_runs: cli.max_runs,
     };
+    let s = c.store.as_path();
     match cli.command {
-        Command::Hash { file, kind } => commands::hash(&file, kind, &mut out),
+        Command::Hash { file, kind } => commands::hash(&file, kind, out),
         Command::Validate { files, kind } => {
-            commands::validate(&files, kind, &mut out, &mut io::stderr())
+            commands::validate(&files, kind, out, &mut io::stderr())
         }
         Command::Run {
             manifest,
             dry_run: true,
             json,
         }
-        | Command::Plan { manifest, json } => commands::plan(&manifest, &limits, json, &mut out),
+        | Command::Plan { manifest, json } => commands::plan(&manifest, &c.limits, json, out),
         Command::Run { manifest, .. } => {
-            commands::run(&cli.store, &manifest, &limits, &mut out, &mut io::stderr())
+            commands::run(s, &manifest, &c.limits, out, &mut io::stderr())
         }
-        Command::Inspect { file } => commands::inspect(&cli.store, &file, &mut out),
-        Command::Bench(args) => {
-            let mut progress: Box<dyn io::Write + Send> = if cli.quiet {
-                Box::new(io::sink())
-            } else {
-                Box::new(io::stderr())
-            };
-            commands::bench(&args.options(), args.json, &mut out, &mut progress)
-        }
-        Command::Screen {
+        Command::Inspect { file } => commands::inspect(s, &file, out),
+        Command::Bench(args) => bench(args, cli.quiet, out),
+        Command::Verdict(args) => verdict(args, out),
+        Command::Holdout {
             study,
-            jobs,
+            pilot,
+            pilot_study,
             json,
-            exec,
-        } => commands::screen(
-            &cli.store,
-            &study,
-            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
+        } => commands::holdout(s, &study, &pilot, &pilot_study, json, out),
+        Command::Audit { path, rerun, seed } => commands::audit(s, &path, rerun, seed, out),
+        Command::Report { study, out: dir } => commands::report(s, &study, dir.as_deref(), out),
+        Command::Responses { scene, json } => commands::responses(scene.as_deref(), json, out),
+        Command::Stages {
+            study,
+            analysis,
+            adaptive,
             json,
-            &mut out,
-        ),
-        Command::Verdict(args) => commands::verdict_table(
-            &args.table,
-            &repose::study::verdict_table::VerdictSpec {
-                value: args.value,
-                group: args.group,
-                target: args.target,
-                tolerance: args.tolerance,
-            },
-            args.json,
-            &mut out,
-        ),
-        Command::Rsm(args) => match (&args.table, &args.study) {
-            (Some(table), _) => {
-                let spec = args.table_spec().map_err(CommandError::Usage)?;
-                commands::rsm_table(table, &spec, args.json, &mut out)
-            }
-            (None, Some(study)) => commands::rsm(
-                &cli.store,
-                study,
-                &args
-                    .exec
-                    .executor(default_jobs(args.jobs), limits, cli.max_runs)?,
-                args.json,
-                &mut out,
-            ),
-            (None, None) => Err(CommandError::Usage(
-                "rsm: give a study manifest or --table FILE".into(),
-            )),
-        },
-        Command::Sensitivity(args) => match (&args.table, &args.study) {
-            (Some(table), _) => commands::sensitivity_table(
-                table,
-                args.response.as_deref().unwrap_or_default(),
-                &args.factors,
-                args.json,
-                &mut out,
-            ),
-            (None, Some(study)) => {
-                let levels = if args.level.is_empty() {
-                    repose::study::sensitivity::Levels::ALL
-                } else {
-                    repose::study::sensitivity::Levels {
-                        one: args.level.contains(&1),
-                        two: args.level.contains(&2),
-                        three: args.level.contains(&3),
-                    }
-                };
-                commands::sensitivity(
-                    &cli.store,
-                    study,
-                    &args
-                        .exec
-                        .executor(default_jobs(args.jobs), limits, cli.max_runs)?,
-                    levels,
-                    args.json,
-                    &mut out,
-                )
-            }
-            (None, None) => Err(CommandError::Usage(
-                "sensitivity: give a study manifest or --table FILE".into(),
-            )),
-        },
+        } => commands::stages(&study, analysis.map(Analysis::from), adaptive, json, out),
+        Command::Runs {
+            command: RunsCommand::List(args),
+        } => {
+            let format = args.format();
+            commands::runs_list(s, &args.options(), format, out)
+        }
+        Command::Diff { a, b, json } => commands::diff(s, &a, &b, json, out),
+        Command::Studies { json } => commands::studies(s, json, out),
+        Command::Runs {
+            command: RunsCommand::Show { prefix },
+        } => commands::runs_show(s, &prefix, out),
+        Command::Status { study, json } => commands::status(s, &study, json, out),
+        Command::Train(args) => train(s, args, out),
+        Command::Search(args) => search(s, args, out),
+        command @ (Command::Verify { .. }
+        | Command::Calibrate { .. }
+        | Command::Fine { .. }
+        | Command::Noise { .. }
+        | Command::LearningCurve { .. }
+        | Command::Batch { .. }
+        | Command::Sample(_)) => run_calibration(&c, command, out),
+        command => run_design_or_sweep(&c, command, out),
+    }
+}
+
+/// The commands of he2019's calibration study, each running experiments.
+fn run_calibration(c: &Ctx, command: Command, out: &mut dyn io::Write) -> Result<(), CommandError> {
+    let s = c.store.as_path();
+    match command {
         Command::Verify {
             study,
             jobs,
             candidates,
             exec,
-        } => commands::verify(
-            &cli.store,
-            &study,
-            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
-            candidates,
-            &mut out,
-        ),
+        } => commands::verify(s, &study, &c.exec(&exec, jobs)?, candidates, out),
         Command::Calibrate {
             study,
             jobs,
@@ -1217,52 +1206,79 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             adaptive,
             json,
             exec,
-        } => commands::calibrate(
-            &cli.store,
-            study.as_deref(),
-            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
-            candidates,
-            commands::CalibrateFlags { adaptive, json },
-            &mut out,
-        ),
-        Command::Holdout {
-            study,
-            pilot,
-            pilot_study,
-            json,
-        } => commands::holdout(&cli.store, &study, &pilot, &pilot_study, json, &mut out),
-        Command::Fine { study, jobs, exec } => commands::fine(
-            &cli.store,
-            &study,
-            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
-            &mut out,
-        ),
+        } => {
+            let flags = commands::CalibrateFlags { adaptive, json };
+            commands::calibrate(
+                s,
+                study.as_deref(),
+                &c.exec(&exec, jobs)?,
+                candidates,
+                flags,
+                out,
+            )
+        }
+        Command::Fine { study, jobs, exec } => {
+            commands::fine(s, &study, &c.exec(&exec, jobs)?, out)
+        }
         Command::Noise {
             study,
-            seeds,
+            seeds: Some(n),
             json,
             jobs,
             exec,
-        } => {
-            let exec = exec.executor(default_jobs(jobs), limits, cli.max_runs)?;
-            match seeds {
-                Some(n) => commands::scene_noise(&cli.store, &study, n, &exec, json, &mut out),
-                None => commands::noise(&cli.store, &study, &exec, &mut out),
-            }
+        } => commands::scene_noise(s, &study, n, &c.exec(&exec, jobs)?, json, out),
+        Command::Noise {
+            study, jobs, exec, ..
+        } => commands::noise(s, &study, &c.exec(&exec, jobs)?, out),
+        Command::LearningCurve {
+            study,
+            sizes,
+            jobs,
+            exec,
+        } => commands::learning_curve(s, &study, sizes.as_deref(), &c.exec(&exec, jobs)?, out),
+        Command::Sample(args) => sample(s, args, c.max_runs, out),
+        Command::Batch { study, jobs, exec } => {
+            commands::batch(s, &study, &c.exec(&exec, jobs)?, out)
         }
+        _ => unreachable!("dispatch routes only these commands here"),
+    }
+}
+
+/// The design studies' and the sweeps' commands, each running experiments.
+fn run_design_or_sweep(
+    c: &Ctx,
+    command: Command,
+    out: &mut dyn io::Write,
+) -> Result<(), CommandError> {
+    let s = c.store.as_path();
+    match command {
+        Command::Screen {
+            study,
+            jobs,
+            json,
+            exec,
+        } => commands::screen(s, &study, &c.exec(&exec, jobs)?, json, out),
+        Command::Rsm(args) => rsm(c, args, out),
+        Command::Sensitivity(args) => sensitivity(c, args, out),
         Command::Tradeoff(args) => {
             let options = args.options().map_err(CommandError::Usage)?;
-            let exec = args
-                .exec
-                .executor(default_jobs(args.jobs), limits, cli.max_runs)?;
-            commands::tradeoff(&cli.store, &args.manifest, &options, &exec, &mut out)
+            commands::tradeoff(
+                s,
+                &args.manifest,
+                &options,
+                &c.exec(&args.exec, args.jobs)?,
+                out,
+            )
         }
         Command::Convergence(args) => {
             let options = args.options().map_err(CommandError::Usage)?;
-            let exec = args
-                .exec
-                .executor(default_jobs(args.jobs), limits, cli.max_runs)?;
-            commands::convergence(&cli.store, &args.manifest, &options, &exec, &mut out)
+            commands::convergence(
+                s,
+                &args.manifest,
+                &options,
+                &c.exec(&args.exec, args.jobs)?,
+                out,
+            )
         }
         Command::Pilot {
             study,
@@ -1274,78 +1290,107 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
             json,
             exec,
         } => {
-            let exec = exec.executor(default_jobs(jobs), limits, cli.max_runs)?;
-            let spec = repose::study::fidelity_pilot::PilotSpec {
+            let spec = PilotSpec {
                 scene,
                 points,
                 seeds,
                 fine_factor: fine_size,
             };
-            commands::pilot(&cli.store, &study, &spec, &exec, json, &mut out)
+            commands::pilot(s, &study, &spec, &c.exec(&exec, jobs)?, json, out)
         }
-        Command::LearningCurve {
-            study,
-            sizes,
-            jobs,
-            exec,
-        } => commands::learning_curve(
-            &cli.store,
-            &study,
-            sizes.as_deref(),
-            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
-            &mut out,
-        ),
-        Command::Audit { path, rerun, seed } => {
-            commands::audit(&cli.store, &path, rerun, seed, &mut out)
-        }
-        Command::Report { study, out: dir } => {
-            commands::report(&cli.store, &study, dir.as_deref(), &mut out)
-        }
-        Command::Responses { scene, json } => commands::responses(scene.as_deref(), json, &mut out),
-        Command::Stages {
-            study,
-            analysis,
-            adaptive,
-            json,
-        } => {
-            let analysis = analysis.map(|a| match a {
-                AnalysisArg::Rsm => Analysis::ResponseSurface,
-                AnalysisArg::Sensitivity => Analysis::Sensitivity,
-            });
-            commands::stages(&study, analysis, adaptive, json, &mut out)
-        }
-        Command::Runs {
-            command: RunsCommand::List(args),
-        } => {
-            let format = args.format();
-            commands::runs_list(&cli.store, &args.options(), format, &mut out)
-        }
-        Command::Diff { a, b, json } => commands::diff(&cli.store, &a, &b, json, &mut out),
-        Command::Studies { json } => commands::studies(&cli.store, json, &mut out),
-        Command::Runs {
-            command: RunsCommand::Show { prefix },
-        } => commands::runs_show(&cli.store, &prefix, &mut out),
-        Command::Sample(args) => sample(&cli.store, args, cli.max_runs, &mut out),
-        Command::Batch { study, jobs, exec } => commands::batch(
-            &cli.store,
-            &study,
-            &exec.executor(default_jobs(jobs), limits, cli.max_runs)?,
-            &mut out,
-        ),
-        Command::Status { study, json } => commands::status(&cli.store, &study, json, &mut out),
-        Command::Train(args) => train(&cli.store, args, &mut out),
-        Command::Search(args) => {
-            let settings = SearchSettings {
-                samples: args.samples,
-                seed: 0,
-                placement: args.placement,
-                kernel: args.kernel,
-                bandwidth: args.bandwidth,
-                quantile: args.quantile,
-            };
-            commands::search(&cli.store, &args.study, &settings, args.seed, &mut out)
-        }
+        _ => unreachable!("dispatch routes only these commands here"),
     }
+}
+
+/// `repose bench`: progress on stderr unless `--quiet`.
+fn bench(args: BenchArgs, quiet: bool, out: &mut dyn io::Write) -> Result<(), CommandError> {
+    let mut progress: Box<dyn io::Write + Send> = if quiet {
+        Box::new(io::sink())
+    } else {
+        Box::new(io::stderr())
+    };
+    commands::bench(&args.options(), args.json, out, &mut progress)
+}
+
+/// `repose verdict TABLE`.
+fn verdict(args: VerdictArgs, out: &mut dyn io::Write) -> Result<(), CommandError> {
+    let spec = repose::study::verdict_table::VerdictSpec {
+        value: args.value,
+        group: args.group,
+        target: args.target,
+        tolerance: args.tolerance,
+    };
+    commands::verdict_table(&args.table, &spec, args.json, out)
+}
+
+/// `repose rsm STUDY` or `repose rsm --table FILE`.
+fn rsm(c: &Ctx, args: RsmArgs, out: &mut dyn io::Write) -> Result<(), CommandError> {
+    match (&args.table, &args.study) {
+        (Some(table), _) => {
+            let spec = args.table_spec().map_err(CommandError::Usage)?;
+            commands::rsm_table(table, &spec, args.json, out)
+        }
+        (None, Some(study)) => commands::rsm(
+            &c.store,
+            study,
+            &c.exec(&args.exec, args.jobs)?,
+            args.json,
+            out,
+        ),
+        (None, None) => Err(CommandError::Usage(
+            "rsm: give a study manifest or --table FILE".into(),
+        )),
+    }
+}
+
+/// `repose sensitivity STUDY` or `repose sensitivity --table FILE`.
+fn sensitivity(
+    c: &Ctx,
+    args: SensitivityArgs,
+    out: &mut dyn io::Write,
+) -> Result<(), CommandError> {
+    match (&args.table, &args.study) {
+        (Some(table), _) => commands::sensitivity_table(
+            table,
+            args.response.as_deref().unwrap_or_default(),
+            &args.factors,
+            args.json,
+            out,
+        ),
+        (None, Some(study)) => {
+            let levels = if args.level.is_empty() {
+                Levels::ALL
+            } else {
+                Levels {
+                    one: args.level.contains(&1),
+                    two: args.level.contains(&2),
+                    three: args.level.contains(&3),
+                }
+            };
+            let exec = c.exec(&args.exec, args.jobs)?;
+            commands::sensitivity(&c.store, study, &exec, levels, args.json, out)
+        }
+        (None, None) => Err(CommandError::Usage(
+            "sensitivity: give a study manifest or --table FILE".into(),
+        )),
+    }
+}
+
+/// `repose search STUDY`.
+fn search(
+    store: &std::path::Path,
+    args: SearchArgs,
+    out: &mut dyn io::Write,
+) -> Result<(), CommandError> {
+    let settings = SearchSettings {
+        samples: args.samples,
+        seed: 0,
+        placement: args.placement,
+        kernel: args.kernel,
+        bandwidth: args.bandwidth,
+        quantile: args.quantile,
+    };
+    commands::search(store, &args.study, &settings, args.seed, out)
 }
 
 fn sample(

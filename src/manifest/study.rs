@@ -193,12 +193,10 @@ pub struct TargetScene {
 }
 
 impl TargetScene {
-    /// The target band [target (1 − tol), target (1 + tol)], degrees.
+    /// The target band [target (1 − tol), target (1 + tol)], degrees
+    /// ([`crate::stats::equivalence::band`]).
     pub fn band_deg(&self) -> (f64, f64) {
-        (
-            self.target_angle_deg * (1.0 - self.tolerance_fraction),
-            self.target_angle_deg * (1.0 + self.tolerance_fraction),
-        )
+        crate::stats::equivalence::band(self.target_angle_deg, self.tolerance_fraction)
     }
 }
 

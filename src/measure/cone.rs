@@ -17,16 +17,18 @@
 //!
 //! and the angle of repose is atan(s). The axis (x₀, y₀) is fitted because a
 //! pile poured from a tilted outlet stands off the platform's centre; it
-//! starts at the highest particle and the fit is Gauss–Newton with
-//! Levenberg–Marquardt damping on the four parameters (h, s, x₀, y₀).
+//! starts at the highest particle and the fit is the project's one
+//! Levenberg–Marquardt loop ([`crate::stats::levenberg`], Marquardt damping)
+//! on the four parameters (h, s, x₀, y₀).
 //! Every surface point of the band weighs the same, so the outer rings,
 //! which hold most of the surface, dominate as they do in a photograph of
 //! the whole pile.
 
-use nalgebra::{Matrix4, Vector4};
+use nalgebra::{DMatrix, DVector};
 
 use super::{check_positive, check_snapshot, mean_diameter, MeasureError};
 use crate::dem::vec3::Vec3;
+use crate::stats::levenberg::{minimise, Damping, LeastSquares, LmSettings, Stopping};
 
 /// How to fit a pile's surface as a cone.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -174,37 +176,65 @@ struct ConeFit {
     r2: f64,
 }
 
-/// Residuals and Jacobian of the cone at parameters (h, s, x₀, y₀).
-fn normal_equations(points: &[[f64; 3]], p: &Vector4<f64>) -> (Matrix4<f64>, Vector4<f64>, f64) {
-    let mut jtj = Matrix4::zeros();
-    let mut jtr = Vector4::zeros();
-    let mut sse = 0.0;
-    for q in points {
-        let (dx, dy) = (q[0] - p[2], q[1] - p[3]);
-        let rho = dx.hypot(dy);
-        let residual = q[2] - (p[0] - p[1] * rho);
-        let (ux, uy) = if rho > 0.0 {
-            (dx / rho, dy / rho)
-        } else {
-            (0.0, 0.0)
-        };
-        let j = Vector4::new(1.0, -rho, p[1] * ux, p[1] * uy);
-        jtj += j * j.transpose();
-        jtr += j * residual;
-        sse += residual * residual;
-    }
-    (jtj, jtr, sse)
+/// The cone z = h − s ρ as a least-squares problem in θ = (h, s, x₀, y₀)
+/// for the one Levenberg–Marquardt loop ([`crate::stats::levenberg`]).
+struct ConeProblem<'a> {
+    points: &'a [[f64; 3]],
 }
 
-fn sse_at(points: &[[f64; 3]], p: &Vector4<f64>) -> f64 {
-    points
-        .iter()
-        .map(|q| {
-            let rho = (q[0] - p[2]).hypot(q[1] - p[3]);
-            let r = q[2] - (p[0] - p[1] * rho);
-            r * r
-        })
-        .sum()
+impl ConeProblem<'_> {
+    /// The model height at `q` and its horizontal distance ρ from the axis.
+    fn model(q: &[f64; 3], p: &[f64]) -> (f64, f64, f64, f64) {
+        let (dx, dy) = (q[0] - p[2], q[1] - p[3]);
+        let rho = dx.hypot(dy);
+        (p[0] - p[1] * rho, rho, dx, dy)
+    }
+}
+
+impl LeastSquares for ConeProblem<'_> {
+    fn objective(&self, p: &[f64]) -> f64 {
+        self.points
+            .iter()
+            .map(|q| {
+                let r = Self::model(q, p).0 - q[2];
+                r * r
+            })
+            .sum()
+    }
+
+    fn linearise(&self, p: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+        let n = self.points.len();
+        let mut e = DVector::zeros(n);
+        let mut jacobian = DMatrix::zeros(n, 4);
+        for (i, q) in self.points.iter().enumerate() {
+            let (model, rho, dx, dy) = Self::model(q, p);
+            let (ux, uy) = if rho > 0.0 {
+                (dx / rho, dy / rho)
+            } else {
+                (0.0, 0.0)
+            };
+            e[i] = model - q[2];
+            jacobian[(i, 0)] = 1.0;
+            jacobian[(i, 1)] = -rho;
+            jacobian[(i, 2)] = p[1] * ux;
+            jacobian[(i, 3)] = p[1] * uy;
+        }
+        (e, jacobian)
+    }
+}
+
+/// The loop's settings: Marquardt damping from 10⁻³, at most 200 trials,
+/// stopping on a relative gain or a relative step below 10⁻¹².
+fn cone_lm() -> LmSettings {
+    LmSettings {
+        damping: Damping::Marquardt { initial: 1e-3 },
+        stopping: Stopping {
+            max_trials: Some(200),
+            objective_gain: Some(1e-12),
+            step: Some(1e-12),
+            ..Stopping::default()
+        },
+    }
 }
 
 /// Fits the cone from the axis `start` (see the module docs).
@@ -231,35 +261,13 @@ fn fit_cone(points: &[[f64; 3]], start: [f64; 2]) -> Result<ConeFit, MeasureErro
         });
     }
     let s0 = -sxz / sxx;
-    let mut p = Vector4::new(mz + s0 * mr, s0, start[0], start[1]);
-    let mut lambda = 1e-3;
-    let (mut jtj, mut jtr, mut sse) = normal_equations(points, &p);
-    for _ in 0..200 {
-        let mut damped = jtj;
-        for k in 0..4 {
-            damped[(k, k)] += lambda * jtj[(k, k)].max(1e-300);
-        }
-        let Some(step) = damped.cholesky().map(|c| c.solve(&jtr)) else {
-            lambda *= 10.0;
-            continue;
-        };
-        let trial = p + step;
-        let trial_sse = sse_at(points, &trial);
-        if trial_sse.is_finite() && trial_sse < sse {
-            let gain = sse - trial_sse;
-            p = trial;
-            (jtj, jtr, sse) = normal_equations(points, &p);
-            lambda = (lambda / 10.0).max(1e-12);
-            if gain <= 1e-12 * sse || step.norm() <= 1e-12 * (p.norm() + 1e-12) {
-                break;
-            }
-        } else {
-            lambda *= 10.0;
-            if lambda > 1e12 {
-                break;
-            }
-        }
-    }
+    let problem = ConeProblem { points };
+    let fit = minimise(
+        &problem,
+        &[mz + s0 * mr, s0, start[0], start[1]],
+        &cone_lm(),
+    );
+    let (p, sse) = (fit.theta, fit.objective);
     let (xmin, xmax, ymin, ymax) = points.iter().fold(
         (
             f64::INFINITY,

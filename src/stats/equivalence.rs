@@ -77,6 +77,14 @@ fn upper_tail(t: f64, df: f64) -> f64 {
     }
 }
 
+/// The equivalence band of a target: target × (1 ∓ tolerance) as
+/// (lo, hi), lo ≤ hi for a target of either sign. The one band formula:
+/// he2019's targets (Eq. 8–10), the design studies' and `repose verdict`.
+pub fn band(target: f64, tolerance: f64) -> (f64, f64) {
+    let (a, b) = (target * (1.0 - tolerance), target * (1.0 + tolerance));
+    (a.min(b), a.max(b))
+}
+
 /// TOST of `values` against the band `band` = (lo, hi) (see the module
 /// docs); `None` for fewer than two values (no spread, so no test).
 pub fn tost(values: &[f64], band: (f64, f64)) -> Option<Tost> {

@@ -338,6 +338,13 @@ impl Store {
         &self.root
     }
 
+    /// Run `id`'s `timing.json` ([`TimingRecord`]), if it has a readable
+    /// one (a run computed here; failed, foreign and damaged runs may not):
+    /// the one reader of what a run cost.
+    pub fn timing(&self, id: &ContentId) -> Option<TimingRecord> {
+        Store::read_json(&self.run_dir(id).timing_path()).ok()
+    }
+
     /// The directory of run `id` (whether or not it exists).
     pub fn run_dir(&self, id: &ContentId) -> RunDir {
         RunDir {

@@ -253,3 +253,13 @@ pub struct TimingRecord {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thread_cpu_s: Option<f64>,
 }
+
+impl TimingRecord {
+    /// The run's CPU cost, s: its thread's CPU time, or its wall time where
+    /// the platform has no per-thread clock (a run of an executor uses one
+    /// thread, so the two agree up to waiting). The one rule every stage,
+    /// sweep and analysis prices a run by.
+    pub fn cpu_s(&self) -> f64 {
+        self.thread_cpu_s.unwrap_or(self.wall_time_s)
+    }
+}

@@ -190,13 +190,6 @@ pub fn seeds_for_power(sigma: f64, band: (f64, f64), alpha: f64, cap: usize) -> 
     equivalence::replicates_for_power(sigma, band, alpha, TARGET_POWER, cap)
 }
 
-/// The band target × (1 ∓ tolerance) as (lo, hi), lo ≤ hi for a target of
-/// either sign.
-pub fn band(target: f64, tolerance: f64) -> (f64, f64) {
-    let (a, b) = (target * (1.0 - tolerance), target * (1.0 + tolerance));
-    (a.min(b), a.max(b))
-}
-
 /// One judged target of an acceptance record: a scene's (or a design
 /// study's) response, its band and the power its seeds have.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -239,7 +232,7 @@ impl AcceptedTarget {
             response: response.to_string(),
             target,
             tolerance_fraction,
-            band: band(target, tolerance_fraction),
+            band: equivalence::band(target, tolerance_fraction),
             seeds,
             sigma: None,
             seeds_for_power: None,

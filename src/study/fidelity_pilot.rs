@@ -216,7 +216,7 @@ pub fn pilot(
         RunOutcome::Complete(r) => super::replicates::response_of(r, target).ok(),
         _ => None,
     };
-    let cpu = |e: &Experiment| super::fine::cpu_s(store, &e.id());
+    let cpu = |e: &Experiment| store.timing(&e.id()).map(|t| t.cpu_s());
     let mut outcomes = collected.outcomes.iter();
     let mut points = Vec::new();
     for planned_point in &planned {

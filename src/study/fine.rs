@@ -72,7 +72,7 @@ use crate::report::markdown::{Align, MarkdownTable};
 use crate::stats::gp::{GaussianProcess, GpHyper, GpPrediction, GpSettings};
 use crate::stats::gp_two_level::{LevelData, TwoLevelFit, TwoLevelGp};
 use crate::stats::summary::mean_ci;
-use crate::store::{RunDir, RunResult, Store, TimingRecord};
+use crate::store::{RunDir, RunResult, Store};
 
 /// Points chosen by space filling before the model chooses.
 pub const SPACE_FILLING_POINTS: usize = 3;
@@ -482,19 +482,16 @@ fn pool_noise(points: &mut [FinePoint], runs: &[Replicated]) {
     }
 }
 
-/// CPU-s of run `id` (its thread's CPU, or its wall time without one).
-pub(crate) fn cpu_s(store: &Store, id: &ContentId) -> Option<f64> {
-    let t: TimingRecord = Store::read_json(&store.run_dir(id).timing_path()).ok()?;
-    Some(t.thread_cpu_s.unwrap_or(t.wall_time_s))
-}
-
 fn level_cost(store: &Store, design: &[Replicated], fine: &[Replicated]) -> LevelCost {
     let sum = |rows: &[Replicated]| -> (usize, f64, usize) {
         let ids: Vec<&ContentId> = rows
             .iter()
             .flat_map(|r| r.runs.iter().map(|s| &s.id))
             .collect();
-        let timed: Vec<f64> = ids.iter().filter_map(|id| cpu_s(store, id)).collect();
+        let timed: Vec<f64> = ids
+            .iter()
+            .filter_map(|id| store.timing(id).map(|t| t.cpu_s()))
+            .collect();
         (ids.len(), timed.iter().sum(), timed.len())
     };
     let (coarse_runs, coarse_cpu_s, _) = sum(design);

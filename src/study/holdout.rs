@@ -31,7 +31,7 @@ use super::calibration::{parameter_names, to_unit};
 use super::dir::Stage;
 use super::dir::StudyDir;
 use super::fidelity_pilot::Pilot;
-use super::fine::{cpu_s, FinePredictor};
+use super::fine::FinePredictor;
 use super::replicates::read_replicates_csv;
 use super::StudyError;
 use crate::manifest::{SizeDistribution, Study};
@@ -211,7 +211,7 @@ fn training_cost(dir: &StudyDir, study: &Study, store: &Store) -> Result<(usize,
             .flat_map(|p| &p.runs)
         {
             runs += 1;
-            cpu += cpu_s(store, &r.id).unwrap_or(0.0);
+            cpu += store.timing(&r.id).map_or(0.0, |t| t.cpu_s());
         }
     }
     Ok((runs, cpu))

@@ -49,7 +49,7 @@ use crate::manifest::{ContentId, Study};
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::{learning_curve_plot, CurvePoint};
 use crate::report::table::{Cell, CsvWriter};
-use crate::store::{Store, TimingRecord};
+use crate::store::Store;
 use crate::surrogate::ga_bp::{split_at, DEFAULT_TRAIN_FRACTION};
 use crate::surrogate::ga_bp::{sweep, Dataset, TrainSettings};
 
@@ -157,11 +157,7 @@ pub fn learning_curve(
     check_sizes(&sizes, capacity)?;
     let wall: Vec<Option<f64>> = design
         .iter()
-        .map(|d| {
-            Store::read_json::<TimingRecord>(&store.run_dir(&d.id).timing_path())
-                .ok()
-                .map(|t| t.wall_time_s)
-        })
+        .map(|d| store.timing(&d.id).map(|t| t.wall_time_s))
         .collect();
     let sum = |range: std::ops::Range<usize>| -> f64 { wall[range].iter().flatten().sum() };
     let validation_wall = sum(capacity..design.len());

@@ -8,8 +8,8 @@
 //! interval, the standard deviation σ, and the precision per cost σ² × CPU
 //! seconds per run: the variance one run leaves per second spent, the figure
 //! of merit of a measurement protocol (halving σ is worth four times the
-//! cost). CPU seconds are the runs' mean wall time (their `timing.json`) ×
-//! the threads each had: one on the local pool, `--cpus-per-task` on Slurm.
+//! cost). CPU seconds are the runs' mean CPU time ([`TimingRecord::cpu_s`]:
+//! each run's thread, which is the whole run on every executor).
 //! The wall times are the only non-deterministic numbers; nothing is written
 //! besides the runs themselves.
 
@@ -60,15 +60,15 @@ pub struct SceneNoise {
     pub threads_per_run: usize,
     /// Mean wall time of the completed runs, s.
     pub wall_s_per_run: Option<f64>,
-    /// Mean CPU time per run (wall × threads), s.
+    /// Mean CPU time per run ([`TimingRecord::cpu_s`]), s.
     pub cpu_s_per_run: Option<f64>,
     /// Every response of the scene kind, in catalogue order.
     pub responses: Vec<ResponseNoise>,
 }
 
-/// What a set of runs cost: the mean wall time of those with a timing
-/// record and the CPU time per run (wall × the threads each run had: one on
-/// this machine's pool, `cpus_per_task` on Slurm).
+/// What a set of runs cost: the mean wall and CPU time of those with a
+/// timing record ([`TimingRecord::cpu_s`]), and the threads each run was
+/// given (one on this machine's pool, `cpus_per_task` on Slurm).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RunCost {
     /// Threads each run had.
@@ -85,17 +85,12 @@ pub fn run_cost<'a>(
     exec: &Executor,
     ids: impl IntoIterator<Item = &'a ContentId>,
 ) -> RunCost {
-    let walls: Vec<f64> = ids
-        .into_iter()
-        .filter_map(|id| Store::read_json::<TimingRecord>(&store.run_dir(id).timing_path()).ok())
-        .map(|t| t.wall_time_s)
-        .collect();
-    let threads = exec.slurm.as_ref().map_or(1, |s| s.cpus_per_task as usize);
-    let wall = (!walls.is_empty()).then(|| walls.iter().sum::<f64>() / walls.len() as f64);
+    let timings: Vec<TimingRecord> = ids.into_iter().filter_map(|id| store.timing(id)).collect();
+    let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     RunCost {
-        threads_per_run: threads,
-        wall_s_per_run: wall,
-        cpu_s_per_run: wall.map(|w| w * threads as f64),
+        threads_per_run: exec.slurm.as_ref().map_or(1, |s| s.cpus_per_task as usize),
+        wall_s_per_run: mean(timings.iter().map(|t| t.wall_time_s).collect()),
+        cpu_s_per_run: mean(timings.iter().map(TimingRecord::cpu_s).collect()),
     }
 }
 

@@ -14,10 +14,11 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::acceptance::{band, judge, Judgement};
+use super::acceptance::{judge, Judgement};
 use super::StudyError;
 use crate::report::markdown::MarkdownTable;
 use crate::report::table::Table;
+use crate::stats::equivalence::band;
 
 /// What to judge in a table.
 #[derive(Debug, Clone)]

@@ -60,7 +60,7 @@ use crate::stats::trend::{weighted_line, LineFit, LinePrediction};
 /// Lack-of-fit p-value below which a line is not trusted to extrapolate:
 /// its levels' means stray from it by more than their runs' scatter allows.
 pub const LACK_OF_FIT_ALPHA: f64 = 0.05;
-use crate::store::{InputRef, Lineage, Store, TimingRecord};
+use crate::store::{InputRef, Lineage, Store};
 pub use plan::{Level, SizePlan, SurfaceEnergyRule};
 
 /// The resolution figures that measure the device across, in particle
@@ -400,11 +400,7 @@ pub fn summarise(
             let cpu_s = runs
                 .iter()
                 .filter(|o| o.result.is_some())
-                .filter_map(|o| {
-                    let t: TimingRecord =
-                        Store::read_json(&store.run_dir(&o.id).timing_path()).ok()?;
-                    Some(t.thread_cpu_s.unwrap_or(t.wall_time_s))
-                })
+                .filter_map(|o| store.timing(&o.id).map(|t| t.cpu_s()))
                 .collect();
             let first = results.first();
             let resolution: BTreeMap<String, f64> = first

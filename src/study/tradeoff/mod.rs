@@ -21,9 +21,7 @@ use crate::exec::{ExecError, Executor};
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::run_logged;
 use crate::stats::summary::{difference_ci, mean_ci, MeanCi};
-use crate::store::{
-    InputRef, Lineage, RunResult, RunState, RunStatus, Store, StoreError, TimingRecord,
-};
+use crate::store::{InputRef, Lineage, RunResult, RunState, RunStatus, Store, StoreError};
 use pareto::pareto_front;
 use plan::Point;
 
@@ -176,7 +174,7 @@ fn outcome(store: &Store, e: &Experiment, o: RunOutcome) -> Outcome {
         }
         RunOutcome::Stored(_) => Err("the run is not complete".to_string()),
     };
-    let timing: Option<TimingRecord> = Store::read_json(&store.run_dir(&id).timing_path()).ok();
+    let timing = store.timing(&id);
     match loaded {
         Ok(result) => Outcome {
             id,
