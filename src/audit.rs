@@ -38,7 +38,7 @@ use crate::scenes::run_logged;
 use crate::store::lineage::{self, LINEAGE_SUFFIX};
 use crate::store::{Depth, Lineage, RunState, Store, StoreError, MCAP_FILE, RESULT_FILE};
 use crate::study::dir::STUDY_FILE;
-use crate::study::spec::DesignStudy;
+use crate::study::plan::design_study::DesignStudy;
 
 /// What the audit found.
 #[derive(Debug, Default)]

@@ -24,32 +24,32 @@ use crate::scenes::run_logged;
 use crate::store::{
     write_atomic, CacheOutcome, Depth, RunError, RunState, RunStatus, Store, StoreError,
 };
-use crate::study::batch::batch as run_batch;
-use crate::study::convergence;
+use crate::study::analyses::holdout;
+use crate::study::analyses::learning_curve;
 use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
-use crate::study::fidelity_pilot::{self, PilotSpec};
-use crate::study::fine::fine as run_fine;
-use crate::study::gp_train::train_gp;
-use crate::study::holdout;
-use crate::study::learning_curve;
-use crate::study::noise::noise as run_noise;
 use crate::study::pipeline::{
     calibrate_noise_aware as calibrate_noise_aware_stages, NoiseAwareOptions,
 };
-use crate::study::probability_search::gp_search;
-use crate::study::sample::{diagnose_table, sample as run_sample, SampleSettings};
-use crate::study::spec::{is_design_study, DesignStudy};
-use crate::study::stages::{
+use crate::study::plan::design_study::{is_design_study, DesignStudy};
+use crate::study::plan::{
     default_candidates, names_adaptive, Analysis, Method, Stage as ClassicStage, StudyFile,
     StudySpec,
 };
-use crate::study::tolerance_search::load_model;
-use crate::study::tolerance_search::{search as run_search, SearchSettings};
-use crate::study::tradeoff as tradeoff_sweep;
-use crate::study::tradeoff::plan::{plan as plan_sweep, study_spec, Knob, PlanError};
-use crate::study::train::{train_study, train_table, TableSpec, TrainOptions};
-use crate::study::verify_clusters::verify as run_verify;
+use crate::study::stages::design::{diagnose_table, sample as run_sample, SampleSettings};
+use crate::study::stages::fine::fine as run_fine;
+use crate::study::stages::fit_gp::train_gp;
+use crate::study::stages::fit_network::{train_study, train_table, TableSpec, TrainOptions};
+use crate::study::stages::noise::noise as run_noise;
+use crate::study::stages::search_probability::gp_search;
+use crate::study::stages::search_tolerance::load_model;
+use crate::study::stages::search_tolerance::{search as run_search, SearchSettings};
+use crate::study::stages::simulate::batch as run_batch;
+use crate::study::stages::verify_candidates::verify as run_verify;
+use crate::study::sweeps::convergence;
+use crate::study::sweeps::pilot::{self, PilotSpec};
+use crate::study::sweeps::tradeoff as tradeoff_sweep;
+use crate::study::sweeps::tradeoff::plan::{plan as plan_sweep, study_spec, Knob, PlanError};
 use crate::study::{self, StudyError};
 use crate::surrogate::ga_bp::Selection;
 use crate::tracking::{self, Format, ListOptions, TrackingError};
@@ -602,7 +602,7 @@ pub struct TradeoffOptions {
 }
 
 /// `repose tradeoff MANIFEST`: sweeps fidelity knobs around the manifest's
-/// scene (see [`crate::study::tradeoff`]), writes tradeoff.csv / .md / .svg with a
+/// scene (see [`crate::study::sweeps::tradeoff`]), writes tradeoff.csv / .md / .svg with a
 /// lineage record, and prints the Markdown table.
 pub fn tradeoff(
     store_root: &Path,
@@ -647,7 +647,7 @@ pub struct ConvergenceOptions {
 }
 
 /// `repose convergence MANIFEST`: sweeps the scene over particle sizes with
-/// replicates (see [`crate::study::convergence`]), writes convergence.csv /
+/// replicates (see [`crate::study::sweeps::convergence`]), writes convergence.csv /
 /// .md / .svg with a lineage record, and prints the report.
 pub fn convergence(
     store_root: &Path,
@@ -669,7 +669,7 @@ pub fn convergence(
 }
 
 /// `repose pilot STUDY --scene NAME`: the two-level pilot (see
-/// [`crate::study::fidelity_pilot`]); writes pilot.md / pilot.json and
+/// [`crate::study::sweeps::pilot`]); writes pilot.md / pilot.json and
 /// prints the report (or the JSON).
 pub fn pilot(
     store_root: &Path,
@@ -688,10 +688,9 @@ pub fn pilot(
         )));
     }
     let store = open_store(store_root)?;
-    let out_dir = fidelity_pilot::default_dir(&store, &study.id(), spec);
+    let out_dir = pilot::default_dir(&store, &study.id(), spec);
     let pool = exec.in_study(&out_dir);
-    let (done, markdown) =
-        fidelity_pilot::pilot(&study, study_path, spec, &store, &pool, &out_dir)?;
+    let (done, markdown) = pilot::pilot(&study, study_path, spec, &store, &pool, &out_dir)?;
     if json {
         return print_json(&done, out);
     }
@@ -703,7 +702,7 @@ pub fn pilot(
 /// `repose learning-curve STUDY`: samples the study if it has no design yet,
 /// runs the batch (cached, resumable; failed runs are left out), then trains
 /// and searches on nested prefixes of the design (see
-/// [`crate::study::learning_curve`]); prints the table.
+/// [`crate::study::analyses::learning_curve`]); prints the table.
 pub fn learning_curve(
     store_root: &Path,
     study_path: &Path,
@@ -925,7 +924,7 @@ fn calibrate_noise_aware(
 }
 
 /// `repose noise STUDY`: the noise floor of a noise-aware study's
-/// calibration response ([`crate::study::noise`]).
+/// calibration response ([`crate::study::stages::noise`]).
 pub fn noise(
     store_root: &Path,
     study_path: &Path,
@@ -949,7 +948,7 @@ pub fn noise(
 }
 
 /// `repose fine STUDY`: the fine stage of a two-level study
-/// ([`crate::study::fine`]).
+/// ([`crate::study::stages::fine`]).
 pub fn fine(
     store_root: &Path,
     study_path: &Path,
@@ -967,7 +966,7 @@ pub fn fine(
 }
 
 /// `repose holdout STUDY --pilot FILE --pilot-study FILE`
-/// ([`crate::study::holdout`]); Markdown, or with `json` one object.
+/// ([`crate::study::analyses::holdout`]); Markdown, or with `json` one object.
 pub fn holdout(
     store_root: &Path,
     study_path: &Path,
@@ -995,7 +994,7 @@ pub fn holdout(
 
 /// `repose noise MANIFEST --seeds N`: one experiment over `seeds` packing
 /// seeds, each response's spread and precision per cost
-/// ([`crate::study::seed_noise`]); Markdown, or with `json` one object.
+/// ([`crate::study::sweeps::noise_floor`]); Markdown, or with `json` one object.
 pub fn scene_noise(
     store_root: &Path,
     manifest: &Path,
@@ -1012,8 +1011,8 @@ pub fn scene_noise(
     let store = open_store(store_root)?;
     let exec = exec.in_study(&store_root.join("noise").join(base.id().short(12)));
     set_quiet(true);
-    let noise = study::seed_noise::scene_noise(&base, seeds, &store, &exec, &run_logged)?;
-    print_as(&noise, json, study::seed_noise::markdown, out)
+    let noise = study::sweeps::noise_floor::scene_noise(&base, seeds, &store, &exec, &run_logged)?;
+    print_as(&noise, json, study::sweeps::noise_floor::markdown, out)
 }
 
 /// `repose batch STUDY`: runs every sampled experiment not yet complete
@@ -1213,7 +1212,7 @@ fn is_design_study_file(path: &Path) -> bool {
 }
 
 /// `repose stages STUDY`: the study's method and stage list
-/// ([`crate::study::stages::StudySpec`]), as text or JSON.
+/// ([`crate::study::plan::StudySpec`]), as text or JSON.
 pub fn stages(
     path: &Path,
     analysis: Option<Analysis>,
@@ -1420,7 +1419,11 @@ pub fn rsm(
         write!(out, "{summary}")?;
         if let Some(v) = &report.verification {
             writeln!(out)?;
-            write!(out, "{}", study::verify::markdown(&study, v))?;
+            write!(
+                out,
+                "{}",
+                study::stages::verify_optimum::markdown(&study, v)
+            )?;
         }
         writeln!(
             out,
@@ -1435,38 +1438,47 @@ pub fn rsm(
 /// replicates.
 pub fn verdict_table(
     path: &Path,
-    spec: &study::verdict_table::VerdictSpec,
+    spec: &study::analyses::verdict_table::VerdictSpec,
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let verdicts = study::verdict_table::judge_table(path, spec)?;
-    print_as(&verdicts, json, study::verdict_table::markdown, out)
+    let verdicts = study::analyses::verdict_table::judge_table(path, spec)?;
+    print_as(
+        &verdicts,
+        json,
+        study::analyses::verdict_table::markdown,
+        out,
+    )
 }
 
 /// `repose rsm --table FILE`: the response-surface analysis of any CSV table.
 pub fn rsm_table(
     path: &Path,
-    spec: &study::rsm::TableSpec,
+    spec: &study::stages::rsm::TableSpec,
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let analysis = study::rsm::analyse_table(path, spec)?;
+    let analysis = study::stages::rsm::analyse_table(path, spec)?;
     if json {
         print_json(&analysis, out)
     } else {
-        write!(out, "{}", study::rsm::table_markdown(path, &analysis))?;
+        write!(
+            out,
+            "{}",
+            study::stages::rsm::table_markdown(path, &analysis)
+        )?;
         Ok(())
     }
 }
 
 /// `repose sensitivity STUDY`: yan2015's three levels (see
-/// [`crate::study::sensitivity`]); prints the summary (or everything as
+/// [`crate::study::stages::sensitivity`]); prints the summary (or everything as
 /// JSON) and fails when a run of the named points failed.
 pub fn sensitivity(
     store_root: &Path,
     study_path: &Path,
     pool: &Executor,
-    levels: study::sensitivity::Levels,
+    levels: study::stages::sensitivity::Levels,
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
@@ -1481,7 +1493,11 @@ pub fn sensitivity(
         write!(out, "{summary}")?;
         if let Some(v) = &outcome.verification {
             writeln!(out)?;
-            write!(out, "{}", study::verify::markdown(&study, v))?;
+            write!(
+                out,
+                "{}",
+                study::stages::verify_optimum::markdown(&study, v)
+            )?;
         }
         writeln!(out, "\nwritten: {}", outcome.dir.display())?;
     }
@@ -1497,16 +1513,20 @@ pub fn sensitivity_table(
     json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let fit = study::sensitivity::level1::fit_table(path, response, factors)?;
+    let fit = study::stages::sensitivity::level1::fit_table(path, response, factors)?;
     if json {
         print_json(&fit, out)
     } else {
-        write!(out, "{}", study::sensitivity::level1::table_markdown(&fit))?;
+        write!(
+            out,
+            "{}",
+            study::stages::sensitivity::level1::table_markdown(&fit)
+        )?;
         Ok(())
     }
 }
 
-/// `repose screen STUDY`: the one-factor tests (see [`crate::study::screen`]).
+/// `repose screen STUDY`: the one-factor tests (see [`crate::study::stages::screen`]).
 pub fn screen(
     store_root: &Path,
     study_path: &Path,
@@ -1520,7 +1540,7 @@ pub fn screen(
     if json {
         print_json(&outcome, out)
     } else {
-        write!(out, "{}", study::screen::markdown(&study, &outcome))?;
+        write!(out, "{}", study::stages::screen::markdown(&study, &outcome))?;
         Ok(())
     }
 }

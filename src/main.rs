@@ -16,15 +16,15 @@ use repose::exec::Executor;
 use repose::scenes::plan::Limits;
 use repose::search::meanshift::Kernel;
 use repose::store::{DEFAULT_STORE, STORE_ENV};
-use repose::study::convergence::plan::{SurfaceEnergyRule, RULE_NAMES};
-use repose::study::convergence::SweepRequest;
-use repose::study::fidelity_pilot::PilotSpec;
-use repose::study::sample::SampleSettings;
-use repose::study::sensitivity::Levels;
-use repose::study::stages::Analysis;
-use repose::study::tolerance_search::SearchSettings;
-use repose::study::tradeoff::plan::{Knob, KNOB_NAMES};
-use repose::study::train::{TableSpec, TrainOptions};
+use repose::study::plan::Analysis;
+use repose::study::stages::design::SampleSettings;
+use repose::study::stages::fit_network::{TableSpec, TrainOptions};
+use repose::study::stages::search_tolerance::SearchSettings;
+use repose::study::stages::sensitivity::Levels;
+use repose::study::sweeps::convergence::plan::{SurfaceEnergyRule, RULE_NAMES};
+use repose::study::sweeps::convergence::SweepRequest;
+use repose::study::sweeps::pilot::PilotSpec;
+use repose::study::sweeps::tradeoff::plan::{Knob, KNOB_NAMES};
 use repose::surrogate::ga_bp::genetic::GaSettings;
 use repose::surrogate::ga_bp::levenberg::TrainlmSettings;
 use repose::surrogate::ga_bp::TrainSettings;
@@ -758,7 +758,7 @@ struct SensitivityArgs {
 
 impl RsmArgs {
     /// The table analysis's columns and ranges.
-    fn table_spec(&self) -> Result<repose::study::rsm::TableSpec, String> {
+    fn table_spec(&self) -> Result<repose::study::stages::rsm::TableSpec, String> {
         let ranges = if self.ranges.is_empty() {
             None
         } else {
@@ -794,7 +794,7 @@ impl RsmArgs {
             }
             Some(ranges)
         };
-        Ok(repose::study::rsm::TableSpec {
+        Ok(repose::study::stages::rsm::TableSpec {
             factors: self.factors.clone(),
             response: self.response.clone().unwrap_or_default(),
             ranges,
@@ -934,7 +934,7 @@ impl ConvergenceArgs {
                 replicates: self.replicates,
                 rule,
                 real_radius_m: self.real_radius,
-                analysis: repose::study::convergence::Analysis {
+                analysis: repose::study::sweeps::convergence::Analysis {
                     responses: self.responses.clone(),
                     tolerance: self.tolerance,
                 },
@@ -1314,7 +1314,7 @@ fn bench(args: BenchArgs, quiet: bool, out: &mut dyn io::Write) -> Result<(), Co
 
 /// `repose verdict TABLE`.
 fn verdict(args: VerdictArgs, out: &mut dyn io::Write) -> Result<(), CommandError> {
-    let spec = repose::study::verdict_table::VerdictSpec {
+    let spec = repose::study::analyses::verdict_table::VerdictSpec {
         value: args.value,
         group: args.group,
         target: args.target,

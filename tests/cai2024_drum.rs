@@ -7,7 +7,7 @@ mod common;
 
 use repose::manifest::scene::{DrumScene, EndWalls};
 use repose::manifest::{parse_experiment, Experiment, Scene, Seeds};
-use repose::study::spec::DesignStudy;
+use repose::study::plan::design_study::DesignStudy;
 
 fn manifest(name: &str) -> Experiment {
     parse_experiment(&common::text(&format!(

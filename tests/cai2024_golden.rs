@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use repose::commands::{rsm, screen};
 use repose::exec::Executor;
 use repose::scenes::plan::Limits;
-use repose::study::spec::read_design_study;
+use repose::study::plan::design_study::read_design_study;
 
 const STUDY: &str = "experiments/cai2024-smoke/study.json";
 const GOLDEN_DIR: &str = "golden/cai2024_smoke";

@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 
 use repose::report::table::Table;
 use repose::stats::metrics::r_squared;
-use repose::study::sample::diagnose_table;
-use repose::study::train::{train_table, TableSpec, TrainOptions, TrainOutcome};
+use repose::study::stages::design::diagnose_table;
+use repose::study::stages::fit_network::{train_table, TableSpec, TrainOptions, TrainOutcome};
 use repose::surrogate::ga_bp::{TrainSettings, DEFAULT_TRAIN_FRACTION};
 
 const TABLE: &str = "experiments/he2019-table-a1/table_a1.csv";

@@ -12,17 +12,17 @@ use std::path::Path;
 use repose::manifest::{parse_study, validate_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
-use repose::study::adaptive::{Stop, ADAPTIVE_INDEX, ROUND_STRIDE};
-use repose::study::calibration::acceptance;
 use repose::study::dir::Stage;
 use repose::study::dir::StudyDir;
-use repose::study::noise::{noise, NOISE_INDEX};
 use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome, NoiseAwareOptions};
-use repose::study::replicates::read_replicates_csv;
-use repose::study::sample::SampleSettings;
-use repose::study::tolerance_search::SearchSettings;
-use repose::study::train::TrainOptions;
-use repose::study::verify_clusters::VERIFY_INDEX;
+use repose::study::plan::calibration::acceptance;
+use repose::study::runs::replicated::read_replicates_csv;
+use repose::study::stages::adaptive::{Stop, ADAPTIVE_INDEX, ROUND_STRIDE};
+use repose::study::stages::design::SampleSettings;
+use repose::study::stages::fit_network::TrainOptions;
+use repose::study::stages::noise::{noise, NOISE_INDEX};
+use repose::study::stages::search_tolerance::SearchSettings;
+use repose::study::stages::verify_candidates::VERIFY_INDEX;
 use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use serde_json::{json, Value};
 
@@ -436,8 +436,8 @@ fn study_with_response(dir: &Path) -> (Study, std::path::PathBuf) {
 /// nothing.
 #[test]
 fn a_replicated_batch_counts_what_it_simulated() {
-    use repose::study::batch::batch;
-    use repose::study::sample::sample;
+    use repose::study::stages::design::sample;
+    use repose::study::stages::simulate::batch;
     let tmp = tempfile::tempdir().unwrap();
     let (study, path) = study(tmp.path(), &[]);
     let root = tmp.path().join("store");
@@ -564,7 +564,7 @@ fn screening_fixes_a_parameter_below_the_noise_at_its_centre() {
         let e = effect(name);
         assert!(e.range > 5.0 && e.active, "{e:?}");
     }
-    let k = repose::study::calibration::parameter_names(&study)
+    let k = repose::study::plan::calibration::parameter_names(&study)
         .iter()
         .position(|n| n == "particle_particle.restitution")
         .unwrap();
@@ -609,9 +609,9 @@ fn screening_fixes_a_parameter_below_the_noise_at_its_centre() {
 /// freedom per point says little, see `stats::homogeneity`.)
 #[test]
 fn a_noisier_half_of_the_design_gives_the_gp_per_point_noise() {
-    use repose::study::batch::batch;
-    use repose::study::gp_train::{train_gp, NoiseModel, PRIOR_DF};
-    use repose::study::sample::sample;
+    use repose::study::stages::design::sample;
+    use repose::study::stages::fit_gp::{train_gp, NoiseModel, PRIOR_DF};
+    use repose::study::stages::simulate::batch;
     let tmp = tempfile::tempdir().unwrap();
     let (study, path) = study(tmp.path(), &[]);
     let root = tmp.path().join("store");

@@ -14,15 +14,15 @@ use std::path::{Path, PathBuf};
 use repose::manifest::{parse_study, Experiment, SizeDistribution, Study};
 use repose::store::{RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
+use repose::study::analyses::holdout::holdout;
 use repose::study::dir::StudyDir;
-use repose::study::fidelity_pilot::{Pilot, PilotPoint};
-use repose::study::fine::{fine, load_two_level, Choice, SPACE_FILLING_POINTS};
-use repose::study::holdout::holdout;
 use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome, NoiseAwareOptions};
-use repose::study::sample::SampleSettings;
-use repose::study::stages::{Stage, StudySpec};
-use repose::study::tolerance_search::SearchSettings;
-use repose::study::train::TrainOptions;
+use repose::study::plan::{Stage, StudySpec};
+use repose::study::stages::design::SampleSettings;
+use repose::study::stages::fine::{fine, load_two_level, Choice, SPACE_FILLING_POINTS};
+use repose::study::stages::fit_network::TrainOptions;
+use repose::study::stages::search_tolerance::SearchSettings;
+use repose::study::sweeps::pilot::{Pilot, PilotPoint};
 use serde_json::{json, Value};
 
 /// Seed-to-seed sd of the fake angle at either size, degrees.

@@ -10,8 +10,8 @@ use std::process::Command;
 use repose::manifest::read_experiment;
 use repose::stats::trend::weighted_line;
 use repose::store::Store;
-use repose::study::convergence::plan::plan;
-use repose::study::convergence::{sweep, Analysis};
+use repose::study::sweeps::convergence::plan::plan;
+use repose::study::sweeps::convergence::{sweep, Analysis};
 
 const MANIFEST: &str = "experiments/tradeoff/drum_tiny.json";
 

@@ -484,8 +484,8 @@ fn example_manifest_ids_are_pinned() {
             .to_string_lossy()
             .replace('\\', "/");
         let text = std::fs::read_to_string(&path).unwrap();
-        let id = if repose::study::spec::is_design_study(&text) {
-            let study: repose::study::spec::DesignStudy =
+        let id = if repose::study::plan::design_study::is_design_study(&text) {
+            let study: repose::study::plan::design_study::DesignStudy =
                 serde_json::from_str(&text).unwrap_or_else(|e| panic!("{relative}: {e}"));
             study
                 .validate()

@@ -11,12 +11,12 @@ use std::time::Duration;
 use repose::exec::Executor;
 use repose::manifest::{parse_study, Experiment, Study};
 use repose::store::{Lineage, RunDir, RunResult, Store};
-use repose::study::batch::{batch, read_design};
-use repose::study::calibration::parameter_names;
+use repose::study::analyses::learning_curve::{csv_header, learning_curve};
 use repose::study::dir::Stage;
 use repose::study::dir::StudyDir;
-use repose::study::learning_curve::{csv_header, learning_curve};
-use repose::study::sample::{sample, SampleSettings};
+use repose::study::plan::calibration::parameter_names;
+use repose::study::stages::design::{sample, SampleSettings};
+use repose::study::stages::simulate::{batch, read_design};
 use repose::study::StudyError;
 use serde_json::json;
 
@@ -138,7 +138,7 @@ fn nested_prefixes_with_fixed_validation_rows() {
     // A rerun (nothing new to simulate) reproduces every column but the
     // wall times byte for byte.
     let again = learning_curve(&dir, &s, &store, Some(&[6, 12, 24])).unwrap();
-    let strip = |rows: &[repose::study::learning_curve::CurveRow]| {
+    let strip = |rows: &[repose::study::analyses::learning_curve::CurveRow]| {
         rows.iter()
             .map(|r| {
                 let mut r = r.clone();

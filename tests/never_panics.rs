@@ -71,10 +71,10 @@ fn exercise(text: &str) {
     if let Ok(s) = parse_study(text) {
         let _ = s.id();
     }
-    if let Ok(s) = serde_json::from_str::<repose::study::spec::DesignStudy>(text) {
+    if let Ok(s) = serde_json::from_str::<repose::study::plan::design_study::DesignStudy>(text) {
         let _ = s.id();
         if s.validate().is_ok() {
-            let _ = repose::study::rsm::coded_design(&s);
+            let _ = repose::study::stages::rsm::coded_design(&s);
         }
     }
 }

@@ -12,7 +12,7 @@ use repose::exec::Executor;
 use repose::manifest::Experiment;
 use repose::report::table::Table;
 use repose::store::{RunDir, RunResult, Store};
-use repose::study::spec::parse_design_study;
+use repose::study::plan::design_study::parse_design_study;
 use serde_json::json;
 
 /// 30 + 20 μ + 10 μ² degrees plus ±10⁻⁶° from the packing seed (a pure

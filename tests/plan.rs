@@ -15,9 +15,9 @@ use repose::manifest::{parse_experiment, parse_study, Experiment};
 use repose::scenes::plan::{plan, Limits, ENGINE_MAX_PARTICLES};
 use repose::scenes::run_experiment;
 use repose::store::{RunDir, RunResult, Store};
-use repose::study::batch::batch;
 use repose::study::dir::StudyDir;
-use repose::study::sample::{sample, SampleSettings};
+use repose::study::stages::design::{sample, SampleSettings};
+use repose::study::stages::simulate::batch;
 use repose::study::StudyError;
 use serde_json::{json, Value};
 
@@ -237,9 +237,10 @@ fn every_committed_experiment_is_within_the_default_limits() {
     let mut seen = 0;
     for path in common::json_files(&common::root().join("experiments")) {
         let text = std::fs::read_to_string(&path).unwrap();
-        if repose::study::spec::is_design_study(&text) {
+        if repose::study::plan::design_study::is_design_study(&text) {
             // Each scene of a design study, at the centre of its ranges.
-            let study: repose::study::spec::DesignStudy = serde_json::from_str(&text).unwrap();
+            let study: repose::study::plan::design_study::DesignStudy =
+                serde_json::from_str(&text).unwrap();
             let centre: Vec<(String, f64)> = study
                 .factors
                 .values()

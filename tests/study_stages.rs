@@ -3,7 +3,7 @@
 
 mod common;
 
-use repose::study::stages::{Analysis, Method, StudyFile, StudySpec};
+use repose::study::plan::{Analysis, Method, StudyFile, StudySpec};
 use serde_json::{json, Value};
 
 fn spec(path: &str, analysis: Analysis, adaptive: bool) -> StudySpec {

@@ -13,7 +13,7 @@ use common::{edit, example, repose, stderr, stdout};
 use repose::manifest::{parse_experiment, ContentId};
 use repose::store::{RunResult, RunSummary, Store};
 use repose::study::dir::StudyDir;
-use repose::study::spec::parse_design_study;
+use repose::study::plan::design_study::parse_design_study;
 use serde_json::{json, Value};
 
 /// Writes one run of experiments/drum/smoke.json with `edits` (JSON pointer,

@@ -7,8 +7,8 @@ use std::process::Command;
 
 use repose::manifest::read_experiment;
 use repose::store::Store;
-use repose::study::tradeoff::plan::{plan, Knob, PlanError};
-use repose::study::tradeoff::{report, run, summarise};
+use repose::study::sweeps::tradeoff::plan::{plan, Knob, PlanError};
+use repose::study::sweeps::tradeoff::{report, run, summarise};
 
 const GOLDEN: &str = "golden/tradeoff_drum_tiny.csv";
 

@@ -21,8 +21,8 @@ use std::path::{Path, PathBuf};
 use repose::commands::sensitivity;
 use repose::exec::Executor;
 use repose::scenes::plan::Limits;
-use repose::study::sensitivity::Levels;
-use repose::study::spec::read_design_study;
+use repose::study::plan::design_study::read_design_study;
+use repose::study::stages::sensitivity::Levels;
 
 const STUDY: &str = "experiments/yan2015-smoke/study.json";
 const GOLDEN_DIR: &str = "golden/yan2015_smoke";

@@ -173,7 +173,7 @@ pub struct Executor {
     pub limits: Limits,
     /// Most runs one call may start (`--max-runs`): a study checks its stages'
     /// counts against it before it builds anything
-    /// ([`crate::study::stages::StudySpec::check_runs`]), and
+    /// ([`crate::study::plan::StudySpec::check_runs`]), and
     /// [`run_incomplete`] refuses more pending runs than this.
     pub max_runs: u64,
     /// Run on Slurm instead of this machine's workers (`--executor slurm`).

@@ -71,7 +71,7 @@ pub struct Study {
     /// The stages the study runs, spelled out in order (absent: the list
     /// its blocks give; `repose stages FILE` prints it). When present it
     /// must be that list, and naming `adaptive` adds the adaptive rounds
-    /// as `--adaptive` does (see `crate::study::stages`).
+    /// as `--adaptive` does (see `crate::study::plan`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub stages: Vec<String>,
 }
@@ -111,7 +111,7 @@ pub struct NoiseAware {
     /// acceptance record's power calculation on the noise floor's σ picks
     /// the seeds (TOST power 0.8 at the band's centre) between
     /// `verification_seeds` and this cap (absent: `verification_seeds`, no
-    /// power calculation raises it). See `crate::study::verify_clusters`.
+    /// power calculation raises it). See `crate::study::stages::verify_candidates`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_verification_seeds: Option<u32>,
     /// Active learning after the initial design (`repose calibrate
@@ -127,7 +127,7 @@ pub struct NoiseAware {
     /// A second, finer particle size (absent: one size): the design runs at
     /// the study's size, a few of its points again at the fine size, a
     /// two-level Gaussian process predicts the fine level, and the search
-    /// and the verification are the fine level's (`crate::study::fine`).
+    /// and the verification are the fine level's (`crate::study::stages::fine`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fidelity: Option<Fidelity>,
 }

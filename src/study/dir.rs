@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::spec::DesignStudy;
+use super::plan::design_study::DesignStudy;
 use super::StudyError;
 use crate::manifest::{canonical_json, ContentId, Study};
 use crate::store::{write_atomic, InputRef, Lineage, StoreError};

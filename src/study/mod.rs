@@ -2,81 +2,42 @@
 //! executor → a response table → an analysis → reports, each stage cached in
 //! the store and recorded with lineage.
 //!
-//! - [`stages`]: the study model — a study file read once and lowered to
-//!   its method and stage list ([`stages::StudySpec`]).
-//! - [`spec`]: the design study manifest (factors by address, design,
-//!   replicates, scenes, named responses, targets, screening, verification)
-//!   and the experiments it generates.
-//! - [`crate::exec`]: the one seam through which every stage runs experiments.
-//! - [`runs`]: points × replicates × scenes → executor → response table.
-//! - [`screen`], [`rsm`], [`verify`]: the design studies' stages (the joint
-//!   desirability optimum is [`crate::search::desirability`]).
-//! - he2019's calibration study ([`calibration`]: its stage directories and
-//!   parameter scaling) and its stages: [`sample`], [`noise`] (the noise
-//!   floor), [`batch`] and [`replicates`] (the design's runs), [`train`]
-//!   (GA-BP) and [`gp_train`] (Gaussian process, screening),
-//!   [`tolerance_search`] and [`probability_search`], [`adaptive`],
-//!   [`verify_clusters`]; [`pipeline`] chains the noise-aware stages, and
-//!   [`learning_curve`] re-trains on nested prefixes of a design.
-//! - [`sensitivity`]: yan2015's three levels of parameter sensitivity.
-//! - [`seed_noise`]: one experiment over packing seeds: each response's
-//!   spread and its precision per cost (`repose noise MANIFEST`).
-//! - [`tradeoff`]: what accuracy costs in time: fidelity knobs swept around
-//!   one experiment with replicates (`repose tradeoff`).
-//! - [`convergence`]: what resolution costs and buys: one scene swept over
-//!   particle size with replicates, each response's trend read at the real
-//!   particle size, and the cost per run (`repose convergence`).
-//! - [`fidelity_pilot`]: does a two-level (coarse + fine particle)
-//!   calibration pay in a scene: ρ and δ of the two-level process on a few
-//!   points at both sizes (`repose pilot`).
-//! - [`fine`]: the fine level of a two-level study (`noise_aware.fidelity`):
-//!   design points re-run at a finer size, chosen by the two-level Gaussian
-//!   process, which then carries the search and the verification.
-//! - [`holdout`]: a study's fine-level predictions against a pilot's
-//!   held-out fine runs, with the study's training CPU (`repose holdout`).
-//! - [`acceptance`]: the one acceptance rule of a candidate in a scene.
-//! - [`dir`]: where a study's outputs live and how they are written.
+//! Where a thing lives says what it is:
+//! - [`plan`]: what a study is — a study file read once ([`plan::StudyFile`])
+//!   and lowered to its method and stage list ([`plan::StudySpec`]); the
+//!   design-study manifest ([`plan::design_study`]) and what he2019's study
+//!   shares ([`plan::calibration`]: parameter scaling, the acceptance record).
+//! - [`stages`]: one file per stage of a method's list, named as `repose
+//!   stages` prints it (noise, design, simulate, fit, fine, adaptive, search,
+//!   screen, rsm, sensitivity, verify).
+//! - [`sweeps`]: one experiment, no study file — the noise floor over
+//!   packing seeds, the fidelity tradeoff, particle-size convergence and the
+//!   two-level pilot.
+//! - [`analyses`]: read a finished study or a table — learning curve,
+//!   held-out fine runs, the verdict table.
+//! - [`runs`]: points × replicates × scenes → [`crate::exec`] → a response
+//!   table; [`acceptance`]: the one acceptance rule; [`dir`]: the one layout
+//!   of a study's outputs and the stage-name vocabulary; [`pipeline`]: the
+//!   noise-aware he2019 chain.
 //!
 //! The runs stay in the store (`<store>/<id>/`), so a run shared by two
 //! stages or studies is simulated once, and a killed stage resumes.
 
 pub mod acceptance;
-pub mod adaptive;
-pub mod batch;
-pub mod calibration;
-pub mod convergence;
+pub mod analyses;
 pub mod dir;
-pub mod fidelity_pilot;
-pub mod fine;
-pub mod gp_surface;
-pub mod gp_train;
-pub mod holdout;
-pub mod learning_curve;
-pub mod noise;
 pub mod pipeline;
-pub mod probability_search;
-pub mod replicates;
-pub mod rsm;
+pub mod plan;
 pub mod runs;
-pub mod sample;
-pub mod screen;
-pub mod seed_noise;
-pub mod sensitivity;
-pub mod spec;
 pub mod stages;
-pub mod tolerance_search;
-pub mod tradeoff;
-pub mod train;
-pub mod verdict_table;
-pub mod verify;
-pub mod verify_clusters;
+pub mod sweeps;
 
 use std::path::Path;
 
 use crate::exec::{ExecError, Executor};
 use crate::manifest::{Experiment, ValidationErrors};
 use crate::store::{RunDir, RunResult, Store, StoreError};
-use spec::DesignStudy;
+use plan::design_study::DesignStudy;
 
 /// Why a study stage failed: the one error of every study stage (he2019's
 /// calibration stages, the design studies, the tradeoff sweep).
@@ -180,9 +141,9 @@ impl StudyError {
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct RsmReport {
     /// The response-surface analysis and optimum.
-    pub rsm: rsm::RsmOutcome,
+    pub rsm: stages::rsm::RsmOutcome,
     /// The verification, when the study has a verification block.
-    pub verification: Option<verify::Verification>,
+    pub verification: Option<stages::verify_optimum::Verification>,
 }
 
 /// `repose rsm STUDY`: the design's runs, the analysis, the optimum, and the
@@ -205,9 +166,9 @@ where
         }
     };
     announce("design runs");
-    let outcome = rsm::rsm(&dir, study, store, pool, runner)?;
+    let outcome = stages::rsm::rsm(&dir, study, store, pool, runner)?;
     announce("verification runs");
-    let verification = verify::verify(&dir, study, &outcome, store, pool, runner)?;
+    let verification = stages::verify_optimum::verify(&dir, study, &outcome, store, pool, runner)?;
     Ok(RsmReport {
         rsm: outcome,
         verification,
@@ -221,13 +182,13 @@ pub fn run_screen<E, F>(
     store: &Store,
     pool: &Executor,
     runner: &F,
-) -> Result<screen::Screen, StudyError>
+) -> Result<stages::screen::Screen, StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
     let dir = dir::StudyDir::prepare(store_root, study)?;
-    screen::screen(&dir, study, store, pool, runner)
+    stages::screen::screen(&dir, study, store, pool, runner)
 }
 
 /// `repose sensitivity STUDY`: the levels asked for (see [`sensitivity`]).
@@ -237,12 +198,12 @@ pub fn run_sensitivity<E, F>(
     store: &Store,
     pool: &Executor,
     runner: &F,
-    levels: sensitivity::Levels,
-) -> Result<sensitivity::SensitivityOutcome, StudyError>
+    levels: stages::sensitivity::Levels,
+) -> Result<stages::sensitivity::SensitivityOutcome, StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
     let dir = dir::StudyDir::prepare(store_root, study)?;
-    sensitivity::sensitivity(&dir, study, store, pool, runner, levels)
+    stages::sensitivity::sensitivity(&dir, study, store, pool, runner, levels)
 }

@@ -14,7 +14,7 @@
 //!
 //! A two-level study (`noise_aware.fidelity`) runs the fine stage after
 //! train and has no adaptive rounds; its search and verification are the
-//! fine level's ([`super::fine`]).
+//! fine level's ([`super::stages::fine`]).
 //!
 //! The outcome ([`CalibrationOutcome`], also `outcome.json` in the study's
 //! directory and what `repose calibrate --json` prints) gathers the noise
@@ -26,20 +26,20 @@
 use serde::Serialize;
 use serde_json::json;
 
-use super::adaptive::{adaptive, AdaptiveOutcome};
-use super::batch::batch;
 use super::dir::json_bytes;
 use super::dir::write_output;
 use super::dir::Stage;
 use super::dir::StudyDir;
-use super::fine::{fine, TwoLevelRecord};
-use super::gp_train::{train_gp, SurrogateMetrics};
-use super::noise::{noise, NoiseFloor};
-use super::probability_search::{gp_search, Candidate};
-use super::sample::{sample, SampleSettings};
-use super::tolerance_search::{load_model, SearchSettings};
-use super::train::{train_study, TrainOptions};
-use super::verify_clusters::{verify, VerifyRow};
+use super::stages::adaptive::{adaptive, AdaptiveOutcome};
+use super::stages::design::{sample, SampleSettings};
+use super::stages::fine::{fine, TwoLevelRecord};
+use super::stages::fit_gp::{train_gp, SurrogateMetrics};
+use super::stages::fit_network::{train_study, TrainOptions};
+use super::stages::noise::{noise, NoiseFloor};
+use super::stages::search_probability::{gp_search, Candidate};
+use super::stages::search_tolerance::{load_model, SearchSettings};
+use super::stages::simulate::batch;
+use super::stages::verify_candidates::{verify, VerifyRow};
 use super::StudyError;
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
@@ -179,7 +179,7 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let spec = super::noise::noise_aware(study)?;
+    let spec = super::stages::noise::noise_aware(study)?;
     if spec.fidelity.is_some() && options.adaptive {
         return Err(StudyError::Settings(
             "--adaptive: the adaptive rounds are one-level; a study with noise_aware.fidelity \
@@ -187,9 +187,9 @@ where
                 .into(),
         ));
     }
-    super::replicates::check_response(&study.calibration)?;
+    super::runs::replicated::check_response(&study.calibration)?;
     for v in &study.verification {
-        super::replicates::check_response(v)?;
+        super::runs::replicated::check_response(v)?;
     }
     log(&format!(
         "== noise floor: centre of the ranges x {} seeds",

@@ -5,7 +5,7 @@
 //! both levels are mapped onto the unit cube of the table's ranges; each
 //! level's known noise variances are taken as given (zero for a fine table
 //! without them, so δ's fitted nugget carries the noise). The predicted sd
-//! is the fine level's latent sd. A study's fine stage ([`crate::study::fine`])
+//! is the fine level's latent sd. A study's fine stage ([`crate::study::stages::fine`])
 //! fits the same process on its trained coarse GP instead.
 
 use super::{to_unit, Prediction, Surrogate, SurrogateError, Table};

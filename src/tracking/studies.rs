@@ -25,7 +25,7 @@ use super::TrackingError;
 use crate::manifest::ContentId;
 use crate::report::table::Table;
 use crate::store::{Depth, RunStatus, Store};
-use crate::study::stages::{Method, StudyFile};
+use crate::study::plan::{Method, StudyFile};
 
 /// The runs a study's tables name, by state.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]

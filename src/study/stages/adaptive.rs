@@ -1,0 +1,291 @@
+//! `repose calibrate --adaptive`: after the initial design, rounds of points
+//! chosen by the GP surrogate until one of its candidates passes the
+//! acceptance rule in the calibration scene, or the run budget is spent
+//! (`noise_aware.adaptive` of the study).
+//!
+//! Each round: the GP is refitted to every point simulated so far
+//! ([`crate::study::stages::fit_gp::fit_model`]); a pool of [`POOL`] Latin-hypercube
+//! points (the adaptive stream, one sub-stream per round) is scored by the
+//! probability that its angle lies in the band. The best point is the
+//! round's **candidate** and runs the calibration scene's pre-registered
+//! seeds, as verification would; the next best at least [`MIN_SEPARATION`] (unit cube)
+//! from every point taken, up to `batch` points in all, explore with
+//! `replicates` seeds each, so one round does not spend its runs on one
+//! spot. The stage stops when the acceptance rule
+//! ([`crate::study::acceptance`], verification's rule) passes a candidate
+//! in the calibration scene, or when the next round would pass `max_runs`.
+//!
+//! Each round tries a new candidate until one passes: a sequential search
+//! whose every round is a chance of a wrong pass. The stage therefore writes
+//! its acceptance record (`adaptive/acceptance.json`, the rule, the seeds
+//! and α) before its first round, with α = 0.05 divided by every round the
+//! budget allows plus the search candidates verification will judge
+//! ([`crate::study::plan::calibration::max_rounds`], [`crate::study::plan::calibration::comparisons`]; Bonferroni), the same
+//! record verification then writes: stopping at the first pass keeps the
+//! chance of any wrong pass ≤ 0.05.
+//!
+//! A design point or the noise floor's centre whose mean happens to fall in
+//! the band does not end the stage: a 2-seed mean is one draw of a noisy
+//! pile and lands in the band from well outside it often enough to matter
+//! (the measured chance: docs/performance.md, "src/study/stages/adaptive.rs"), so
+//! only a point run with the verification's seeds counts, and a failed
+//! candidate's seeds become data for the next fit. Round k's points are indexed from [`ADAPTIVE_INDEX`] +
+//! [`ROUND_STRIDE`] × k, the candidate first; they are written to
+//! `adaptive/replicates.csv`, which the GP's training then includes. A killed
+//! stage resumes: the table is rewritten after every round and the runs are
+//! cached.
+
+use serde::Serialize;
+use serde_json::json;
+
+use crate::doe::lhs::{latin_hypercube, Placement};
+use crate::exec::Executor;
+use crate::manifest::{Experiment, Study};
+use crate::search::acquisition::probability_in_band;
+use crate::store::{RunDir, RunResult, Store};
+use crate::streams::{rng, Stream};
+use crate::study::acceptance::{Record, Verdict, RULE};
+use crate::study::dir::json_bytes;
+use crate::study::dir::write_output;
+use crate::study::dir::Stage;
+use crate::study::dir::StudyDir;
+use crate::study::plan::calibration::to_physical;
+use crate::study::plan::calibration::{acceptance, comparisons, parameter_names, round_runs};
+use crate::study::runs::replicated::{
+    read_replicates_csv, replicates_csv, run_replicated, Replicated,
+};
+use crate::study::stages::fit_gp::fit_model;
+use crate::study::stages::noise::read_noise;
+use crate::study::StudyError;
+
+/// `sample_index` of the first adaptive point.
+pub const ADAPTIVE_INDEX: u64 = 2_000_000_000;
+/// Points scored per round.
+pub const POOL: usize = 2000;
+/// Smallest distance between two points of one round (unit cube).
+pub const MIN_SEPARATION: f64 = 0.15;
+/// Index distance between the points of two rounds: round k's points are
+/// `ADAPTIVE_INDEX + ROUND_STRIDE * k + j`, its candidate `j = 0`.
+pub const ROUND_STRIDE: u64 = 1000;
+
+/// Why the adaptive stage stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stop {
+    /// A round's candidate passed the acceptance rule in the band.
+    Reached,
+    /// The next round would exceed the run budget.
+    Budget,
+}
+
+/// What the adaptive stage did.
+#[derive(Debug, Clone, Serialize)]
+pub struct AdaptiveOutcome {
+    /// Rounds run (by this call and before).
+    pub rounds: usize,
+    /// Runs the adaptive points took.
+    pub runs: usize,
+    /// Why it stopped.
+    pub stop: Stop,
+    /// The candidate that passed, if any.
+    pub hit: Option<Hit>,
+}
+
+/// An adaptive candidate that passed in the calibration scene.
+#[derive(Debug, Clone, Serialize)]
+pub struct Hit {
+    /// Its `sample_index`.
+    pub index: u64,
+    /// Parameter values, physical units, in the study's parameter order.
+    pub point: Vec<f64>,
+    /// Seeds it ran.
+    pub seeds: usize,
+    /// Seeds that measured the response.
+    pub measured: usize,
+    /// Mean of the measured seeds, degrees.
+    pub mean_deg: f64,
+}
+
+/// The first round candidate among `points` that the acceptance `rule`
+/// passes in the calibration scene (its first target): the rule of
+/// verification, at the record's α.
+fn passing(points: &[Replicated], rule: &Record) -> Option<Hit> {
+    points
+        .iter()
+        .filter(|p| (p.index - ADAPTIVE_INDEX).is_multiple_of(ROUND_STRIDE))
+        .find_map(|p| {
+            let v = p.values();
+            let mean = p.mean()?;
+            (rule.judge(0, &v).verdict == Verdict::Pass).then(|| Hit {
+                index: p.index,
+                point: p.point.clone(),
+                seeds: p.runs.len(),
+                measured: v.len(),
+                mean_deg: mean,
+            })
+        })
+}
+
+/// The adaptive stage's passing candidate under verification's `rule`, when
+/// the stage has run and found one (`adaptive/replicates.csv`): verification
+/// re-simulates it in every scene beside the search's candidates, so the
+/// point that ended the stage is the one judged.
+pub fn passing_candidate(
+    dir: &StudyDir,
+    study: &Study,
+    rule: &Record,
+) -> Result<Option<Hit>, StudyError> {
+    let path = dir.adaptive_path();
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let points = read_replicates_csv(&path, study)?;
+    Ok(passing(&points, rule))
+}
+
+/// Runs the adaptive rounds (see the module docs), seeded by `seed`, for a
+/// calibration that will verify `candidates` search candidates beside them.
+#[allow(clippy::too_many_arguments)]
+pub fn adaptive<E, F>(
+    dir: &StudyDir,
+    study: &Study,
+    store: &Store,
+    pool: &Executor,
+    seed: u64,
+    candidates: usize,
+    runner: F,
+    progress: &mut dyn FnMut(&str),
+) -> Result<AdaptiveOutcome, StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let spec = crate::study::stages::noise::noise_aware(study)?;
+    let path = dir.adaptive_path();
+    let mut points: Vec<Replicated> = if path.is_file() {
+        read_replicates_csv(&path, study)?
+    } else {
+        Vec::new()
+    };
+    let (lo, hi) = study.calibration.band_deg();
+    let names = parameter_names(study);
+    let noise_sd = read_noise(dir).ok().and_then(|f| f.sd_deg);
+    let rule = acceptance(study, noise_sd, comparisons(study, candidates, true));
+    // The rule goes on record before the first round.
+    dir.prepare_stage(study, Stage::Adaptive)?;
+    write_output(
+        &dir.stage(Stage::Adaptive).join("acceptance.json"),
+        &json_bytes(&rule),
+        &dir.lineage(Stage::Adaptive, json!({ "record": "acceptance rule" })),
+    )?;
+    let seeds = rule.targets[0].seeds;
+    let explore = spec.replicates as usize;
+    let round_runs = round_runs(&spec, seeds);
+    let budget = spec.adaptive.max_runs as usize;
+    loop {
+        let rounds = points
+            .iter()
+            .map(|p| (p.index - ADAPTIVE_INDEX) / ROUND_STRIDE + 1)
+            .max()
+            .unwrap_or(0) as usize;
+        let runs: usize = points.iter().map(|p| p.runs.len()).sum();
+        let hit = passing(&points, &rule);
+        if hit.is_some() {
+            return Ok(AdaptiveOutcome {
+                rounds,
+                runs,
+                stop: Stop::Reached,
+                hit,
+            });
+        }
+        if runs + round_runs > budget {
+            return Ok(AdaptiveOutcome {
+                rounds,
+                runs,
+                stop: Stop::Budget,
+                hit: None,
+            });
+        }
+        let gp = fit_model(dir, study, seed)?.process()?;
+        let pool_points = latin_hypercube(
+            POOL,
+            names.len(),
+            Placement::Random,
+            &mut rng(seed, Stream::Adaptive, rounds as u64),
+        );
+        let mut scored: Vec<(f64, usize)> = pool_points
+            .iter()
+            .enumerate()
+            .map(|(i, u)| {
+                let p = gp.predict(u);
+                (probability_in_band(p.mean, p.sd, lo, hi), i)
+            })
+            .collect();
+        scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let mut chosen: Vec<&Vec<f64>> = Vec::new();
+        for (_, i) in &scored {
+            let u = &pool_points[*i];
+            let far = chosen.iter().all(|c| {
+                c.iter()
+                    .zip(u)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt()
+                    >= MIN_SEPARATION
+            });
+            if far {
+                chosen.push(u);
+                if chosen.len() == spec.adaptive.batch as usize {
+                    break;
+                }
+            }
+        }
+        let first = ADAPTIVE_INDEX + ROUND_STRIDE * rounds as u64;
+        let mut new: Vec<(u64, Vec<f64>)> = chosen
+            .iter()
+            .enumerate()
+            .map(|(k, u)| (first + k as u64, to_physical(study, u)))
+            .collect();
+        progress(&format!(
+            "adaptive round {}: candidate x {seeds} seeds (P(in band) {:.2}), {} more point(s) x {explore} seeds",
+            rounds + 1,
+            scored.first().map_or(0.0, |s| s.0),
+            new.len().saturating_sub(1),
+        ));
+        let explorers = new.split_off(1.min(new.len()));
+        let mut ran = Vec::new();
+        for (group, replicates) in [(&new, seeds as u32), (&explorers, spec.replicates)] {
+            let (r, _) = run_replicated(
+                study,
+                &study.calibration,
+                group,
+                replicates,
+                store,
+                pool,
+                &runner,
+                false,
+            )?;
+            ran.extend(r);
+        }
+        points.extend(ran);
+        let mut lineage = dir.lineage(
+            Stage::Adaptive,
+            json!({ "batch": spec.adaptive.batch, "max_runs": budget, "pool": POOL,
+                    "min_separation": MIN_SEPARATION, "seed": seed,
+                    "candidate_seeds": seeds, "explore_seeds": explore,
+                    "rule": RULE, "alpha": rule.alpha, "comparisons": rule.comparisons,
+                    "score": "probability of the target band under the GP" }),
+        );
+        for r in points.iter().flat_map(|p| &p.runs) {
+            let file = store.run_dir(&r.id).result_path();
+            if file.is_file() {
+                lineage = lineage.with_input(dir.input("result", &file)?);
+            }
+        }
+        write_output(
+            &path,
+            replicates_csv(study, &[(&study.calibration.name, &points)]).as_bytes(),
+            &lineage,
+        )?;
+    }
+}

@@ -1,0 +1,345 @@
+//! The search of a noise-aware study: resampled points kept by the
+//! probability, under the GP surrogate, that their angle lies in the target
+//! band; mean-shift clusters of the kept points as candidates; and the
+//! family of parameter sets consistent with the target.
+//!
+//! Each resampled point x gets the GP's predictive mean μ(x) and latent
+//! standard deviation s(x) of the angle (the mean over packings, not one
+//! run), and P(x) = Φ((hi − μ)/s) − Φ((lo − μ)/s) for the band [lo, hi] =
+//! target (1 ∓ tolerance). Points with P ≥ `min_probability` are kept: a
+//! point the surrogate knows little about is not kept on a lucky mean, and
+//! one it knows well is kept only when its mean is inside. The kept points
+//! are clustered by mean shift as in he2019 (§3.5, [`crate::search::meanshift`]),
+//! and the clusters (largest first) are the candidates `verify` re-simulates.
+//! In a two-level study (`noise_aware.fidelity`) μ and s are the fine
+//! level's, from the two-level process of the fine stage ([`crate::study::stages::fine`]).
+//!
+//! # The family
+//!
+//! `family.md` reports the parameter sets consistent with the target
+//! ([`crate::search::band::family`]).
+//!
+//! The resampling is `10 × samples` points of a Latin hypercube from the
+//! search stream (the GP is cheap to evaluate; a narrow band in five
+//! parameters needs thousands of points to be populated).
+//!
+//! # Screening
+//!
+//! The train stage sets every parameter's main effect under the GP against
+//! one run's seed-to-seed σ (`train/gp.json`, `screening.csv`;
+//! [`crate::study::stages::fit_gp`]). With `noise_aware.screen`, the parameters below the
+//! noise are fixed at the centre of their ranges in every resampled point,
+//! so the kept points, the clusters and the candidates vary only the
+//! parameters these runs can calibrate; the run budget is unchanged (the
+//! screening reads the surrogate, not new runs).
+
+use std::fmt::Write as _;
+
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use crate::manifest::Study;
+use crate::report::markdown::MarkdownTable;
+use crate::report::svg::scatter_matrix;
+use crate::report::table::{Cell, CsvWriter};
+use crate::search::acquisition::probability_in_band;
+use crate::search::band::{cluster_column, family, resample, select, Criterion, Family, Selection};
+use crate::search::screen::{fix_inactive, MainEffect};
+use crate::study::dir::json_bytes;
+use crate::study::dir::write_output;
+use crate::study::dir::Stage;
+use crate::study::dir::StudyDir;
+use crate::study::plan::calibration::parameter_names;
+use crate::study::plan::calibration::to_physical;
+use crate::study::stages::fine::FinePredictor;
+use crate::study::stages::fit_gp::read_gp;
+use crate::study::stages::noise::noise_aware;
+use crate::study::stages::search_tolerance::SearchSettings;
+use crate::study::StudyError;
+use crate::surrogate::Prediction;
+
+/// Resampled points per point of the network's search.
+pub const RESAMPLE_FACTOR: usize = 10;
+
+/// A candidate: one cluster of kept points.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Candidate {
+    /// Group number (1 = largest).
+    pub group: usize,
+    /// Kept points in the cluster.
+    pub size: usize,
+    /// The cluster centre, physical units, in parameter order.
+    pub centre: Vec<f64>,
+    /// GP mean at the centre, degrees.
+    pub predicted_deg: f64,
+    /// GP latent standard deviation at the centre, degrees.
+    pub predicted_sd_deg: f64,
+    /// Probability of the band at the centre.
+    pub probability: f64,
+}
+
+/// What the search did.
+#[derive(Debug, Clone)]
+pub struct GpSearchOutcome {
+    /// The candidates, largest cluster first.
+    pub candidates: Vec<Candidate>,
+    /// The family report.
+    pub family: Family,
+    /// Every parameter's main effect under the GP against the noise floor's
+    /// σ, and whether the search varied it (fixed at the centre when the
+    /// study screens and the effect is below the noise).
+    pub screening: Vec<MainEffect>,
+    /// The Markdown report (clusters and family).
+    pub markdown: String,
+}
+
+/// Runs the noise-aware search (see the module docs).
+pub fn gp_search(
+    dir: &StudyDir,
+    study: &Study,
+    settings: &SearchSettings,
+) -> Result<GpSearchOutcome, StudyError> {
+    let spec = noise_aware(study)?;
+    let model = read_gp(dir)?;
+    // A two-level study searches the fine level's prediction.
+    let predictor = FinePredictor::of(dir, study)?;
+    let predict = |u: &[f64]| predictor.predict(u);
+    let names = parameter_names(study);
+    let effects = &model.screening;
+    let samples = settings.samples * RESAMPLE_FACTOR;
+    let unit: Vec<Vec<f64>> = resample(samples, names.len(), settings.placement, settings.seed, 1)
+        .iter()
+        .map(|u| fix_inactive(u, effects))
+        .collect();
+    let (lo, hi) = study.calibration.band_deg();
+    let predictions: Vec<_> = unit.iter().map(|u| predict(u)).collect();
+    let criterion = Criterion::Probability {
+        lo,
+        hi,
+        min: spec.min_probability,
+    };
+    let probability: Vec<f64> = predictions
+        .iter()
+        .map(|p| {
+            criterion.score(&Prediction {
+                mean: p.mean,
+                sd: Some(p.sd),
+            })
+        })
+        .collect();
+    let Some(Selection {
+        kept,
+        kept_unit,
+        bandwidth,
+        clustering,
+    }) = select(
+        &unit,
+        &probability,
+        &criterion,
+        settings.kernel,
+        settings.bandwidth,
+        settings.quantile,
+    )
+    else {
+        let best = (0..unit.len())
+            .max_by(|&a, &b| probability[a].total_cmp(&probability[b]))
+            .unwrap_or(0);
+        let (model, remedy) = if predictor.is_two_level() {
+            (
+                "the two-level GP's fine level",
+                "more fine points (noise_aware.fidelity.fine_points)",
+            )
+        } else {
+            ("the GP", "more runs near the target (`--adaptive`)")
+        };
+        return Err(StudyError::NothingKept(format!(
+            "none of the {samples} resampled points has probability >= {} of an angle in \
+             {lo:.2}–{hi:.2} deg under {model}; the best has {:.3} (mean {:.2} ± {:.2} deg) at \
+             {}: {remedy} or a lower min_probability",
+            spec.min_probability,
+            probability[best],
+            predictions[best].mean,
+            predictions[best].sd,
+            to_physical(study, &unit[best])
+                .iter()
+                .zip(&names)
+                .map(|(v, n)| format!("{n} = {v:.4}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    };
+    let candidates: Vec<Candidate> = clustering
+        .centres
+        .iter()
+        .zip(&clustering.sizes)
+        .enumerate()
+        .map(|(k, (c, &size))| {
+            let p = predict(c);
+            Candidate {
+                group: k + 1,
+                size,
+                centre: to_physical(study, c),
+                predicted_deg: p.mean,
+                predicted_sd_deg: p.sd,
+                probability: probability_in_band(p.mean, p.sd, lo, hi),
+            }
+        })
+        .collect();
+    let ranges = crate::study::plan::calibration::ranges(study);
+    let family = family(&names, &ranges, &kept_unit, samples);
+
+    let label = cluster_column(unit.len(), &kept, &clustering.labels);
+    let out = dir.stage(Stage::Search);
+    dir.prepare_stage(study, Stage::Search)?;
+    let surrogate = if predictor.is_two_level() {
+        "two_level_gp"
+    } else {
+        "gp"
+    };
+    let mut lineage = dir
+        .lineage(
+            Stage::Search,
+            json!({ "settings": settings, "surrogate": surrogate, "resampled": samples,
+                    "min_probability": spec.min_probability, "band_deg": [lo, hi],
+                    "fixed_by_screening": effects.iter().filter(|e| !e.active)
+                        .map(|e| e.parameter.clone()).collect::<Vec<_>>(),
+                    "bandwidth_used": bandwidth }),
+        )
+        .with_input(dir.input("gp", &dir.gp_path())?);
+    if predictor.is_two_level() {
+        lineage = lineage.with_input(dir.input("two_level", &dir.two_level_path())?);
+    }
+    let mut header = vec!["point".to_string()];
+    header.extend(names.iter().cloned());
+    header.extend(
+        [
+            "predicted_deg",
+            "predicted_sd_deg",
+            "probability",
+            "cluster",
+        ]
+        .map(String::from),
+    );
+    let mut points = CsvWriter::new(&header);
+    for (i, u) in unit.iter().enumerate() {
+        let mut cells = vec![Cell::Integer(i as u64)];
+        cells.extend(to_physical(study, u).into_iter().map(Cell::Number));
+        cells.push(Cell::Number(predictions[i].mean));
+        cells.push(Cell::Number(predictions[i].sd));
+        cells.push(Cell::Number(probability[i]));
+        cells.push(label[i].map_or(Cell::Empty, |l| Cell::Integer(l as u64)));
+        points.row(&cells);
+    }
+    let mut header = vec!["group".to_string(), "size".to_string()];
+    header.extend(names.iter().cloned());
+    header.extend(["predicted_angle_deg", "predicted_sd_deg", "probability"].map(String::from));
+    let mut clusters = CsvWriter::new(&header);
+    for c in &candidates {
+        let mut cells = vec![Cell::Integer(c.group as u64), Cell::Integer(c.size as u64)];
+        cells.extend(c.centre.iter().map(|v| Cell::Number(*v)));
+        cells.push(Cell::Number(c.predicted_deg));
+        cells.push(Cell::Number(c.predicted_sd_deg));
+        cells.push(Cell::Number(c.probability));
+        clusters.row(&cells);
+    }
+    let svg = scatter_matrix(
+        &names,
+        &ranges,
+        &kept_unit,
+        &clustering.labels,
+        &clustering.centres,
+        &format!(
+            "{} of {samples} points with P(angle in {lo:.1}–{hi:.1} deg) >= {}",
+            kept.len(),
+            spec.min_probability
+        ),
+    );
+    let markdown = markdown(&names, &candidates, &family, spec.min_probability, (lo, hi));
+    write_output(
+        &out.join("points.csv"),
+        points.finish().as_bytes(),
+        &lineage,
+    )?;
+    write_output(&out.join("scatter.svg"), svg.as_bytes(), &lineage)?;
+    write_output(&out.join("family.json"), &json_bytes(&family), &lineage)?;
+    write_output(&out.join("clusters.md"), markdown.as_bytes(), &lineage)?;
+    write_output(&dir.clusters_path(), clusters.finish().as_bytes(), &lineage)?;
+    Ok(GpSearchOutcome {
+        candidates,
+        family,
+        markdown,
+        screening: effects.clone(),
+    })
+}
+
+fn markdown(
+    names: &[String],
+    candidates: &[Candidate],
+    family: &Family,
+    min_probability: f64,
+    band: (f64, f64),
+) -> String {
+    let mut t = MarkdownTable::new(
+        &[
+            vec!["group".to_string(), "size".to_string()],
+            names.to_vec(),
+            vec!["GP mean ± sd (°)".to_string(), "P(in band)".to_string()],
+        ]
+        .concat()
+        .iter()
+        .map(String::as_str)
+        .collect::<Vec<_>>(),
+    );
+    for c in candidates {
+        let mut row = vec![c.group.to_string(), c.size.to_string()];
+        row.extend(c.centre.iter().map(|v| format!("{v:.4}")));
+        row.push(format!(
+            "{:.2} ± {:.2}",
+            c.predicted_deg, c.predicted_sd_deg
+        ));
+        row.push(format!("{:.2}", c.probability));
+        t.row(&row);
+    }
+    let mut out = format!(
+        "{} of {} resampled points have P(angle in {:.2}–{:.2}°) ≥ {min_probability} under the GP; \
+         mean shift gives {} cluster(s):\n\n",
+        family.kept,
+        family.resampled,
+        band.0,
+        band.1,
+        candidates.len()
+    );
+    out.push_str(&t.render());
+    out.push_str("\n## The family of parameter sets consistent with the target\n\n");
+    let mut s = MarkdownTable::new(&["parameter", "mean", "sd", "min", "max", "sd / range"]);
+    for p in &family.spread {
+        s.row(&[
+            p.parameter.clone(),
+            format!("{:.4}", p.mean),
+            format!("{:.4}", p.sd),
+            format!("{:.4}", p.min),
+            format!("{:.4}", p.max),
+            format!("{:.2}", p.relative_sd),
+        ]);
+    }
+    out.push_str(&s.render());
+    out.push_str(
+        "\nPrincipal directions of the kept points (unit cube of the ranges, largest share \
+         first; a large share is a combination the target leaves free):\n\n",
+    );
+    let mut d = MarkdownTable::new(
+        &[vec!["share".to_string()], names.to_vec()]
+            .concat()
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    for dir in &family.directions {
+        let mut row = vec![format!("{:.0} %", 100.0 * dir.variance_share)];
+        row.extend(dir.loadings.iter().map(|v| format!("{v:+.2}")));
+        d.row(&row);
+    }
+    out.push_str(&d.render());
+    let _ = writeln!(out);
+    out
+}
