@@ -26,26 +26,15 @@ use crate::store::{
 };
 use crate::study::analyses::holdout;
 use crate::study::analyses::learning_curve;
-use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
-use crate::study::pipeline::{
-    calibrate_noise_aware as calibrate_noise_aware_stages, NoiseAwareOptions,
-};
 use crate::study::plan::design_study::{is_design_study, DesignStudy};
 use crate::study::plan::{
-    default_candidates, names_adaptive, Analysis, Method, Stage as ClassicStage, StudyFile,
-    StudySpec,
+    default_candidates, names_adaptive, Analysis, Method, StudyFile, StudySpec,
 };
-use crate::study::stages::design::{diagnose_table, sample as run_sample, SampleSettings};
-use crate::study::stages::fine::fine as run_fine;
-use crate::study::stages::fit_gp::train_gp;
-use crate::study::stages::fit_network::{train_study, train_table, TableSpec, TrainOptions};
-use crate::study::stages::noise::noise as run_noise;
-use crate::study::stages::search_probability::gp_search;
-use crate::study::stages::search_tolerance::load_model;
-use crate::study::stages::search_tolerance::{search as run_search, SearchSettings};
-use crate::study::stages::simulate::batch as run_batch;
-use crate::study::stages::verify_candidates::verify as run_verify;
+use crate::study::run::{CalibrationSettings, Env, Plan, StageOutcome, Upto};
+use crate::study::stages::design::{diagnose_table, SampleSettings};
+use crate::study::stages::fit_network::{train_table, TableSpec, TrainOptions};
+use crate::study::stages::search_tolerance::SearchSettings;
 use crate::study::sweeps::convergence;
 use crate::study::sweeps::pilot::{self, PilotSpec};
 use crate::study::sweeps::tradeoff as tradeoff_sweep;
@@ -711,15 +700,29 @@ pub fn learning_curve(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
+    let settings = CalibrationSettings::defaults(&study, default_candidates(&study), false);
     if !dir.design_path().is_file() {
-        sample_stage(
-            (&study, &dir),
-            &SampleSettings::default(),
+        let design = run_stages(
+            store_root,
+            &study,
+            &dir,
+            settings,
+            exec,
+            Upto::Only("design"),
             out,
-            &mut io::stderr(),
         )?;
+        design_warnings(&design, &mut io::stderr())?;
     }
-    batch_leaving_out_failures(store_root, (&study, &dir), exec, out)?;
+    let runs = run_stages(
+        store_root,
+        &study,
+        &dir,
+        settings,
+        exec,
+        Upto::Only("simulate"),
+        out,
+    )?;
+    failures(&runs, true, out)?;
     let store = open_store(store_root)?;
     let outcome = learning_curve::learning_curve(&dir, &study, &store, sizes)?;
     write!(out, "\n{}", outcome.markdown)?;
@@ -766,10 +769,6 @@ fn runs_in(
     Ok((store, exec.in_study(study_dir)))
 }
 
-/// A calibration study read once and its output directory: what the
-/// stages of `repose calibrate` share.
-type Opened<'a> = (&'a Study, &'a StudyDir);
-
 /// The study and its output directory in the store (its killed writers'
 /// leftover temp files removed, [`sweep_old_temps`]).
 fn open_study(store_root: &Path, path: &Path) -> Result<(Study, StudyDir), CommandError> {
@@ -815,7 +814,7 @@ fn write_diagnostics(
 }
 
 /// `repose sample STUDY`: the study's Latin hypercube, one experiment manifest
-/// per sample, and the design's diagnostics.
+/// per sample, and the design's diagnostics (their warnings on `err`).
 /// A study that may start more than `max_runs` runs is refused before its
 /// design is built.
 pub fn sample(
@@ -827,35 +826,57 @@ pub fn sample(
     err: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_sized_study(store_root, study_path, max_runs)?;
-    sample_stage((&study, &dir), settings, out, err)
+    let mut plan = CalibrationSettings::defaults(&study, default_candidates(&study), false);
+    plan.sample = *settings;
+    let stages = run_stages(
+        store_root,
+        &study,
+        &dir,
+        plan,
+        &Executor::local(1, Limits::default()),
+        Upto::Only("design"),
+        out,
+    )?;
+    design_warnings(&stages, err)
 }
 
-/// The design stage of an opened study ([`sample`]).
-fn sample_stage(
-    (study, dir): Opened<'_>,
-    settings: &SampleSettings,
-    out: &mut dyn Write,
-    err: &mut dyn Write,
-) -> Result<(), CommandError> {
-    let outcome = run_sample(dir, study, settings)?;
-    writeln!(
-        out,
-        "sampled {} points of {} parameter(s) for study {} ({})",
-        outcome.points.len(),
-        outcome.parameters.len(),
-        study.name,
-        dir.id().short(12)
-    )?;
-    if let Some(o) = &outcome.optimisation {
-        writeln!(
-            out,
-            "  optimised: {} of {} exchanges kept, phi_p {:.4} -> {:.4}",
-            o.accepted, o.iterations, o.initial_phi_p, o.final_phi_p
-        )?;
+/// Prints the design stage's diagnostics warnings on `err`.
+fn design_warnings(stages: &[StageOutcome], err: &mut dyn Write) -> Result<(), CommandError> {
+    for stage in stages {
+        if let StageOutcome::Design(o) = stage {
+            for w in &o.diagnostics.warnings {
+                writeln!(err, "warning: {w}")?;
+            }
+        }
     }
-    write_diagnostics(&outcome.diagnostics, out, err)?;
-    writeln!(out, "  design: {}", outcome.design_file.display())?;
     Ok(())
+}
+
+/// Runs `upto` of a he2019 study's stage list with `settings` through the
+/// one driver ([`crate::study::run`]), each stage's heading and report on
+/// `out`.
+fn run_stages(
+    store_root: &Path,
+    study: &Study,
+    dir: &StudyDir,
+    settings: CalibrationSettings,
+    exec: &Executor,
+    upto: Upto,
+    out: &mut dyn Write,
+) -> Result<Vec<StageOutcome>, CommandError> {
+    let (store, pool) = runs_in(store_root, dir.path(), exec)?;
+    let plan = Plan::calibration(study.clone(), settings);
+    let mut log = |line: &str| {
+        let _ = writeln!(out, "{line}");
+    };
+    let env = Env {
+        dir,
+        store: &store,
+        pool: &pool,
+        runner: &run_logged,
+        log: &mut log,
+    };
+    Ok(study::run::run(&plan, upto, env)?)
 }
 
 /// `repose sample --diagnose TABLE`: design diagnostics of a CSV table.
@@ -888,38 +909,81 @@ pub struct CalibrateFlags {
     pub json: bool,
 }
 
-/// `repose calibrate` on a noise-aware study
-/// ([`crate::study::pipeline`]): stage reports on `out` (stderr with
-/// `--json`, which then prints the outcome as JSON on `out`).
-fn calibrate_noise_aware(
+/// `repose calibrate` on a he2019 study ([`crate::study::pipeline`]): stage
+/// reports on `out` (stderr with `--json`, which then prints the outcome
+/// as JSON on `out`). Failed design runs are noted and left out of
+/// training; a failed verification run fails the command after the table.
+fn calibrate_study(
     store_root: &Path,
     path: &Path,
     study: &Study,
     exec: &Executor,
-    candidates: usize,
-    flags: CalibrateFlags,
+    settings: CalibrationSettings,
+    json: bool,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let dir = study_dir(store_root, study, path)?;
     let (store, pool) = runs_in(store_root, dir.path(), exec)?;
-    let options = NoiseAwareOptions::defaults(study, candidates, flags.adaptive);
-    // Stage reports as they come: on `out`, or on stderr with `--json`.
-    let outcome = {
+    let plan = Plan::calibration(study.clone(), settings);
+    let done = {
         let mut err = io::stderr();
-        let sink: &mut dyn Write = if flags.json { &mut err } else { &mut *out };
+        let sink: &mut dyn Write = if json { &mut err } else { &mut *out };
         let mut log = |line: &str| {
             let _ = writeln!(sink, "{line}");
         };
-        calibrate_noise_aware_stages(&dir, study, &store, &pool, &options, run_logged, &mut log)?
+        let env = Env {
+            dir: &dir,
+            store: &store,
+            pool: &pool,
+            runner: &run_logged,
+            log: &mut log,
+        };
+        study::pipeline::calibrate(&plan, env)?
     };
-    if flags.json {
-        return print_json(&outcome, out);
+    match &done.outcome {
+        Some(outcome) if json => return print_json(outcome, out),
+        Some(outcome) => writeln!(
+            out,
+            "\n{}",
+            outcome.summary(&dir.path().join("outcome.json"))
+        )?,
+        None => {}
     }
-    writeln!(
-        out,
-        "\n{}",
-        outcome.summary(&dir.path().join("outcome.json"))
-    )?;
+    failures(&done.stages, true, out)
+}
+
+/// The failed runs of finished `stages`: a design run is noted (training
+/// leaves it out and the next run retries it) when `calibrating`, else an
+/// error like a failed verification run.
+fn failures(
+    stages: &[StageOutcome],
+    calibrating: bool,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    for stage in stages {
+        match stage {
+            StageOutcome::Simulate(b) if !b.failures.is_empty() && calibrating => writeln!(
+                out,
+                "note: {} of {} runs failed (listed above); training leaves them out \
+                 and the next calibrate or batch retries them",
+                b.failures.len(),
+                b.total
+            )?,
+            StageOutcome::Simulate(b) if !b.failures.is_empty() => {
+                return Err(CommandError::BatchIncomplete {
+                    failed: b.failures.len(),
+                    total: b.total,
+                })
+            }
+            StageOutcome::VerifyCandidates(v) if v.failed_runs > 0 => {
+                return Err(CommandError::BatchIncomplete {
+                    failed: v.failed_runs,
+                    total: v.runs,
+                })
+            }
+            _ => {}
+        }
+    }
     Ok(())
 }
 
@@ -940,10 +1004,16 @@ pub fn noise(
         )));
     }
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    let (store, pool) = runs_in(store_root, dir.path(), exec)?;
-    let outcome = run_noise(&dir, &study, &store, &pool, run_logged)?;
-    write!(out, "{}", outcome.markdown)?;
-    writeln!(out, "  outputs: {}", dir.stage(Stage::Noise).display())?;
+    let settings = CalibrationSettings::defaults(&study, default_candidates(&study), false);
+    run_stages(
+        store_root,
+        &study,
+        &dir,
+        settings,
+        exec,
+        Upto::Only("noise"),
+        out,
+    )?;
     Ok(())
 }
 
@@ -956,12 +1026,16 @@ pub fn fine(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    let (store, pool) = runs_in(store_root, dir.path(), exec)?;
-    let outcome = run_fine(&dir, &study, &store, &pool, &run_logged, &mut |m| {
-        eprintln!("{m}")
-    })?;
-    write!(out, "{}", outcome.markdown)?;
-    writeln!(out, "  outputs: {}", dir.stage(Stage::Fine).display())?;
+    let settings = CalibrationSettings::defaults(&study, default_candidates(&study), false);
+    run_stages(
+        store_root,
+        &study,
+        &dir,
+        settings,
+        exec,
+        Upto::Only("fine"),
+        out,
+    )?;
     Ok(())
 }
 
@@ -1027,46 +1101,17 @@ pub fn batch(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    let (failed, total) = run_batch_and_report(store_root, (&study, &dir), exec, out)?;
-    if failed > 0 {
-        return Err(CommandError::BatchIncomplete { failed, total });
-    }
-    Ok(())
-}
-
-/// The batch stage for the commands that go on after it (`calibrate`,
-/// `learning-curve`): failed runs (e.g. a pile whose angle is not measurable)
-/// are reported, not an error; training leaves them out and the next batch
-/// retries them.
-fn batch_leaving_out_failures(
-    store_root: &Path,
-    opened: Opened<'_>,
-    exec: &Executor,
-    out: &mut dyn Write,
-) -> Result<(), CommandError> {
-    let (failed, total) = run_batch_and_report(store_root, opened, exec, out)?;
-    if failed > 0 {
-        writeln!(
-            out,
-            "note: {failed} of {total} runs failed (listed above); training leaves them out \
-             and the next calibrate or batch retries them"
-        )?;
-    }
-    Ok(())
-}
-
-/// The batch stage with its report (counts, each failure, the table's path);
-/// returns (failed runs, samples).
-fn run_batch_and_report(
-    store_root: &Path,
-    (study, dir): Opened<'_>,
-    exec: &Executor,
-    out: &mut dyn Write,
-) -> Result<(usize, usize), CommandError> {
-    let (store, settings) = runs_in(store_root, dir.path(), exec)?;
-    let outcome = run_batch(dir, study, &store, &settings, run_logged)?;
-    write!(out, "{}", outcome.text())?;
-    Ok((outcome.failures.len(), outcome.total))
+    let settings = CalibrationSettings::defaults(&study, default_candidates(&study), false);
+    let stages = run_stages(
+        store_root,
+        &study,
+        &dir,
+        settings,
+        exec,
+        Upto::Only("simulate"),
+        out,
+    )?;
+    failures(&stages, false, out)
 }
 
 /// `repose train STUDY`: the GA-BP hidden-size sweep on the batch's angles;
@@ -1082,34 +1127,21 @@ pub fn train(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
-    train_stage((&study, &dir), options, seed, selection, out)
-}
-
-/// The fit stage of an opened study ([`train`]).
-fn train_stage(
-    (study, dir): Opened<'_>,
-    options: &TrainOptions,
-    seed: Option<u64>,
-    selection: Option<Selection>,
-    out: &mut dyn Write,
-) -> Result<(), CommandError> {
-    let mut options = *options;
-    options.settings.seed = seed.unwrap_or(study.design.seed);
-    options.settings.selection = selection.unwrap_or_else(|| TrainOptions::selection(study));
-    let outcome = train_study(dir, study, &options)?;
-    write!(out, "{}", outcome.text())?;
-    if Method::of_calibration(study) == Method::He2019NoiseAware {
-        let model = load_model(&dir.stage(Stage::Train).join("model.json"))?;
-        let net = |x: &[f64]| model.predict(x);
-        let gp = train_gp(
-            dir,
-            study,
-            options.train_fraction,
-            options.settings.seed,
-            Some(&net),
-        )?;
-        write!(out, "\n{}", gp.markdown)?;
-    }
+    let mut settings = CalibrationSettings::defaults(&study, default_candidates(&study), false);
+    settings.train = *options;
+    settings.train.settings.seed = seed.unwrap_or(study.design.seed);
+    settings.train.settings.selection =
+        selection.unwrap_or_else(|| TrainOptions::selection(&study));
+    let local = Executor::local(1, Limits::default());
+    run_stages(
+        store_root,
+        &study,
+        &dir,
+        settings,
+        &local,
+        Upto::Only("fit"),
+        out,
+    )?;
     Ok(())
 }
 
@@ -1136,31 +1168,18 @@ pub fn search(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_study(store_root, study_path)?;
-    search_stage((&study, &dir), settings, seed, out)
-}
-
-/// The search stage of an opened study ([`search`]).
-fn search_stage(
-    (study, dir): Opened<'_>,
-    settings: &SearchSettings,
-    seed: Option<u64>,
-    out: &mut dyn Write,
-) -> Result<(), CommandError> {
-    let mut settings = *settings;
-    settings.seed = seed.unwrap_or(study.design.seed);
-    if Method::of_calibration(study) == Method::He2019NoiseAware {
-        let found = gp_search(dir, study, &settings)?;
-        write!(out, "{}", found.markdown)?;
-        return Ok(());
-    }
-    let outcome = run_search(dir, study, &settings)?;
-    write!(out, "{}", outcome.markdown)?;
-    writeln!(
+    let mut plan = CalibrationSettings::defaults(&study, default_candidates(&study), false);
+    plan.search = *settings;
+    plan.search.seed = seed.unwrap_or(study.design.seed);
+    let local = Executor::local(1, Limits::default());
+    run_stages(
+        store_root,
+        &study,
+        &dir,
+        plan,
+        &local,
+        Upto::Only("search"),
         out,
-        "\n{} distinct modes merged into {} cluster(s); outputs: {}",
-        outcome.modes,
-        outcome.clusters.len(),
-        outcome.out_dir.display()
     )?;
     Ok(())
 }
@@ -1181,28 +1200,17 @@ pub fn verify(
         return rsm(store_root, study_path, exec, false, out);
     }
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    verify_stage(store_root, (&study, &dir), exec, candidates, out)
-}
-
-/// The verify stage of an opened study ([`verify`]).
-fn verify_stage(
-    store_root: &Path,
-    (study, dir): Opened<'_>,
-    exec: &Executor,
-    candidates: usize,
-    out: &mut dyn Write,
-) -> Result<(), CommandError> {
-    let (store, settings) = runs_in(store_root, dir.path(), exec)?;
-    let outcome = run_verify(dir, study, &store, &settings, candidates, run_logged)?;
-    write!(out, "{}", outcome.markdown)?;
-    writeln!(out, "  table: {}", outcome.table.display())?;
-    if outcome.failed_runs > 0 {
-        return Err(CommandError::BatchIncomplete {
-            failed: outcome.failed_runs,
-            total: outcome.runs,
-        });
-    }
-    Ok(())
+    let settings = CalibrationSettings::defaults(&study, candidates, false);
+    let stages = run_stages(
+        store_root,
+        &study,
+        &dir,
+        settings,
+        exec,
+        Upto::Only("verify"),
+        out,
+    )?;
+    failures(&stages, false, out)
 }
 
 /// Whether `path` holds a design study (a `factors` object); unreadable
@@ -1315,14 +1323,6 @@ fn write_status(report: &StatusReport, out: &mut dyn Write) -> Result<(), Comman
         )?;
     }
     Ok(())
-}
-
-/// How an executor runs, for stage headings: `N at a time` or `on Slurm`.
-fn exec_label(exec: &Executor) -> String {
-    match &exec.slurm {
-        Some(_) => "on Slurm".to_string(),
-        None => format!("{} at a time", exec.jobs),
-    }
 }
 
 /// The design study at `path` and the store; a readable JSON file without a
@@ -1579,41 +1579,15 @@ pub fn calibrate(
         .check_runs(exec.max_runs)
         .map_err(CommandError::Usage)?;
     match Method::of_calibration(&study) {
-        Method::He2019NoiseAware => {
-            calibrate_noise_aware(store_root, &path, &study, exec, candidates, flags, out)
-        }
-        _ if adaptive || flags.json => Err(CommandError::Usage(format!(
+        Method::He2019 if adaptive || flags.json => Err(CommandError::Usage(format!(
             "--adaptive and --json need a noise-aware study (a `noise_aware` block); {} has none",
             path.display()
         ))),
-        _ => calibrate_classic(store_root, &path, &study, exec, candidates, out),
+        _ => {
+            let settings = CalibrationSettings::defaults(&study, candidates, adaptive);
+            calibrate_study(store_root, &path, &study, exec, settings, flags.json, out)
+        }
     }
-}
-
-/// `repose calibrate` on a classic he2019 study: its stage list, each stage
-/// run by its subcommand ([`run_classic_stage`]) under a `== i/n stage`
-/// heading.
-fn calibrate_classic(
-    store_root: &Path,
-    path: &Path,
-    study: &Study,
-    exec: &Executor,
-    candidates: usize,
-    out: &mut dyn Write,
-) -> Result<(), CommandError> {
-    let dir = study_dir(store_root, study, path)?;
-    let spec = StudySpec::calibration(study, false, candidates);
-    let total = spec.stages.len();
-    for (i, stage) in spec.stages.iter().enumerate() {
-        let how = match stage {
-            ClassicStage::Simulate { .. } => format!(" ({})", exec_label(exec)),
-            ClassicStage::Verify { .. } => format!(" ({candidates} candidate(s))"),
-            _ => String::new(),
-        };
-        writeln!(out, "\n== {}/{total} {}{how}", i + 1, stage.name())?;
-        run_classic_stage(store_root, (study, &dir), stage, exec, candidates, out)?;
-    }
-    Ok(())
 }
 
 /// Writes the embedded default study to `<store>/default-study.json` and
@@ -1633,38 +1607,4 @@ fn write_default_study(
         writeln!(out, "{note}")?;
     }
     Ok(p)
-}
-
-/// One stage of he2019's classic stage list, run by its subcommand with the
-/// stage's defaults (the design is sampled, failed batch runs are left out of
-/// training, the `candidates` largest clusters are verified).
-fn run_classic_stage(
-    store_root: &Path,
-    opened: Opened<'_>,
-    stage: &ClassicStage,
-    exec: &Executor,
-    candidates: usize,
-    out: &mut dyn Write,
-) -> Result<(), CommandError> {
-    let study = opened.0;
-    match stage {
-        ClassicStage::Design { .. } => {
-            sample_stage(opened, &SampleSettings::default(), out, &mut io::stderr())
-        }
-        ClassicStage::Simulate { .. } => batch_leaving_out_failures(store_root, opened, exec, out),
-        ClassicStage::Fit { .. } => {
-            train_stage(opened, &TrainOptions::defaults(study), None, None, out)
-        }
-        ClassicStage::Search { .. } => search_stage(
-            opened,
-            &SearchSettings::with_seed(study.design.seed),
-            None,
-            out,
-        ),
-        ClassicStage::Verify { .. } => verify_stage(store_root, opened, exec, candidates, out),
-        other => Err(CommandError::Usage(format!(
-            "stage `{}` is not part of he2019's classic method",
-            other.name()
-        ))),
-    }
 }

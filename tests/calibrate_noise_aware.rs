@@ -14,15 +14,16 @@ use repose::store::{Lineage, RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
 use repose::study::dir::Stage;
 use repose::study::dir::StudyDir;
-use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome, NoiseAwareOptions};
+use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome};
 use repose::study::plan::calibration::acceptance;
+use repose::study::plan::calibration::{ADAPTIVE_INDEX, NOISE_INDEX, ROUND_STRIDE, VERIFY_INDEX};
+use repose::study::run::CalibrationSettings;
 use repose::study::runs::replicated::read_replicates_csv;
-use repose::study::stages::adaptive::{Stop, ADAPTIVE_INDEX, ROUND_STRIDE};
+use repose::study::stages::adaptive::Stop;
 use repose::study::stages::design::SampleSettings;
 use repose::study::stages::fit_network::TrainOptions;
-use repose::study::stages::noise::{noise, NOISE_INDEX};
+use repose::study::stages::noise::noise;
 use repose::study::stages::search_tolerance::SearchSettings;
-use repose::study::stages::verify_candidates::VERIFY_INDEX;
 use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use serde_json::{json, Value};
 
@@ -71,8 +72,8 @@ fn study(dir: &Path, edits: &[(&str, Value)]) -> (Study, std::path::PathBuf) {
     (parse_study(&v.to_string()).unwrap(), path)
 }
 
-fn options(study: &Study, adaptive: bool) -> NoiseAwareOptions {
-    NoiseAwareOptions {
+fn options(study: &Study, adaptive: bool) -> CalibrationSettings {
+    CalibrationSettings {
         candidates: 1,
         adaptive,
         sample: SampleSettings::default(),

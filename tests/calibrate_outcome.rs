@@ -23,10 +23,8 @@ use repose::manifest::{parse_study, PHYSICS_VERSION};
 use repose::study::dir::StudyDir;
 use repose::study::plan::calibration::parameter_names;
 use repose::study::plan::calibration::to_physical;
-use repose::study::stages::adaptive::ADAPTIVE_INDEX;
+use repose::study::plan::calibration::{ADAPTIVE_INDEX, NOISE_INDEX, VERIFY_INDEX};
 use repose::study::stages::design::{sample, SampleSettings};
-use repose::study::stages::noise::NOISE_INDEX;
-use repose::study::stages::verify_candidates::VERIFY_INDEX;
 use serde_json::Value;
 
 const OUTCOME: &str = "experiments/he2019-quick/measured/outcome.json";

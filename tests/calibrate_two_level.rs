@@ -16,8 +16,9 @@ use repose::store::{RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
 use repose::study::analyses::holdout::holdout;
 use repose::study::dir::StudyDir;
-use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome, NoiseAwareOptions};
+use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome};
 use repose::study::plan::{Stage, StudySpec};
+use repose::study::run::CalibrationSettings;
 use repose::study::stages::design::SampleSettings;
 use repose::study::stages::fine::{fine, load_two_level, Choice, SPACE_FILLING_POINTS};
 use repose::study::stages::fit_network::TrainOptions;
@@ -86,7 +87,7 @@ fn fidelity() -> Value {
 fn calibrate(root: &Path, study: &Study, path: &Path, jobs: usize) -> CalibrationOutcome {
     let store = Store::open(root).unwrap();
     let dir = StudyDir::new(root, study, path);
-    let options = NoiseAwareOptions {
+    let options = CalibrationSettings {
         candidates: 1,
         adaptive: false,
         sample: SampleSettings::default(),
@@ -346,7 +347,7 @@ fn the_fine_stage_says_what_is_wrong() {
     assert!(err.contains("repose train"), "{err}");
 
     // --adaptive is refused in a two-level study.
-    let options = NoiseAwareOptions {
+    let options = CalibrationSettings {
         candidates: 1,
         adaptive: true,
         sample: SampleSettings::default(),

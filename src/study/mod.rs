@@ -28,6 +28,8 @@ pub mod analyses;
 pub mod dir;
 pub mod pipeline;
 pub mod plan;
+pub mod records;
+pub mod run;
 pub mod runs;
 pub mod stages;
 pub mod sweeps;
@@ -38,6 +40,9 @@ use crate::exec::{ExecError, Executor};
 use crate::manifest::{Experiment, ValidationErrors};
 use crate::store::{RunDir, RunResult, Store, StoreError};
 use plan::design_study::DesignStudy;
+use plan::Analysis;
+use run::{Env, Plan, StageOutcome, Upto};
+use stages::sensitivity::Levels;
 
 /// Why a study stage failed: the one error of every study stage (he2019's
 /// calibration stages, the design studies, the tradeoff sweep).
@@ -146,6 +151,38 @@ pub struct RsmReport {
     pub verification: Option<stages::verify_optimum::Verification>,
 }
 
+/// Runs `upto` of a design study's stage list for `analysis` through the
+/// one driver ([`run::run`]), its headings announced on stderr when the
+/// executor shows progress.
+fn run_design<E, F>(
+    store_root: &Path,
+    study: &DesignStudy,
+    (analysis, levels, upto): (Analysis, Levels, Upto),
+    store: &Store,
+    pool: &Executor,
+    runner: &F,
+) -> Result<Vec<StageOutcome>, StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let dir = dir::StudyDir::prepare(store_root, study)?;
+    let plan = Plan::design(study.clone(), analysis, levels);
+    let mut log = |line: &str| {
+        if pool.progress {
+            eprintln!("{}: {}", study.name, line.trim_start());
+        }
+    };
+    let env = Env {
+        dir: &dir,
+        store,
+        pool,
+        runner,
+        log: &mut log,
+    };
+    run::run(&plan, upto, env)
+}
+
 /// `repose rsm STUDY`: the design's runs, the analysis, the optimum, and the
 /// verification of the optimum and the named points.
 pub fn run_rsm<E, F>(
@@ -159,20 +196,17 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let dir = dir::StudyDir::prepare(store_root, study)?;
-    let announce = |what: &str| {
-        if pool.progress {
-            eprintln!("{}: {what}", study.name);
+    let how = (Analysis::ResponseSurface, Levels::ALL, Upto::All);
+    let (mut rsm, mut verification) = (None, None);
+    for stage in run_design(store_root, study, how, store, pool, runner)? {
+        match stage {
+            StageOutcome::ResponseSurface(r) => rsm = Some(r),
+            StageOutcome::VerifyOptimum(v) => verification = v,
+            _ => {}
         }
-    };
-    announce("design runs");
-    let outcome = stages::rsm::rsm(&dir, study, store, pool, runner)?;
-    announce("verification runs");
-    let verification = stages::verify_optimum::verify(&dir, study, &outcome, store, pool, runner)?;
-    Ok(RsmReport {
-        rsm: outcome,
-        verification,
-    })
+    }
+    let rsm = rsm.ok_or_else(|| StudyError::Unsupported("the study ran no search".into()))?;
+    Ok(RsmReport { rsm, verification })
 }
 
 /// `repose screen STUDY`.
@@ -187,23 +221,36 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let dir = dir::StudyDir::prepare(store_root, study)?;
-    stages::screen::screen(&dir, study, store, pool, runner)
+    let how = (Analysis::ResponseSurface, Levels::ALL, Upto::Only("screen"));
+    run_design(store_root, study, how, store, pool, runner)?
+        .into_iter()
+        .find_map(|s| match s {
+            StageOutcome::Screen(s) => Some(s),
+            _ => None,
+        })
+        .ok_or_else(|| StudyError::Unsupported("the study ran no screen".into()))
 }
 
-/// `repose sensitivity STUDY`: the levels asked for (see [`sensitivity`]).
+/// `repose sensitivity STUDY`: the levels asked for (see
+/// [`stages::sensitivity`]).
 pub fn run_sensitivity<E, F>(
     store_root: &Path,
     study: &DesignStudy,
     store: &Store,
     pool: &Executor,
     runner: &F,
-    levels: stages::sensitivity::Levels,
+    levels: Levels,
 ) -> Result<stages::sensitivity::SensitivityOutcome, StudyError>
 where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let dir = dir::StudyDir::prepare(store_root, study)?;
-    stages::sensitivity::sensitivity(&dir, study, store, pool, runner, levels)
+    let how = (Analysis::Sensitivity, levels, Upto::All);
+    run_design(store_root, study, how, store, pool, runner)?
+        .into_iter()
+        .find_map(|s| match s {
+            StageOutcome::Sensitivity(s) => Some(s),
+            _ => None,
+        })
+        .ok_or_else(|| StudyError::Unsupported("the study ran no sensitivity stage".into()))
 }

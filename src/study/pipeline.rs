@@ -1,19 +1,20 @@
-//! `repose calibrate` on a noise-aware study: every stage in order, with the
-//! outcome as one record.
+//! The outcome of a he2019 calibration: [`calibrate`] runs the plan's
+//! whole stage list through the one driver ([`super::run`]) and, for a
+//! noise-aware study, gathers the stages' outcomes into one record.
 //!
 //! ```text
 //! noise  ──▶ noise/noise.{csv,md,json}      σ at the centre, precision per cost
-//! sample ──▶ sample/design.csv              the study's Latin hypercube
-//! batch  ──▶ batch/replicates.csv, angles.csv  R seeds per sample, their means
-//! train  ──▶ train/model.json (GA-BP, he2019), train/gp.json, surrogates.md
-//! adaptive (--adaptive) ──▶ adaptive/replicates.csv (rounds until a GP candidate passes), then train again
+//! design ──▶ sample/design.csv              the study's Latin hypercube
+//! simulate ──▶ batch/replicates.csv, angles.csv  R seeds per sample, their means
+//! fit    ──▶ train/model.json (GA-BP, he2019), train/gp.json, surrogates.md
+//! adaptive (--adaptive) ──▶ adaptive/replicates.csv (rounds until a GP candidate passes), then the GP again
 //! fine (noise_aware.fidelity) ──▶ fine/runs.csv, two_level.json: design points at the fine size
 //! search ──▶ search/points.csv, clusters.csv/.md, family.json
 //! verify ──▶ verify/acceptance.json (first), verification.csv/.md, runs.csv
 //! ```
 //!
 //! A two-level study (`noise_aware.fidelity`) runs the fine stage after
-//! train and has no adaptive rounds; its search and verification are the
+//! fit and has no adaptive rounds; its search and verification are the
 //! fine level's ([`super::stages::fine`]).
 //!
 //! The outcome ([`CalibrationOutcome`], also `outcome.json` in the study's
@@ -30,16 +31,13 @@ use super::dir::json_bytes;
 use super::dir::write_output;
 use super::dir::Stage;
 use super::dir::StudyDir;
-use super::stages::adaptive::{adaptive, AdaptiveOutcome};
-use super::stages::design::{sample, SampleSettings};
-use super::stages::fine::{fine, TwoLevelRecord};
-use super::stages::fit_gp::{train_gp, SurrogateMetrics};
-use super::stages::fit_network::{train_study, TrainOptions};
-use super::stages::noise::{noise, NoiseFloor};
-use super::stages::search_probability::{gp_search, Candidate};
-use super::stages::search_tolerance::{load_model, SearchSettings};
-use super::stages::simulate::batch;
-use super::stages::verify_candidates::{verify, VerifyRow};
+use super::records::NoiseFloor;
+use super::run::{run, CalibrationSettings, Env, Plan, StageOutcome, Upto};
+use super::stages::adaptive::AdaptiveOutcome;
+use super::stages::fine::TwoLevelRecord;
+use super::stages::fit_gp::SurrogateMetrics;
+use super::stages::search_probability::Candidate;
+use super::stages::verify_candidates::VerifyRow;
 use super::StudyError;
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
@@ -48,39 +46,6 @@ use crate::search::screen::MainEffect;
 use crate::store::{RunDir, RunResult, Store};
 use crate::study::acceptance::Record;
 use crate::study::acceptance::Verdict;
-
-/// Options of a noise-aware calibration.
-#[derive(Debug, Clone, Copy)]
-pub struct NoiseAwareOptions {
-    /// Candidates (clusters, largest first) to verify.
-    pub candidates: usize,
-    /// Run the adaptive rounds after the initial design.
-    pub adaptive: bool,
-    /// The sample stage's settings.
-    pub sample: SampleSettings,
-    /// The network's training (he2019) and the validation split of both
-    /// surrogates.
-    pub train: TrainOptions,
-    /// The search's resampling and clustering.
-    pub search: SearchSettings,
-}
-
-impl NoiseAwareOptions {
-    /// Every stage's defaults, seeded by the study's design seed: the sample
-    /// stage's settings, the network's sweep with he2019's two-thirds split
-    /// and the study's hidden-size selection ([`TrainOptions::defaults`]:
-    /// cross-validation within the training rows), the search's resampling
-    /// and clustering.
-    pub fn defaults(study: &Study, candidates: usize, adaptive: bool) -> NoiseAwareOptions {
-        NoiseAwareOptions {
-            candidates,
-            adaptive,
-            sample: SampleSettings::default(),
-            train: TrainOptions::defaults(study),
-            search: SearchSettings::with_seed(study.design.seed),
-        }
-    }
-}
 
 /// DEM runs per stage.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
@@ -165,13 +130,55 @@ impl CalibrationOutcome {
     }
 }
 
-/// Runs every stage (see the module docs); `log` gets one line per stage.
+/// What a calibration did: every stage's outcome and, for a noise-aware
+/// study, the whole outcome record (also `outcome.json`).
+#[derive(Debug, Clone)]
+pub struct Calibrated {
+    /// Each stage's outcome, in the list's order.
+    pub stages: Vec<StageOutcome>,
+    /// The noise-aware outcome record.
+    pub outcome: Option<CalibrationOutcome>,
+}
+
+/// Runs every stage of a he2019 `plan` (see the module docs) and, for a
+/// noise-aware study, writes `outcome.json`.
+pub fn calibrate<E, F>(plan: &Plan, env: Env<'_, F>) -> Result<Calibrated, StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let dir = env.dir;
+    let stages = run(plan, Upto::All, env)?;
+    let outcome = match plan {
+        Plan::Calibration {
+            study, settings, ..
+        } if study.noise_aware.is_some() => {
+            let outcome = CalibrationOutcome::of(study, dir, &stages)?;
+            let lineage = dir.lineage(
+                Stage::Verify,
+                json!({ "record": "calibration outcome", "adaptive": settings.adaptive,
+                        "candidates": settings.candidates }),
+            );
+            write_output(
+                &dir.path().join("outcome.json"),
+                &json_bytes(&outcome),
+                &lineage,
+            )?;
+            Some(outcome)
+        }
+        _ => None,
+    };
+    Ok(Calibrated { stages, outcome })
+}
+
+/// Runs a noise-aware study's stages with `settings` ([`calibrate`]);
+/// `log` gets each stage's heading and report.
 pub fn calibrate_noise_aware<E, F>(
     dir: &StudyDir,
     study: &Study,
     store: &Store,
     pool: &Executor,
-    options: &NoiseAwareOptions,
+    settings: &CalibrationSettings,
     runner: F,
     log: &mut dyn FnMut(&str),
 ) -> Result<CalibrationOutcome, StudyError>
@@ -179,144 +186,100 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let spec = super::stages::noise::noise_aware(study)?;
-    if spec.fidelity.is_some() && options.adaptive {
-        return Err(StudyError::Settings(
-            "--adaptive: the adaptive rounds are one-level; a study with noise_aware.fidelity \
-             chooses its fine points in the fine stage instead"
-                .into(),
-        ));
-    }
-    super::runs::replicated::check_response(&study.calibration)?;
-    for v in &study.verification {
-        super::runs::replicated::check_response(v)?;
-    }
-    log(&format!(
-        "== noise floor: centre of the ranges x {} seeds",
-        spec.noise_seeds
-    ));
-    let floor = noise(dir, study, store, pool, &runner)?;
-    log(&floor.markdown);
-    log("== sample");
-    let sampled = sample(dir, study, &options.sample)?;
-    let design_points = sampled.points.len();
-    log(&format!(
-        "== batch: {design_points} samples x {} seeds",
-        spec.replicates
-    ));
-    let b = batch(dir, study, store, pool, &runner)?;
-    log(&format!(
-        "{} runs, {} without an angle",
-        b.total,
-        b.failures.len()
-    ));
-    log("== train: GA-BP network (he2019) and Gaussian process");
-    train_study(dir, study, &options.train)?;
-    let seed = options.train.settings.seed;
-    let fraction = options.train.train_fraction;
-    let model = load_model(&dir.stage(Stage::Train).join("model.json"))?;
-    let net = |x: &[f64]| model.predict(x);
-    let mut gp = train_gp(dir, study, fraction, seed, Some(&net))?;
-    log(&gp.markdown);
-    let mut adaptive_outcome = None;
-    if options.adaptive {
-        log("== adaptive");
-        let a = adaptive(
-            dir,
-            study,
-            store,
-            pool,
-            seed,
-            options.candidates,
-            &runner,
-            &mut |m| log(m),
-        )?;
-        log(&format!(
-            "stopped ({:?}) after {} round(s), {} run(s){}",
-            a.stop,
-            a.rounds,
-            a.runs,
-            a.hit.as_ref().map_or(String::new(), |h| format!(
-                "; candidate {} at {:.2}° ({} of {} seeds measured)",
-                h.index, h.mean_deg, h.measured, h.seeds
-            ))
-        ));
-        gp = train_gp(dir, study, fraction, seed, Some(&net))?;
-        adaptive_outcome = Some(a);
-    }
-    let mut fine_outcome = None;
-    if let Some(f) = spec.fidelity {
-        log(&format!(
-            "== fine: {} design points x {} seeds at particle size x {}",
-            f.fine_points, f.fine_replicates, f.fine_size
-        ));
-        let o = fine(dir, study, store, pool, &runner, &mut |m| log(m))?;
-        log(&o.markdown);
-        fine_outcome = Some(o);
-    }
-    log("== search");
-    let found = gp_search(dir, study, &options.search)?;
-    log(&found.markdown);
-    let adaptive_hit = adaptive_outcome.as_ref().and_then(|a| a.hit.as_ref());
-    log(&format!(
-        "== verify: {} candidate(s) x {} scene(s), seeds by the acceptance record",
-        options.candidates.min(found.candidates.len()) + usize::from(adaptive_hit.is_some()),
-        1 + study.verification.len(),
-    ));
-    let v = verify(dir, study, store, pool, options.candidates, &runner)?;
-    log(&v.markdown);
-    let calibrated = v
-        .rows
-        .iter()
-        .any(|r| r.scene == study.calibration.name && r.judgement.verdict == Verdict::Pass);
-    // Every verified candidate: the search's and the adaptive one.
-    let verified = v.rows.iter().any(|c| {
-        v.rows
-            .iter()
-            .filter(|r| r.group == c.group)
-            .all(|r| r.judgement.verdict == Verdict::Pass)
-    });
-    let outcome = CalibrationOutcome {
-        study: study.name.clone(),
-        study_id: dir.id().to_string(),
-        runs: RunCounts {
-            noise: floor.floor.seeds,
-            design: b.total,
-            adaptive: adaptive_outcome.as_ref().map_or(0, |a| a.runs),
-            fine: fine_outcome.as_ref().map_or(0, |f| f.runs),
-            // The adaptive candidate's calibration-scene runs are the
-            // adaptive stage's, counted there.
-            verification: v
-                .rows
-                .iter()
-                .filter(|r| {
-                    !(adaptive_hit.is_some_and(|h| h.index as usize == r.group)
-                        && r.scene == study.calibration.name)
-                })
-                .map(|r| r.seeds)
-                .sum(),
-        },
-        noise_floor: floor.floor,
-        adaptive: adaptive_outcome,
-        fine: fine_outcome.map(|f| f.record),
-        surrogates: gp.metrics,
-        candidates: found.candidates,
-        family: found.family,
-        screening: found.screening,
-        acceptance: v.acceptance,
-        verification: v.rows,
-        calibrated,
-        verified,
+    let plan = Plan::calibration(study.clone(), *settings);
+    let env = Env {
+        dir,
+        store,
+        pool,
+        runner: &runner,
+        log,
     };
-    let lineage = dir.lineage(
-        Stage::Verify,
-        json!({ "record": "calibration outcome", "adaptive": options.adaptive,
-                "candidates": options.candidates }),
-    );
-    write_output(
-        &dir.path().join("outcome.json"),
-        &json_bytes(&outcome),
-        &lineage,
-    )?;
-    Ok(outcome)
+    calibrate(&plan, env)?.outcome.ok_or_else(|| {
+        StudyError::Unsupported(format!(
+            "study {}: no `noise_aware` block (a classic he2019 study has no outcome record)",
+            study.name
+        ))
+    })
+}
+
+impl CalibrationOutcome {
+    /// The record of a noise-aware study's finished `stages`.
+    pub fn of(
+        study: &Study,
+        dir: &StudyDir,
+        stages: &[StageOutcome],
+    ) -> Result<CalibrationOutcome, StudyError> {
+        let missing =
+            |what: &str| StudyError::Unsupported(format!("the calibration ran no {what} stage"));
+        let mut floor = None;
+        let mut design = 0;
+        let mut gp = None;
+        let mut adaptive = None;
+        let mut fine = None;
+        let mut found = None;
+        let mut verified = None;
+        for stage in stages {
+            match stage {
+                StageOutcome::Noise(o) => floor = Some(o),
+                StageOutcome::Simulate(b) => design = b.total,
+                StageOutcome::Fit { gp: Some(g), .. } => gp = Some(g),
+                StageOutcome::Adaptive { rounds, gp: g } => {
+                    adaptive = Some(rounds);
+                    gp = Some(g);
+                }
+                StageOutcome::Fine(f) => fine = Some(f),
+                StageOutcome::ProbabilitySearch(f) => found = Some(f),
+                StageOutcome::VerifyCandidates(v) => verified = Some(v),
+                _ => {}
+            }
+        }
+        let floor = floor.ok_or_else(|| missing("noise"))?;
+        let gp = gp.ok_or_else(|| missing("fit"))?;
+        let found = found.ok_or_else(|| missing("search"))?;
+        let v = verified.ok_or_else(|| missing("verify"))?;
+        let adaptive_hit = adaptive.and_then(|a| a.hit.as_ref());
+        let calibrated = v
+            .rows
+            .iter()
+            .any(|r| r.scene == study.calibration.name && r.judgement.verdict == Verdict::Pass);
+        // Every verified candidate: the search's and the adaptive one.
+        let verified = v.rows.iter().any(|c| {
+            v.rows
+                .iter()
+                .filter(|r| r.group == c.group)
+                .all(|r| r.judgement.verdict == Verdict::Pass)
+        });
+        Ok(CalibrationOutcome {
+            study: study.name.clone(),
+            study_id: dir.id().to_string(),
+            runs: RunCounts {
+                noise: floor.floor.seeds,
+                design,
+                adaptive: adaptive.map_or(0, |a| a.runs),
+                fine: fine.map_or(0, |f| f.runs),
+                // The adaptive candidate's calibration-scene runs are the
+                // adaptive stage's, counted there.
+                verification: v
+                    .rows
+                    .iter()
+                    .filter(|r| {
+                        !(adaptive_hit.is_some_and(|h| h.index as usize == r.group)
+                            && r.scene == study.calibration.name)
+                    })
+                    .map(|r| r.seeds)
+                    .sum(),
+            },
+            noise_floor: floor.floor.clone(),
+            adaptive: adaptive.cloned(),
+            fine: fine.map(|f| f.record.clone()),
+            surrogates: gp.metrics.clone(),
+            candidates: found.candidates.clone(),
+            family: found.family.clone(),
+            screening: found.screening.clone(),
+            acceptance: v.acceptance.clone(),
+            verification: v.rows.clone(),
+            calibrated,
+            verified,
+        })
+    }
 }

@@ -219,3 +219,39 @@ pub fn max_rounds(study: &Study) -> usize {
         n.adaptive.max_runs as usize / round_runs(n, n.verification_seeds as usize).max(1)
     })
 }
+
+/// The noise-aware block of `study`, or the error saying the stage needs it.
+pub fn noise_aware(study: &Study) -> Result<NoiseAware, StudyError> {
+    study.noise_aware.ok_or_else(|| {
+        StudyError::Settings(format!(
+            "study `{}` has no `noise_aware` block: the noise floor, replicates and the \
+             noise-aware search need one (experiments/he2019-quick/study.json has an example)",
+            study.name
+        ))
+    })
+}
+
+/// The particle size factor of a study's search and verification: the fine
+/// level's when it has one, else 1.
+pub fn verified_size(study: &Study) -> f64 {
+    study.fidelity().map_or(1.0, |f| f.fine_size)
+}
+
+// The index spaces of a study's runs: each stage's `sample_index` range, so
+// the packing seeds drawn from an index never repeat between stages.
+
+/// `sample_index` of the noise floor's runs (no design reaches it).
+pub const NOISE_INDEX: u64 = 1_000_000_000;
+
+/// `sample_index` of the first adaptive point.
+pub const ADAPTIVE_INDEX: u64 = 2_000_000_000;
+
+/// Index distance between the points of two rounds: round k's points are
+/// `ADAPTIVE_INDEX + ROUND_STRIDE * k + j`, its candidate `j = 0`.
+pub const ROUND_STRIDE: u64 = 1000;
+
+/// `sample_index` of the first verification point: the search's candidate
+/// of cluster group g is verified as `VERIFY_INDEX + g`, so its packing seeds
+/// in a noise-aware study are drawn apart from the design's (whose indices
+/// start at 0), the noise floor's and the adaptive points'.
+pub const VERIFY_INDEX: u64 = 3_000_000_000;

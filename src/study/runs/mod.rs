@@ -272,3 +272,16 @@ pub fn write_table(
     }
     crate::study::dir::write_output(path, runs.csv(&needed_scenes(study)).as_bytes(), &lineage)
 }
+
+/// A sentence on replicates without every response, or nothing.
+pub fn incomplete_note(incomplete: usize) -> String {
+    if incomplete == 0 {
+        String::new()
+    } else {
+        format!(
+            " {incomplete} replicate(s) lack a response: their runs failed or could not \
+             measure it (the status column of responses.csv says why); the analysis \
+             uses the rest."
+        )
+    }
+}

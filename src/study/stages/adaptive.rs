@@ -44,29 +44,25 @@ use crate::manifest::{Experiment, Study};
 use crate::search::acquisition::probability_in_band;
 use crate::store::{RunDir, RunResult, Store};
 use crate::streams::{rng, Stream};
-use crate::study::acceptance::{Record, Verdict, RULE};
+use crate::study::acceptance::RULE;
 use crate::study::dir::json_bytes;
 use crate::study::dir::write_output;
 use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
 use crate::study::plan::calibration::to_physical;
 use crate::study::plan::calibration::{acceptance, comparisons, parameter_names, round_runs};
+use crate::study::plan::calibration::{ADAPTIVE_INDEX, ROUND_STRIDE};
+use crate::study::records::{passing, read_noise, Hit};
 use crate::study::runs::replicated::{
     read_replicates_csv, replicates_csv, run_replicated, Replicated,
 };
 use crate::study::stages::fit_gp::fit_model;
-use crate::study::stages::noise::read_noise;
 use crate::study::StudyError;
 
-/// `sample_index` of the first adaptive point.
-pub const ADAPTIVE_INDEX: u64 = 2_000_000_000;
 /// Points scored per round.
 pub const POOL: usize = 2000;
 /// Smallest distance between two points of one round (unit cube).
 pub const MIN_SEPARATION: f64 = 0.15;
-/// Index distance between the points of two rounds: round k's points are
-/// `ADAPTIVE_INDEX + ROUND_STRIDE * k + j`, its candidate `j = 0`.
-pub const ROUND_STRIDE: u64 = 1000;
 
 /// Why the adaptive stage stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -91,58 +87,6 @@ pub struct AdaptiveOutcome {
     pub hit: Option<Hit>,
 }
 
-/// An adaptive candidate that passed in the calibration scene.
-#[derive(Debug, Clone, Serialize)]
-pub struct Hit {
-    /// Its `sample_index`.
-    pub index: u64,
-    /// Parameter values, physical units, in the study's parameter order.
-    pub point: Vec<f64>,
-    /// Seeds it ran.
-    pub seeds: usize,
-    /// Seeds that measured the response.
-    pub measured: usize,
-    /// Mean of the measured seeds, degrees.
-    pub mean_deg: f64,
-}
-
-/// The first round candidate among `points` that the acceptance `rule`
-/// passes in the calibration scene (its first target): the rule of
-/// verification, at the record's α.
-fn passing(points: &[Replicated], rule: &Record) -> Option<Hit> {
-    points
-        .iter()
-        .filter(|p| (p.index - ADAPTIVE_INDEX).is_multiple_of(ROUND_STRIDE))
-        .find_map(|p| {
-            let v = p.values();
-            let mean = p.mean()?;
-            (rule.judge(0, &v).verdict == Verdict::Pass).then(|| Hit {
-                index: p.index,
-                point: p.point.clone(),
-                seeds: p.runs.len(),
-                measured: v.len(),
-                mean_deg: mean,
-            })
-        })
-}
-
-/// The adaptive stage's passing candidate under verification's `rule`, when
-/// the stage has run and found one (`adaptive/replicates.csv`): verification
-/// re-simulates it in every scene beside the search's candidates, so the
-/// point that ended the stage is the one judged.
-pub fn passing_candidate(
-    dir: &StudyDir,
-    study: &Study,
-    rule: &Record,
-) -> Result<Option<Hit>, StudyError> {
-    let path = dir.adaptive_path();
-    if !path.is_file() {
-        return Ok(None);
-    }
-    let points = read_replicates_csv(&path, study)?;
-    Ok(passing(&points, rule))
-}
-
 /// Runs the adaptive rounds (see the module docs), seeded by `seed`, for a
 /// calibration that will verify `candidates` search candidates beside them.
 #[allow(clippy::too_many_arguments)]
@@ -160,7 +104,7 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let spec = crate::study::stages::noise::noise_aware(study)?;
+    let spec = crate::study::plan::calibration::noise_aware(study)?;
     let path = dir.adaptive_path();
     let mut points: Vec<Replicated> = if path.is_file() {
         read_replicates_csv(&path, study)?

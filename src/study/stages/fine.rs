@@ -179,12 +179,6 @@ pub fn fidelity(study: &Study) -> Result<Fidelity, StudyError> {
     })
 }
 
-/// The particle size factor of a study's search and verification: the fine
-/// level's when it has one, else 1.
-pub fn verified_size(study: &Study) -> f64 {
-    study.fidelity().map_or(1.0, |f| f.fine_size)
-}
-
 /// The two-level process the fine stage fitted, rebuilt from `gp.json` (the
 /// coarse level) and `two_level.json` (δ and the fine data).
 pub fn load_two_level(dir: &StudyDir) -> Result<TwoLevelGp, StudyError> {

@@ -42,7 +42,7 @@ use crate::study::plan::calibration::create_dir;
 use crate::study::plan::calibration::parameter_names;
 use crate::study::plan::calibration::serde_name;
 use crate::study::plan::Method;
-use crate::study::stages::simulate::read_angles;
+use crate::study::records::read_angles;
 use crate::study::StudyError;
 use crate::surrogate::ga_bp::{
     sweep, Dataset, Scale, Selection, Sweep, TrainSettings, DEFAULT_FOLDS, DEFAULT_TRAIN_FRACTION,

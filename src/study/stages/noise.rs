@@ -17,7 +17,6 @@
 
 use std::fmt::Write as _;
 
-use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use crate::exec::Executor;
@@ -28,39 +27,11 @@ use crate::study::dir::json_bytes;
 use crate::study::dir::write_output;
 use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
-use crate::study::plan::calibration::to_physical;
+use crate::study::plan::calibration::{noise_aware, to_physical, NOISE_INDEX};
+use crate::study::records::NoiseFloor;
 use crate::study::runs::replicated::{replicates_csv, run_replicated, Replicated};
 use crate::study::sweeps::noise_floor::{response_noise, run_cost};
 use crate::study::StudyError;
-
-/// `sample_index` of the noise floor's runs (no design reaches it).
-pub const NOISE_INDEX: u64 = 1_000_000_000;
-
-/// The noise floor of the calibration response.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct NoiseFloor {
-    /// Response the floor is of (the target's response name, or
-    /// `headline_angle_deg`).
-    pub response: String,
-    /// The centre of the ranges, physical units, in parameter order.
-    pub centre: Vec<f64>,
-    /// Seeds run.
-    pub seeds: usize,
-    /// Seeds measured.
-    pub measured: usize,
-    /// Mean, degrees.
-    pub mean_deg: Option<f64>,
-    /// Seed-to-seed standard deviation σ, degrees.
-    pub sd_deg: Option<f64>,
-    /// Half-width of the 95 % interval of the mean, degrees.
-    pub ci95_half_width_deg: Option<f64>,
-    /// Mean wall time per run, s (non-deterministic).
-    pub wall_s_per_run: Option<f64>,
-    /// Threads each run had.
-    pub threads_per_run: usize,
-    /// σ² × CPU seconds per run, deg²·s (non-deterministic).
-    pub precision_per_cost_deg2_s: Option<f64>,
-}
 
 /// What the noise stage did.
 #[derive(Debug, Clone)]
@@ -71,17 +42,6 @@ pub struct NoiseOutcome {
     pub runs: Replicated,
     /// The Markdown report (also noise.md).
     pub markdown: String,
-}
-
-/// The noise-aware block of `study`, or the error saying the stage needs it.
-pub fn noise_aware(study: &Study) -> Result<crate::manifest::NoiseAware, StudyError> {
-    study.noise_aware.ok_or_else(|| {
-        StudyError::Settings(format!(
-            "study `{}` has no `noise_aware` block: the noise floor, replicates and the \
-             noise-aware search need one (experiments/he2019-quick/study.json has an example)",
-            study.name
-        ))
-    })
 }
 
 /// Runs the noise floor (see the module docs).
@@ -160,15 +120,6 @@ where
         floor,
         runs,
         markdown,
-    })
-}
-
-/// Reads `noise/noise.json`.
-pub fn read_noise(dir: &StudyDir) -> Result<NoiseFloor, StudyError> {
-    let path = dir.require(dir.noise_path(), Stage::Noise)?;
-    Store::read_json(&path).map_err(|e| StudyError::Inconsistent {
-        path,
-        message: format!("{e}: rerun `repose noise`"),
     })
 }
 

@@ -351,19 +351,6 @@ where
     Ok(outcome)
 }
 
-/// A sentence on replicates without every response, or nothing.
-pub fn incomplete_note(incomplete: usize) -> String {
-    if incomplete == 0 {
-        String::new()
-    } else {
-        format!(
-            " {incomplete} replicate(s) lack a response: their runs failed or could not \
-             measure it (the status column of responses.csv says why); the analysis \
-             uses the rest."
-        )
-    }
-}
-
 fn y_of(runs: &Runs, response: &str) -> Vec<f64> {
     runs.replicates
         .iter()
@@ -715,7 +702,7 @@ fn gp_markdown(o: &RsmOutcome) -> String {
 fn summary_markdown(o: &RsmOutcome) -> String {
     let mut md = format!(
         "# {} — response surface ({} runs)\n\nStudy id {}.{}\n\n| Factor | Label | Address | Low (−1) | High (+1) |\n|---|---|---|---:|---:|\n",
-        o.study, o.runs, o.study_id, incomplete_note(o.incomplete)
+        o.study, o.runs, o.study_id, crate::study::runs::incomplete_note(o.incomplete)
     );
     for (n, l, a, lo, hi) in &o.factors {
         md.push_str(&format!("| {n} | {l} | `{a}` | {lo} | {hi} |\n"));

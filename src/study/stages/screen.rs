@@ -274,7 +274,7 @@ pub fn markdown(study: &DesignStudy, s: &Screen) -> String {
         study.name,
         s.runs,
         s.alpha,
-        crate::study::stages::rsm::incomplete_note(s.incomplete)
+        crate::study::runs::incomplete_note(s.incomplete)
     );
     md.push_str("| Factor | Response | Level means ± 95 % CI | F | p | Significant |\n|---|---|---|---:|---:|---|\n");
     for e in &s.effects {

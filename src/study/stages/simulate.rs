@@ -14,7 +14,7 @@ use serde_json::json;
 use crate::exec::outcomes::{run_collect, Retry, RunOutcome};
 use crate::exec::Executor;
 use crate::manifest::{read_experiment, ContentId, Experiment, Study};
-use crate::report::table::{parse_number, Cell, CsvWriter, Table};
+use crate::report::table::{Cell, CsvWriter, Table};
 use crate::store::{RunDir, RunResult, RunStatus, Store};
 use crate::study::dir::write_output;
 use crate::study::dir::Stage;
@@ -241,38 +241,6 @@ fn write_angles(
     crate::study::plan::calibration::create_dir(&dir.stage(Stage::Batch))?;
     write_output(&path, csv.finish().as_bytes(), &lineage)?;
     Ok(path)
-}
-
-/// One row of angles.csv.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AngleRow {
-    /// Sample index.
-    pub index: usize,
-    /// Parameter values, physical units.
-    pub point: Vec<f64>,
-    /// The simulated angle, degrees (`None` unless the run is complete).
-    pub angle_deg: Option<f64>,
-}
-
-/// Reads `batch/angles.csv` for `study`.
-pub fn read_angles(dir: &StudyDir, study: &Study) -> Result<(PathBuf, Vec<AngleRow>), StudyError> {
-    let path = dir.require(dir.angles_path(), Stage::Batch)?;
-    let table = Table::read(&path)?;
-    let names = parameter_names(study);
-    let index = table.numbers(&path, "index")?;
-    let columns = names
-        .iter()
-        .map(|n| table.numbers(&path, n))
-        .collect::<Result<Vec<_>, _>>()?;
-    let angle = table.require(&path, "angle_deg")?;
-    let rows = (0..table.rows.len())
-        .map(|i| AngleRow {
-            index: index[i] as usize,
-            point: columns.iter().map(|c| c[i]).collect(),
-            angle_deg: parse_number(&table.rows[i][angle]),
-        })
-        .collect();
-    Ok((path, rows))
 }
 
 /// The batch of a noise-aware study: `replicates` packing seeds per design

@@ -53,7 +53,7 @@
 //! The search's largest clusters' centres (`--candidates`, numbered by
 //! cluster group) and, when `calibrate --adaptive` ended on one, the
 //! adaptive candidate that passed in the calibration scene, under its sample
-//! index (≥ [`crate::study::stages::adaptive::ADAPTIVE_INDEX`]). Its calibration-scene runs
+//! index (≥ [`crate::study::plan::calibration::ADAPTIVE_INDEX`]). Its calibration-scene runs
 //! are the adaptive stage's own (the same manifests, so the store returns
 //! them), and it is judged in every other scene like the search's.
 
@@ -75,11 +75,11 @@ use crate::study::dir::write_output;
 use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
 use crate::study::plan::calibration::parameter_names;
+use crate::study::plan::calibration::verified_size;
+use crate::study::plan::calibration::VERIFY_INDEX;
 use crate::study::plan::calibration::{acceptance, comparisons};
+use crate::study::records::{passing_candidate, read_noise};
 use crate::study::runs::replicated::{replicates_csv, run_replicated_at, Replicated};
-use crate::study::stages::adaptive::passing_candidate;
-use crate::study::stages::fine::verified_size;
-use crate::study::stages::noise::read_noise;
 use crate::study::StudyError;
 
 /// One candidate in one scene.
@@ -131,12 +131,6 @@ pub struct VerifyOutcome {
     /// Runs in all.
     pub runs: usize,
 }
-
-/// `sample_index` of the first verification point: the search's candidate
-/// of cluster group g is verified as `VERIFY_INDEX + g`, so its packing seeds
-/// in a noise-aware study are drawn apart from the design's (whose indices
-/// start at 0), the noise floor's and the adaptive points'.
-pub const VERIFY_INDEX: u64 = 3_000_000_000;
 
 /// Cluster centres to verify: (group, physical point in parameter order).
 pub(crate) type Centres = Vec<(u64, Vec<f64>)>;

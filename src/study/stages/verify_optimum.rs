@@ -326,7 +326,7 @@ pub fn markdown(study: &DesignStudy, v: &Verification) -> String {
         "# {} — verification ({} runs).{}\n\n| Point | {} |\n|---|{}\n",
         study.name,
         v.runs,
-        crate::study::stages::rsm::incomplete_note(v.incomplete),
+        crate::study::runs::incomplete_note(v.incomplete),
         names.join(" | "),
         "---:|".repeat(names.len())
     );
