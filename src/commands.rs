@@ -825,18 +825,12 @@ pub fn sample(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, dir) = open_sized_study(store_root, study_path, max_runs)?;
-    let mut plan = CalibrationSettings::defaults(&study, default_candidates(&study), false);
-    plan.sample = *settings;
-    let stages = run_stages(
-        store_root,
-        &study,
-        &dir,
-        plan,
-        &Executor::local(1, Limits::default()),
-        Upto::Only("design"),
-        out,
-    )?;
+    let local = Executor {
+        max_runs,
+        ..Executor::local(1, Limits::default())
+    };
+    let set = |_: &Study, s: &mut CalibrationSettings| s.sample = *settings;
+    let stages = run_one_stage(store_root, study_path, &local, "design", set, out)?;
     design_warnings(&stages, err)
 }
 
@@ -850,6 +844,32 @@ fn design_warnings(stages: &[StageOutcome], err: &mut dyn Write) -> Result<(), C
         }
     }
     Ok(())
+}
+
+/// A he2019 stage command: `stage` alone on the study at `study_path`
+/// (refused first when its stages may start more than `exec.max_runs`
+/// runs), every stage's defaults changed by `adjust`, the stage's report
+/// on `out`.
+fn run_one_stage(
+    store_root: &Path,
+    study_path: &Path,
+    exec: &Executor,
+    stage: &'static str,
+    adjust: impl FnOnce(&Study, &mut CalibrationSettings),
+    out: &mut dyn Write,
+) -> Result<Vec<StageOutcome>, CommandError> {
+    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
+    let mut settings = CalibrationSettings::defaults(&study, default_candidates(&study), false);
+    adjust(&study, &mut settings);
+    run_stages(
+        store_root,
+        &study,
+        &dir,
+        settings,
+        exec,
+        Upto::Only(stage),
+        out,
+    )
 }
 
 /// Runs `upto` of a he2019 study's stage list with `settings` through the
@@ -1003,17 +1023,7 @@ pub fn noise(
             base.id().short(12)
         )));
     }
-    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    let settings = CalibrationSettings::defaults(&study, default_candidates(&study), false);
-    run_stages(
-        store_root,
-        &study,
-        &dir,
-        settings,
-        exec,
-        Upto::Only("noise"),
-        out,
-    )?;
+    run_one_stage(store_root, study_path, exec, "noise", |_, _| {}, out)?;
     Ok(())
 }
 
@@ -1025,17 +1035,7 @@ pub fn fine(
     exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    let settings = CalibrationSettings::defaults(&study, default_candidates(&study), false);
-    run_stages(
-        store_root,
-        &study,
-        &dir,
-        settings,
-        exec,
-        Upto::Only("fine"),
-        out,
-    )?;
+    run_one_stage(store_root, study_path, exec, "fine", |_, _| {}, out)?;
     Ok(())
 }
 
@@ -1100,17 +1100,7 @@ pub fn batch(
     exec: &Executor,
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
-    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    let settings = CalibrationSettings::defaults(&study, default_candidates(&study), false);
-    let stages = run_stages(
-        store_root,
-        &study,
-        &dir,
-        settings,
-        exec,
-        Upto::Only("simulate"),
-        out,
-    )?;
+    let stages = run_one_stage(store_root, study_path, exec, "simulate", |_, _| {}, out)?;
     failures(&stages, false, out)
 }
 
@@ -1199,17 +1189,8 @@ pub fn verify(
     if is_design_study_file(study_path) {
         return rsm(store_root, study_path, exec, false, out);
     }
-    let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
-    let settings = CalibrationSettings::defaults(&study, candidates, false);
-    let stages = run_stages(
-        store_root,
-        &study,
-        &dir,
-        settings,
-        exec,
-        Upto::Only("verify"),
-        out,
-    )?;
+    let set = |_: &Study, s: &mut CalibrationSettings| s.candidates = candidates;
+    let stages = run_one_stage(store_root, study_path, exec, "verify", set, out)?;
     failures(&stages, false, out)
 }
 

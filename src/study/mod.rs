@@ -15,10 +15,13 @@
 //!   two-level pilot.
 //! - [`analyses`]: read a finished study or a table — learning curve,
 //!   held-out fine runs, the verdict table.
+//! - [`run`]: the one driver, walking a plan's stage list;
+//!   [`records`]: what a stage wrote that a later one reads, read back
+//!   through the layout.
 //! - [`runs`]: points × replicates × scenes → [`crate::exec`] → a response
 //!   table; [`acceptance`]: the one acceptance rule; [`dir`]: the one layout
-//!   of a study's outputs and the stage-name vocabulary; [`pipeline`]: the
-//!   noise-aware he2019 chain.
+//!   of a study's outputs and the stage-name vocabulary; [`pipeline`]: a
+//!   he2019 calibration's whole list and its outcome record.
 //!
 //! The runs stay in the store (`<store>/<id>/`), so a run shared by two
 //! stages or studies is simulated once, and a killed stage resumes.
