@@ -8,7 +8,7 @@
 //! | `calibrate`, `rsm`, `sensitivity` | through the last stage |
 //! | `noise`, `sample`, `batch`, `train`, `fine`, `search`, `verify` (he2019) | only that stage (`noise`, `design`, `simulate`, `fit`, `fine`, `search`, `verify`) |
 //! | `screen` | only `screen` |
-//! | `verify` (a design study) | through `verify` |
+//! | `verify` (a design study) | the whole list (as `rsm`) |
 //!
 //! A stage command runs its stage alone on the outputs its predecessors
 //! recorded (a missing one is refused, naming the command that writes it):
@@ -149,18 +149,11 @@ impl Plan {
             Plan::Calibration { spec, .. } | Plan::Design { spec, .. } => spec,
         }
     }
-
-    /// Whether the stage list names `stage`.
-    pub fn has(&self, stage: &str) -> bool {
-        self.spec().stages.iter().any(|s| s.name() == stage)
-    }
 }
 
 /// Which stages of the list a run takes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Upto {
-    /// Every stage from the first through this one.
-    Through(&'static str),
     /// This stage alone, on what its predecessors recorded.
     Only(&'static str),
     /// The whole list.
@@ -238,6 +231,9 @@ where
     let stages = &plan.spec().stages;
     let selected = select(stages, upto)?;
     check_plan(plan)?;
+    // A heading per stage when the run takes several: a stage command's
+    // output is its stage's report alone.
+    let several = selected.len() > 1;
     let mut outcomes: Vec<StageOutcome> = Vec::new();
     let Env {
         dir,
@@ -246,10 +242,12 @@ where
         runner,
         log,
     } = env;
-    // A heading per stage when the run takes several: a stage command's
-    // output is its stage's report alone.
-    let several = (0..stages.len()).filter(|i| selected(*i)).count() > 1;
-    for (i, stage) in stages.iter().enumerate().filter(|(i, _)| selected(*i)) {
+    for (i, stage) in stages
+        .iter()
+        .enumerate()
+        .take(selected.end)
+        .skip(selected.start)
+    {
         if several {
             log(&format!(
                 "\n== {}/{} {}",
@@ -282,9 +280,9 @@ where
     Ok(outcomes)
 }
 
-/// Which positions of the list `upto` takes; a stage the list does not
-/// name is refused, naming the list.
-fn select(stages: &[Stage], upto: Upto) -> Result<impl Fn(usize) -> bool, StudyError> {
+/// The positions of the list `upto` takes; a stage the list does not name
+/// is refused, naming the list.
+fn select(stages: &[Stage], upto: Upto) -> Result<std::ops::Range<usize>, StudyError> {
     let find = |name: &str| {
         stages.iter().position(|s| s.name() == name).ok_or_else(|| {
             let names: Vec<&str> = stages.iter().map(Stage::name).collect();
@@ -294,15 +292,13 @@ fn select(stages: &[Stage], upto: Upto) -> Result<impl Fn(usize) -> bool, StudyE
             ))
         })
     };
-    let (from, to) = match upto {
-        Upto::All => (0, stages.len().saturating_sub(1)),
-        Upto::Through(name) => (0, find(name)?),
+    Ok(match upto {
+        Upto::All => 0..stages.len(),
         Upto::Only(name) => {
             let k = find(name)?;
-            (k, k)
+            k..k + 1
         }
-    };
-    Ok(move |i: usize| i >= from && i <= to)
+    })
 }
 
 /// What a plan must hold before its first stage runs: a noise-aware
@@ -437,8 +433,9 @@ where
     }))
 }
 
-/// Runs one stage of a design study (the module's table): `None` for a
-/// stage carried out by the one that ends its unit.
+/// Runs one stage of a design study (the module's table) in the study's
+/// directory, which its caller prepared (`study.json` written once):
+/// `None` for a stage carried out by the one that ends its unit.
 fn design_stage<E, F>(
     study: &DesignStudy,
     levels: Levels,
@@ -451,7 +448,6 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    dir.write_study(study)?;
     Ok(match stage {
         Stage::Screen { .. } => Some(StageOutcome::Screen(screen(
             dir, study, store, pool, runner,
