@@ -669,7 +669,9 @@ pub fn pilot(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let study = read_study(study_path)?;
-    let runs = 2 * spec.points as u64 * u64::from(spec.seeds);
+    let runs = (spec.points as u64)
+        .saturating_mul(2)
+        .saturating_mul(u64::from(spec.seeds));
     if runs > exec.max_runs {
         return Err(CommandError::Usage(format!(
             "pilot: {runs} runs, more than --max-runs {}",

@@ -28,7 +28,9 @@ use super::{ExperimentDoc, PHYSICS_VERSION, SCHEMA_VERSION};
 /// except a wall material whose same field is named explicitly elsewhere in
 /// `parameters` or `fixed`, which that address sets instead: e.g. a funnel's
 /// brush with its own friction beside one calibrated μ_pw for every other wall).
-/// Every parameter slot is either calibrated or fixed, exactly once.
+/// Every parameter slot is either calibrated or fixed, exactly once, and every
+/// address sets at least one slot: a wildcard whose every wall is named
+/// explicitly would be a design column no run uses, and is refused.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Study {

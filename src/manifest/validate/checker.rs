@@ -60,6 +60,14 @@ impl Checker {
         });
     }
 
+    /// Requires a name that is safe as one path component
+    /// ([`super::check_path_component`]).
+    pub(crate) fn path_component(&mut self, path: &str, name: &str) {
+        if let Err(rule) = super::check_path_component(name) {
+            self.fail(path, string(name), rule);
+        }
+    }
+
     /// Requires a finite value > 0.
     pub(crate) fn positive(&mut self, path: &str, v: f64) {
         if !(v.is_finite() && v > 0.0) {

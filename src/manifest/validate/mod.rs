@@ -4,13 +4,15 @@
 
 mod checker;
 mod experiment;
+mod name;
 mod scene;
 mod study;
 
 use std::fmt;
 
-pub(crate) use checker::number;
+pub(crate) use checker::{number, string};
 pub use checker::FieldError;
+pub use name::{check_path_component, MAX_NAME_CHARS};
 pub use scene::PACKING_LIMIT;
 
 use super::experiment::Experiment;

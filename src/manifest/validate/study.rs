@@ -15,9 +15,7 @@ use crate::manifest::Scene;
 /// Checks every field of a study.
 pub(crate) fn check_study(c: &mut Checker, s: &Study) {
     check_schema_version(c, "schema_version", s.schema_version);
-    if s.name.trim().is_empty() {
-        c.fail("name", string(&s.name), "must be a non-empty name");
-    }
+    c.path_component("name", &s.name);
     check_material(c, "material", &s.material);
     check_parameters(c, s);
     check_target(c, "calibration", &s.calibration, s);
@@ -148,6 +146,17 @@ fn check_parameters(c: &mut Checker, s: &Study) {
     // slot -> the address that gave it a value
     let mut covered: BTreeMap<Slot, String> = BTreeMap::new();
     let mut cover = |c: &mut Checker, path: &str, address: &str, slots: Vec<Slot>| {
+        if slots.is_empty() {
+            // A wildcard whose every wall is named by its own address drives
+            // nothing: its design column would be calibrated although no run
+            // used it.
+            c.fail(
+                path,
+                string(address),
+                "sets no contact parameter: every wall material's field is set by its own \
+                 particle_wall.<wall>.<field> address (remove the wildcard, or one of those)",
+            );
+        }
         for slot in slots {
             if let Some(first) = covered.get(&slot) {
                 c.fail(
@@ -223,13 +232,7 @@ fn check_parameters(c: &mut Checker, s: &Study) {
 }
 
 fn check_target(c: &mut Checker, path: &str, t: &TargetScene, s: &Study) {
-    if t.name.trim().is_empty() {
-        c.fail(
-            &join(path, "name"),
-            string(&t.name),
-            "must be a non-empty name",
-        );
-    }
+    c.path_component(&join(path, "name"), &t.name);
     let scene_path = join(path, "scene");
     if let Scene::Pair(_) = t.scene {
         c.fail(

@@ -31,7 +31,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::manifest::validate::number;
+use crate::manifest::validate::{check_path_component, number, string};
 use crate::manifest::{
     validate_experiment, AtRest, CoarseGraining, Contact, ContentId, Experiment, ExperimentDoc,
     FieldError, Material, Profile, Scene, Seeds, TimeStep, ValidationErrors, PHYSICS_VERSION,
@@ -353,12 +353,15 @@ impl DesignStudy {
                 format!("must be {SCHEMA_VERSION}"),
             );
         }
-        if self.name.is_empty() || self.name.contains(['/', '\\']) {
-            fail(
-                "name".into(),
-                format!("{:?}", self.name),
-                "must be non-empty without path separators".into(),
-            );
+        // Every name that becomes a path component, checked by the one rule.
+        let names = std::iter::once(("name".to_string(), &self.name))
+            .chain(self.scenes.keys().map(|n| ("scenes (a key)".to_string(), n)))
+            .chain(self.factors.keys().map(|n| ("factors (a key)".to_string(), n)))
+            .chain(self.responses.keys().map(|n| ("responses (a key)".to_string(), n)));
+        for (path, name) in names {
+            if let Err(rule) = check_path_component(name) {
+                fail(path, string(name), rule);
+            }
         }
         if self.scenes.is_empty() {
             fail(

@@ -240,6 +240,16 @@ pub fn plan_and_sweep(
     request: &SweepRequest,
     exec: &Executor,
 ) -> Result<(SizeSweep, PathBuf), StudyError> {
+    // Counted before anything is planned: the plan holds every replicate's
+    // experiment, so a billion replicates must be refused, not allocated.
+    StudySpec::convergence(
+        &manifest.display().to_string(),
+        base.id(),
+        request.factors.len() as u64,
+        request.replicates as u64,
+    )
+    .check_runs(exec.max_runs)
+    .map_err(StudyError::Settings)?;
     let plan = plan::plan(
         base,
         &request.factors,
@@ -248,14 +258,6 @@ pub fn plan_and_sweep(
         request.real_radius_m,
     )
     .map_err(|e| StudyError::Settings(e.to_string()))?;
-    StudySpec::convergence(
-        &manifest.display().to_string(),
-        base.id(),
-        plan.levels.len() as u64,
-        request.replicates as u64,
-    )
-    .check_runs(exec.max_runs)
-    .map_err(StudyError::Settings)?;
     let out_dir = request
         .out_dir
         .clone()

@@ -1,0 +1,152 @@
+//! Studies under hostile input (issue 54, round 3): names that would escape the
+//! store, he2019 parameters that alias, sweeps counted before they are planned.
+//! Each test reproduces a fault found by trying the commands as a hostile user
+//! would; it failed on the code before the fix.
+
+mod common;
+
+use std::path::Path;
+
+use common::{edit, example, repose, stderr};
+use serde_json::{json, Value};
+
+/// Writes `study` into `dir` as `study.json` and returns its path as text.
+fn write_study(dir: &Path, study: &Value) -> String {
+    let path = dir.join("study.json");
+    std::fs::write(&path, serde_json::to_string_pretty(study).unwrap()).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+/// Renames the key `from` of the object at `pointer` to `to`.
+fn rename_key(mut v: Value, pointer: &str, from: &str, to: &str) -> Value {
+    let map = v.pointer_mut(pointer).unwrap().as_object_mut().unwrap();
+    let value = map.remove(from).unwrap_or_else(|| panic!("no {from} in {pointer}"));
+    map.insert(to.to_string(), value);
+    v
+}
+
+/// Every entry below `dir` (recursively), sorted.
+fn entries(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p.clone());
+            }
+            out.push(p);
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn a_name_that_would_leave_the_store_is_refused_by_validate_and_by_rsm() {
+    let base = example("cai2024-smoke/study.json");
+    let tmp = tempfile::tempdir().unwrap();
+    let outside = tmp.path().join("outside");
+    let escapes = [
+        outside.to_string_lossy().into_owned(),
+        "../../../../../../../../tmp/repose-escape".to_string(),
+        "..".to_string(),
+        "nul\0byte".to_string(),
+        "esc\u{1b}[31m".to_string(),
+        "x".repeat(300),
+    ];
+    for bad in &escapes {
+        // (the study as edited, the field the refusal must name)
+        let mut response = rename_key(base.clone(), "/responses", "static_angle_deg", bad);
+        response = rename_key(response, "/targets", "static_angle_deg", bad);
+        let mut scene = rename_key(base.clone(), "/scenes", "static", bad);
+        scene = edit(scene, "/responses/static_angle_deg/scene", Some(json!(bad)));
+        let factor = rename_key(base.clone(), "/factors", "A", bad);
+        let name = edit(base.clone(), "/name", Some(json!(bad)));
+        let mut he2019 = example("calibrate-smoke/study.json");
+        he2019 = edit(he2019, "/name", Some(json!(bad)));
+        let he2019_target = edit(
+            example("calibrate-smoke/study.json"),
+            "/calibration/name",
+            Some(json!(bad)),
+        );
+        for (study, field) in [
+            (response, "responses (a key)"),
+            (scene, "scenes (a key)"),
+            (factor, "factors (a key)"),
+            (name.clone(), "name"),
+            (he2019, "name"),
+            (he2019_target, "calibration.name"),
+        ] {
+            let work = tempfile::tempdir_in(tmp.path()).unwrap();
+            let path = write_study(work.path(), &study);
+            let store = work.path().join("store");
+            let v = repose(&store, &["validate", &path]);
+            assert_eq!(v.status.code(), Some(2), "{field} = {bad:?}: {}", stderr(&v));
+            assert!(
+                stderr(&v).contains(&format!("{field} = ")),
+                "{field} = {bad:?}: {}",
+                stderr(&v)
+            );
+            if study.get("factors").is_some() {
+                let r = repose(&store, &["rsm", &path]);
+                assert_eq!(r.status.code(), Some(2), "rsm, {field} = {bad:?}: {}", stderr(&r));
+            }
+            assert!(!outside.exists(), "{field} = {bad:?} wrote {outside:?}");
+            assert!(!Path::new("/tmp/repose-escape").exists(), "{field} = {bad:?}");
+            let written: Vec<_> = entries(work.path())
+                .into_iter()
+                .filter(|p| !p.starts_with(&store) && !p.ends_with("study.json"))
+                .collect();
+            assert!(written.is_empty(), "{field} = {bad:?} wrote {written:?}");
+        }
+    }
+}
+
+#[test]
+fn a_wildcard_he2019_parameter_that_sets_no_wall_is_refused() {
+    let base = example("calibrate-smoke/study.json");
+    // Two parameters, the wildcard and the only wall's own address.
+    let mut two = edit(base.clone(), "/fixed/particle_wall.steel.static_friction", None);
+    for address in ["particle_wall.*.static_friction", "particle_wall.steel.static_friction"] {
+        two = edit(
+            two,
+            &format!("/parameters/{address}"),
+            Some(json!({"min": 0.3, "max": 0.9})),
+        );
+    }
+    // A wildcard parameter beside the only wall's fixed value.
+    let beside_fixed = edit(
+        base,
+        "/parameters/particle_wall.*.static_friction",
+        Some(json!({"min": 0.3, "max": 0.9})),
+    );
+    for study in [two, beside_fixed] {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = write_study(tmp.path(), &study);
+        let store = tmp.path().join("store");
+        let v = repose(&store, &["validate", &path]);
+        assert_eq!(v.status.code(), Some(2), "{}", stderr(&v));
+        assert!(
+            stderr(&v).contains("parameters.particle_wall.*.static_friction = ")
+                && stderr(&v).contains("sets no contact parameter"),
+            "{}",
+            stderr(&v)
+        );
+        let s = repose(&store, &["sample", &path]);
+        assert_eq!(s.status.code(), Some(2), "{}", stderr(&s));
+        assert!(!store.join("studies").exists(), "sample wrote a study");
+    }
+}
+
+#[test]
+fn a_convergence_sweep_is_counted_before_it_is_planned() {
+    // A billion replicates once built a 544 GB plan before --max-runs was read.
+    let tmp = tempfile::tempdir().unwrap();
+    let out = repose(
+        &tmp.path().join("store"),
+        &["convergence", "experiments/drum/smoke.json", "--replicates", "1000000000"],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--max-runs"), "{}", stderr(&out));
+}
