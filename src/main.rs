@@ -499,10 +499,11 @@ impl ExecArgs {
                 None
             }
             ExecutorKind::Slurm => {
-                if !(self.poll_seconds > 0.0 && self.poll_seconds <= MAX_POLL_SECONDS) {
+                if !(self.poll_seconds >= MIN_POLL_SECONDS && self.poll_seconds <= MAX_POLL_SECONDS)
+                {
                     return Err(CommandError::Usage(format!(
-                        "--poll-seconds = {}: must be a number > 0 and at most {MAX_POLL_SECONDS} \
-                         (a day)",
+                        "--poll-seconds = {:?}: must lie in [{MIN_POLL_SECONDS}, \
+                         {MAX_POLL_SECONDS}] (a millisecond to a day)",
                         self.poll_seconds
                     )));
                 }
@@ -532,6 +533,10 @@ impl ExecArgs {
         })
     }
 }
+
+/// Shortest `--poll-seconds`: a millisecond (a shorter wait rounds to no
+/// wait at all).
+const MIN_POLL_SECONDS: f64 = 0.001;
 
 /// Longest `--poll-seconds`: a day (a longer wait between two looks at the
 /// queue is no use, and 1e300 s does not fit a `Duration`).
@@ -693,7 +698,7 @@ struct VerdictArgs {
     target: f64,
     /// Accepted relative deviation of the mean, in (0, 1): the band is
     /// target x (1 -/+ tolerance).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     tolerance: f64,
     /// Print the verdicts as JSON on stdout.
     #[arg(long)]

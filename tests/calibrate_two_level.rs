@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use repose::manifest::{parse_study, Experiment, SizeDistribution, Study};
 use repose::store::{RunDir, RunResult, Store};
 use repose::study::acceptance::Verdict;
-use repose::study::analyses::holdout::holdout;
+use repose::study::analyses::holdout::{holdout, read_pilot};
 use repose::study::dir::StudyDir;
 use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome};
 use repose::study::plan::{Stage, StudySpec};
@@ -279,6 +279,43 @@ fn a_two_level_calibration_verifies_at_the_fine_size_and_reproduces() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("fine one"), "{err}");
+
+    // Issue 54 item 8: a pilot is used only with the study it ran (by the id
+    // it records) ...
+    let err = holdout(&dir, &study, &store, &pilot, &coarse_only)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("is not the study the pilot ran"), "{err}");
+    let mut unrecorded = pilot.clone();
+    unrecorded.study = None;
+    let err = holdout(&dir, &study, &store, &unrecorded, &study)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("records no study id"), "{err}");
+
+    // ... and only as `repose pilot` wrote it: its lineage record describes
+    // the bytes read.
+    let file = tmp.path().join("pilot").join("pilot.json");
+    std::fs::create_dir_all(file.parent().unwrap()).unwrap();
+    let bytes = serde_json::to_vec_pretty(&pilot).unwrap();
+    let lineage = repose::store::Lineage::new("pilot", json!({}));
+    repose::study::dir::write_output(&file, &bytes, &lineage).unwrap();
+    assert_eq!(read_pilot(&file).unwrap().points.len(), pilot.points.len());
+    let edited = String::from_utf8(bytes)
+        .unwrap()
+        .replacen("\"drum\"", "\"Drum\"", 1);
+    std::fs::write(&file, edited).unwrap();
+    for (path, says) in [
+        (file.clone(), "edited after it was written"),
+        (tmp.path().join("nonexistent.json"), "cannot read it"),
+    ] {
+        let err = read_pilot(&path).unwrap_err();
+        assert!(err.is_invalid_input(), "{err}");
+        assert!(err.to_string().contains(says), "{err}");
+    }
+    std::fs::remove_file(repose::store::Lineage::path_beside(&file)).unwrap();
+    let err = read_pilot(&file).unwrap_err().to_string();
+    assert!(err.contains("no readable lineage record"), "{err}");
 }
 
 /// A pilot of 4 points off the design (sample indices 4e9 + i) with the
@@ -286,6 +323,7 @@ fn a_two_level_calibration_verifies_at_the_fine_size_and_reproduces() {
 fn pilot_of(study: &Study) -> Pilot {
     let points = [[0.1, 0.3], [0.25, 0.5], [0.05, 0.7], [0.2, 0.2]];
     Pilot {
+        study: Some(study.id()),
         scene: "drum".into(),
         response: "headline angle".into(),
         parameters: study.parameters.keys().cloned().collect(),

@@ -20,7 +20,9 @@ fn write_study(dir: &Path, study: &Value) -> String {
 /// Renames the key `from` of the object at `pointer` to `to`.
 fn rename_key(mut v: Value, pointer: &str, from: &str, to: &str) -> Value {
     let map = v.pointer_mut(pointer).unwrap().as_object_mut().unwrap();
-    let value = map.remove(from).unwrap_or_else(|| panic!("no {from} in {pointer}"));
+    let value = map
+        .remove(from)
+        .unwrap_or_else(|| panic!("no {from} in {pointer}"));
     map.insert(to.to_string(), value);
     v
 }
@@ -82,7 +84,12 @@ fn a_name_that_would_leave_the_store_is_refused_by_validate_and_by_rsm() {
             let path = write_study(work.path(), &study);
             let store = work.path().join("store");
             let v = repose(&store, &["validate", &path]);
-            assert_eq!(v.status.code(), Some(2), "{field} = {bad:?}: {}", stderr(&v));
+            assert_eq!(
+                v.status.code(),
+                Some(2),
+                "{field} = {bad:?}: {}",
+                stderr(&v)
+            );
             assert!(
                 stderr(&v).contains(&format!("{field} = ")),
                 "{field} = {bad:?}: {}",
@@ -90,10 +97,18 @@ fn a_name_that_would_leave_the_store_is_refused_by_validate_and_by_rsm() {
             );
             if study.get("factors").is_some() {
                 let r = repose(&store, &["rsm", &path]);
-                assert_eq!(r.status.code(), Some(2), "rsm, {field} = {bad:?}: {}", stderr(&r));
+                assert_eq!(
+                    r.status.code(),
+                    Some(2),
+                    "rsm, {field} = {bad:?}: {}",
+                    stderr(&r)
+                );
             }
             assert!(!outside.exists(), "{field} = {bad:?} wrote {outside:?}");
-            assert!(!Path::new("/tmp/repose-escape").exists(), "{field} = {bad:?}");
+            assert!(
+                !Path::new("/tmp/repose-escape").exists(),
+                "{field} = {bad:?}"
+            );
             let written: Vec<_> = entries(work.path())
                 .into_iter()
                 .filter(|p| !p.starts_with(&store) && !p.ends_with("study.json"))
@@ -107,8 +122,15 @@ fn a_name_that_would_leave_the_store_is_refused_by_validate_and_by_rsm() {
 fn a_wildcard_he2019_parameter_that_sets_no_wall_is_refused() {
     let base = example("calibrate-smoke/study.json");
     // Two parameters, the wildcard and the only wall's own address.
-    let mut two = edit(base.clone(), "/fixed/particle_wall.steel.static_friction", None);
-    for address in ["particle_wall.*.static_friction", "particle_wall.steel.static_friction"] {
+    let mut two = edit(
+        base.clone(),
+        "/fixed/particle_wall.steel.static_friction",
+        None,
+    );
+    for address in [
+        "particle_wall.*.static_friction",
+        "particle_wall.steel.static_friction",
+    ] {
         two = edit(
             two,
             &format!("/parameters/{address}"),
@@ -145,8 +167,47 @@ fn a_convergence_sweep_is_counted_before_it_is_planned() {
     let tmp = tempfile::tempdir().unwrap();
     let out = repose(
         &tmp.path().join("store"),
-        &["convergence", "experiments/drum/smoke.json", "--replicates", "1000000000"],
+        &[
+            "convergence",
+            "experiments/drum/smoke.json",
+            "--replicates",
+            "1000000000",
+        ],
     );
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("--max-runs"), "{}", stderr(&out));
+}
+
+/// Issue 54 item 9: a fine size of 1e-9 (1.8e29 particles) once ran the
+/// noise, design and training stages before the fine runs were refused.
+#[test]
+fn every_stages_run_limits_are_checked_before_the_first_run() {
+    let block = json!({ "replicates": 2, "noise_seeds": 8, "min_probability": 0.5,
+        "verification_seeds": 5, "adaptive": { "batch": 2, "max_runs": 8 },
+        "fidelity": { "fine_size": 1e-9, "fine_points": 5, "fine_replicates": 3 } });
+    let study = edit(
+        example("calibrate-smoke/study.json"),
+        "/noise_aware",
+        Some(block),
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let path = write_study(tmp.path(), &study);
+    let store = tmp.path().join("store");
+    let out = repose(&store, &["calibrate", &path]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("at particle size x 0.000000001")
+            && stderr(&out).contains("refused before the study's first run"),
+        "{}",
+        stderr(&out)
+    );
+    // No run was started: the store holds no run directory.
+    let runs: Vec<_> = std::fs::read_dir(&store)
+        .map(|d| d.map(|e| e.unwrap().file_name()).collect())
+        .unwrap_or_default();
+    assert!(
+        runs.iter()
+            .all(|n| n == "studies" || n.to_string_lossy().starts_with('.')),
+        "{runs:?}"
+    );
 }

@@ -264,6 +264,60 @@ fn an_unknown_field_exits_2_naming_it_and_the_closest() {
     assert!(stderr(&out).contains("= != < <= > >="), "{}", stderr(&out));
 }
 
+/// Issue 54 item 6: `runs list --where 'angle_2h_d_deg>30'` was an unknown
+/// field although `repose responses static_pile` lists it.
+#[test]
+fn every_name_repose_responses_prints_is_a_field_of_runs_list() {
+    let tmp = tempfile::tempdir().unwrap();
+    query_store(tmp.path());
+    for (kind, specs) in repose::scenes::responses::listing(None).unwrap() {
+        for spec in specs {
+            let out = repose(
+                tmp.path(),
+                &["runs", "list", "--where", &format!("{}>0", spec.name)],
+            );
+            assert_eq!(
+                out.status.code(),
+                Some(0),
+                "{kind} {}: {}",
+                spec.name,
+                stderr(&out)
+            );
+        }
+    }
+    // A drum run answers its catalogue's names, derived from its measurements.
+    let drum = repose::scenes::responses::catalogue("drum").unwrap();
+    let shown: Vec<&str> = drum.iter().map(|s| s.name).collect();
+    let rows = list_json(
+        tmp.path(),
+        &["--where", "status=complete", "--columns", &shown.join(",")],
+    );
+    assert_eq!(rows.len(), 9);
+}
+
+/// Issue 54, low: filters that matched nothing or everything silently.
+#[test]
+fn a_filter_that_cannot_mean_what_it_says_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    query_store(tmp.path());
+    for (filter, says) in [
+        (format!("{MU}>abc"), "holds numbers and `abc` is not one"),
+        ("scene==drum".to_string(), "`==` is not an operator"),
+        ("scene>5".to_string(), "`scene` holds words"),
+        ("scene=".to_string(), "no value after the operator"),
+    ] {
+        let out = repose(tmp.path(), &["runs", "list", "--where", &filter]);
+        assert_eq!(out.status.code(), Some(2), "{filter}: {}", stdout(&out));
+        assert!(stderr(&out).contains(says), "{filter}: {}", stderr(&out));
+    }
+    // Words still order against words, numbers against numbers.
+    assert_eq!(list_json(tmp.path(), &["--where", "scene>=drum"]).len(), 10);
+    assert_eq!(
+        list_json(tmp.path(), &["--where", "angle_deg>=41"]).len(),
+        1
+    );
+}
+
 #[test]
 fn diff_of_two_runs_reports_exactly_the_fields_that_differ() {
     let tmp = tempfile::tempdir().unwrap();

@@ -124,3 +124,91 @@ fn bad_input_is_refused_naming_the_field() {
         );
     }
 }
+
+/// Issue 54 item 4: values near 1e300 once overflowed the sum of squares
+/// (sd null, "inconclusive"); the interval lies wholly outside the band.
+/// Expected sd from Python's exact `statistics.stdev([1e300, 1.0000001e300,
+/// 0.9999999e300])` = 9.99999999963232e+292.
+#[test]
+fn values_near_the_float_limit_get_a_finite_spread_and_a_fail() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = "x\n1e300\n1.0000001e300\n0.9999999e300\n";
+    let out = verdict(
+        tmp.path(),
+        text,
+        &[
+            "--value",
+            "x",
+            "--target",
+            "1",
+            "--tolerance",
+            "0.05",
+            "--json",
+        ],
+    );
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let v: Value = serde_json::from_str(&common::stdout(&out)).unwrap();
+    let j = &v["groups"][0]["judgement"];
+    let sd = j["tost"]["sd"].as_f64().expect("a finite sd");
+    assert!((sd / 9.99999999963232e292 - 1.0).abs() < 1e-12, "{sd}");
+    assert_eq!(j["verdict"], "fail", "{j}");
+}
+
+#[test]
+fn a_table_without_rows_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = verdict(
+        tmp.path(),
+        "x\n",
+        &["--value", "x", "--target", "1", "--tolerance", "0.05"],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", common::stdout(&out));
+    assert!(
+        common::stderr(&out).contains("no rows"),
+        "{}",
+        common::stderr(&out)
+    );
+}
+
+/// The printed table: no NaN for a mean exactly on a band edge with no
+/// spread (its t is 0/0; p is 1), no 300-digit numbers for a huge target,
+/// and a negative tolerance refused by the rule, not mistaken for a flag.
+#[test]
+fn the_printed_table_has_no_nan_no_300_digit_numbers_and_negative_flags_parse() {
+    let tmp = tempfile::tempdir().unwrap();
+    // band of 50 ± 10 % is [45, 55]; five values exactly on its lower edge.
+    let edge = verdict(
+        tmp.path(),
+        "x\n45\n45\n45\n45\n45\n",
+        &["--value", "x", "--target", "50", "--tolerance", "0.1"],
+    );
+    assert!(edge.status.success(), "{}", common::stderr(&edge));
+    assert!(
+        !common::stdout(&edge).contains("NaN"),
+        "{}",
+        common::stdout(&edge)
+    );
+    let huge = verdict(
+        tmp.path(),
+        "x\n1\n2\n3\n",
+        &["--value", "x", "--target", "1e308", "--tolerance", "0.05"],
+    );
+    assert!(huge.status.success(), "{}", common::stderr(&huge));
+    let longest = common::stdout(&huge)
+        .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .map(str::len)
+        .max()
+        .unwrap();
+    assert!(longest < 30, "{}", common::stdout(&huge));
+    let negative = verdict(
+        tmp.path(),
+        "x\n1\n2\n3\n",
+        &["--value", "x", "--target", "2", "--tolerance", "-0.05"],
+    );
+    assert_eq!(negative.status.code(), Some(2));
+    assert!(
+        common::stderr(&negative).contains("--tolerance = -0.05: must lie in (0, 1)"),
+        "{}",
+        common::stderr(&negative)
+    );
+}

@@ -33,7 +33,7 @@
 use statrs::distribution::{ContinuousCDF, Normal};
 use statrs::function::gamma::ln_gamma;
 
-use super::summary::{t_quantile, t_two_sided_p};
+use super::summary::{mean_sd, t_quantile, t_two_sided_p};
 
 /// The two one-sided t-tests of a mean against a band, with the intervals a
 /// report prints beside them. Units are those of the values.
@@ -92,9 +92,8 @@ pub fn tost(values: &[f64], band: (f64, f64)) -> Option<Tost> {
     if n < 2 {
         return None;
     }
-    let mean = values.iter().sum::<f64>() / n as f64;
+    let (mean, sd) = mean_sd(values);
     let df = (n - 1) as f64;
-    let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / df).sqrt();
     let se = sd / (n as f64).sqrt();
     let t_lower = (mean - band.0) / se;
     let t_upper = (mean - band.1) / se;

@@ -70,6 +70,31 @@ pub struct MeanCi {
 /// z of a two-sided 95 % normal interval (the 97.5 % normal quantile).
 pub const Z95: f64 = 1.959_963_984_540_054;
 
+/// Sample mean and standard deviation (n − 1 denominator) of n ≥ 2 values.
+///
+/// The plain two-pass sums are used whenever they are finite (so every
+/// ordinary result keeps its bits); when finite values overflow them (a sum
+/// above about 1.8e308, or squared deviations above it, i.e. deviations past
+/// about 1.3e154), the mean is taken as Σ(v/n) and the deviations are scaled
+/// by the largest before squaring, which cannot overflow.
+pub fn mean_sd(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mut mean = values.iter().sum::<f64>() / n;
+    if !mean.is_finite() {
+        mean = values.iter().map(|v| v / n).sum::<f64>();
+    }
+    let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    if sd.is_finite() || !mean.is_finite() {
+        return (mean, sd);
+    }
+    let scale = values.iter().fold(0.0f64, |m, v| m.max((v - mean).abs()));
+    let sum = values
+        .iter()
+        .map(|v| ((v - mean) / scale).powi(2))
+        .sum::<f64>();
+    (mean, scale * (sum / (n - 1.0)).sqrt())
+}
+
 /// [`MeanCi`] of `values`; `None` for fewer than two values (no spread, so no
 /// interval).
 pub fn mean_ci(values: &[f64]) -> Option<MeanCi> {
@@ -77,9 +102,7 @@ pub fn mean_ci(values: &[f64]) -> Option<MeanCi> {
     if n < 2 {
         return None;
     }
-    let mean = values.iter().sum::<f64>() / n as f64;
-    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
-    let std = var.sqrt();
+    let (mean, std) = mean_sd(values);
     Some(MeanCi {
         mean,
         std,
@@ -108,7 +131,22 @@ pub fn difference_ci(a: &MeanCi, b: &MeanCi) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::stats::assert_rel;
+    use crate::stats::{assert_rel, assert_rel_within};
+
+    /// Python's exact `statistics.stdev` (fractions): 9.99999999963232e+292
+    /// for the first set, and `statistics.stdev([1.5, 2.5, 4.0])` =
+    /// 1.2583057392117916 for the ordinary one.
+    #[test]
+    fn mean_sd_survives_values_whose_squares_overflow() {
+        let (mean, sd) = mean_sd(&[1e300, 1.0000001e300, 0.9999999e300]);
+        assert_rel_within("huge", &[mean, sd], &[1e300, 9.99999999963232e292], 1e-12);
+        // statistics.stdev([1.5e308, 1.7e308, 1.6e308]) = 9.999999999999996e+306
+        let (mean, sd) = mean_sd(&[1.5e308, 1.7e308, 1.6e308]);
+        assert_rel_within("max", &[mean, sd], &[1.6e308, 9.999999999999996e306], 1e-12);
+        let (mean, sd) = mean_sd(&[1.5, 2.5, 4.0]);
+        assert_eq!(mean, 8.0 / 3.0);
+        assert_rel_within("ordinary", &[sd], &[1.2583057392117916], 1e-15);
+    }
 
     #[test]
     fn t_quantiles_match_scipy() {

@@ -43,7 +43,7 @@ use crate::study::dir::StudyDir;
 use crate::study::plan::calibration::noise_aware;
 use crate::study::plan::design_study::DesignStudy;
 use crate::study::plan::{Analysis, Method, Stage, StudySpec};
-use crate::study::runs::replicated::check_response;
+use crate::study::runs::replicated::{check_limits, check_response};
 use crate::study::stages::adaptive::{adaptive, AdaptiveOutcome};
 use crate::study::stages::design::{sample, SampleOutcome, SampleSettings};
 use crate::study::stages::fine::{fine, FineOutcome};
@@ -230,7 +230,8 @@ where
 {
     let stages = &plan.spec().stages;
     let selected = select(stages, upto)?;
-    check_plan(plan)?;
+    let runs_experiments = stages[selected.clone()].iter().any(|s| s.runs() > 0);
+    check_plan(plan, runs_experiments.then_some(env.pool))?;
     // A heading per stage when the run takes several: a stage command's
     // output is its stage's report alone.
     let several = selected.len() > 1;
@@ -301,16 +302,21 @@ fn select(stages: &[Stage], upto: Upto) -> Result<std::ops::Range<usize>, StudyE
     })
 }
 
-/// What a plan must hold before its first stage runs: a noise-aware
-/// study's responses exist in their scenes, and the adaptive rounds are
-/// not asked of a two-level study.
-fn check_plan(plan: &Plan) -> Result<(), StudyError> {
+/// What a plan must hold before its first stage runs: when the selected
+/// stages start runs (`pool` given), every stage's experiments within the
+/// executor's limits ([`check_limits`]); a noise-aware study's responses
+/// exist in their scenes, and the adaptive rounds are not asked of a
+/// two-level study.
+fn check_plan(plan: &Plan, pool: Option<&Executor>) -> Result<(), StudyError> {
     let Plan::Calibration {
         study, settings, ..
     } = plan
     else {
         return Ok(());
     };
+    if let Some(pool) = pool {
+        check_limits(study, &pool.limits)?;
+    }
     if plan.spec().method != Method::He2019NoiseAware {
         return Ok(());
     }

@@ -8,8 +8,13 @@
 //! - every leaf of its manifest by dotted path, as the canonical JSON holds
 //!   it (`contact.particle_particle.static_friction`, `scene.kind`,
 //!   `seeds.packing_seed`; array items by index, `a.0.b`);
-//! - its responses: every key of the result's `measurements` and
-//!   [`HEADLINE_KEY`] (the headline angle, degrees), for a complete run.
+//! - its responses: every key of the result's `measurements`,
+//!   [`HEADLINE_KEY`] (the headline angle, degrees) and every named response
+//!   of its scene kind's catalogue (`repose responses`), for a complete run.
+//!
+//! Every catalogue name is a known field even in a store with no run of that
+//! kind (it then matches nothing); an unknown name is refused with the
+//! closest known ones.
 //!
 //! A response whose key equals a manifest path is shadowed by the manifest
 //! field (no scene names one so). Values keep their kind: numbers compare as
@@ -19,6 +24,7 @@ use std::cmp::Ordering;
 use std::collections::{BTreeMap, BTreeSet};
 
 use crate::manifest::Experiment;
+use crate::scenes::responses::{catalogue, kinds, response};
 use crate::store::{RunSummary, HEADLINE_KEY};
 
 /// The fields every run has, whatever its manifest and result hold.
@@ -102,6 +108,15 @@ impl Record {
             if let Some(angle) = result.headline_angle_deg {
                 responses.insert(HEADLINE_KEY.to_string(), angle);
             }
+            // The named responses of the scene's catalogue (what `repose
+            // responses` prints), derived from the measurements.
+            if let Some(kind) = summary.experiment.as_ref().map(|e| e.scene.kind()) {
+                for spec in catalogue(kind).unwrap_or(&[]) {
+                    if let Ok(v) = response(result, kind, spec.name) {
+                        responses.entry(spec.name.to_string()).or_insert(v);
+                    }
+                }
+            }
         }
         Record {
             summary,
@@ -177,14 +192,32 @@ pub fn flatten(json: &serde_json::Value, prefix: String, out: &mut BTreeMap<Stri
     }
 }
 
-/// Every field name any of `records` has, with the built-ins.
+/// Every field name any of `records` has, with the built-ins and every
+/// response name of every scene kind's catalogue (a name `repose responses`
+/// prints is a field even when no run of the store has it).
 pub fn known_fields(records: &[Record]) -> BTreeSet<String> {
     let mut known: BTreeSet<String> = BUILTINS.iter().map(|s| s.to_string()).collect();
+    for kind in kinds() {
+        known.extend(
+            catalogue(kind)
+                .unwrap_or(&[])
+                .iter()
+                .map(|s| s.name.to_string()),
+        );
+    }
     for r in records {
         known.extend(r.manifest.keys().cloned());
         known.extend(r.responses.keys().cloned());
     }
     known
+}
+
+/// Whether `field` is a response name of some scene kind's catalogue (a
+/// number wherever a run has it).
+pub fn is_catalogue_response(field: &str) -> bool {
+    kinds()
+        .iter()
+        .any(|k| catalogue(k).unwrap_or(&[]).iter().any(|s| s.name == field))
 }
 
 /// The (at most) five names of `known` closest to `field`: those containing

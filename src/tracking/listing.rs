@@ -24,7 +24,7 @@
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 
-use super::fields::{closest, known_fields, Record, Value, BUILTINS};
+use super::fields::{closest, is_catalogue_response, known_fields, Record, Value, BUILTINS};
 use super::group::{group_by_seed, Estimate, Group};
 use super::query::{order_by, Filter, SortKey};
 use super::TrackingError;
@@ -166,6 +166,10 @@ pub fn list_runs(store: &Store, options: &ListOptions) -> Result<Listing, Tracki
             field: field.clone(),
             closest: closest(field, &known),
         });
+    }
+    for f in &filters {
+        let values: Vec<Value> = records.iter().filter_map(|r| r.get(&f.field)).collect();
+        f.check_kind(&values, is_catalogue_response(&f.field))?;
     }
     records.retain(|r| filters.iter().all(|f| f.accepts(r.get(&f.field).as_ref())));
     let rows: Vec<Row> = if options.group_seeds {

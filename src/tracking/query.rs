@@ -6,7 +6,10 @@
 //! 0.35), otherwise as texts (`scene=drum`; `<` on texts is byte order). A
 //! run without the field (a hopper field on a drum run, a response of a
 //! failed run) matches no filter, not even `!=`: the question asked is
-//! about a value it does not have. Several filters must all hold.
+//! about a value it does not have. Several filters must all hold. A filter
+//! that cannot mean what it says is refused: a word against a field of
+//! numbers (`static_friction>abc`), an order of a number against a field of
+//! words (`scene>5`), a doubled operator (`scene==drum`) or no value.
 //!
 //! A sort key is `FIELD` or `FIELD:desc` (`:asc` is the default); keys apply
 //! in the order given, the sort is stable (rows equal on every key keep the
@@ -46,6 +49,14 @@ impl Op {
         ("<", Op::Lt),
         (">", Op::Gt),
     ];
+
+    /// The operator as written.
+    fn spelling(self) -> &'static str {
+        Op::SPELLINGS
+            .iter()
+            .find(|(_, op)| *op == self)
+            .map_or("?", |(s, _)| s)
+    }
 
     fn holds(self, order: Ordering) -> bool {
         match self {
@@ -88,11 +99,56 @@ impl Filter {
         if field.is_empty() {
             return Err(bad("no field before the operator"));
         }
+        if value.is_empty() {
+            return Err(bad("no value after the operator"));
+        }
+        if value.starts_with(['=', '<', '>', '!']) {
+            return Err(bad(&format!(
+                "`{}{}` is not an operator; use one of = != < <= > >=",
+                &text[at..at + len],
+                &value[..1]
+            )));
+        }
         Ok(Filter {
             field: field.to_string(),
             op,
             value: Value::Text(value.to_string()),
         })
+    }
+
+    /// Refuses a comparison that could only match nothing or everything by
+    /// accident: a word against a field whose `values` (every run's) are
+    /// numbers, or an order (`< <= > >=`) of a number against a field of
+    /// words. `numeric` says the field is known to hold numbers even when no
+    /// run has it (a catalogue response).
+    pub fn check_kind<'a>(
+        &self,
+        values: impl IntoIterator<Item = &'a Value>,
+        numeric: bool,
+    ) -> Result<(), TrackingError> {
+        let (mut numbers, mut words) = (numeric, false);
+        for v in values {
+            match v.number() {
+                Some(_) => numbers = true,
+                None => words = true,
+            }
+        }
+        let bad = |message: String| TrackingError::Expression {
+            text: format!("{}{}{}", self.field, self.op.spelling(), self.value),
+            message,
+        };
+        let ordering = !matches!(self.op, Op::Eq | Op::Ne);
+        match self.value.number() {
+            None if numbers && !words => Err(bad(format!(
+                "`{}` holds numbers and `{}` is not one",
+                self.field, self.value
+            ))),
+            Some(_) if ordering && words && !numbers => Err(bad(format!(
+                "`{}` holds words; order it against a word, or compare with = or !=",
+                self.field
+            ))),
+            _ => Ok(()),
+        }
     }
 
     /// Whether `value` (the row's value of the field) passes; a missing one

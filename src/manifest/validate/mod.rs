@@ -10,8 +10,8 @@ mod study;
 
 use std::fmt;
 
-pub(crate) use checker::{number, string};
 pub use checker::FieldError;
+pub(crate) use checker::{number, string};
 pub use name::{check_path_component, MAX_NAME_CHARS};
 pub use scene::PACKING_LIMIT;
 

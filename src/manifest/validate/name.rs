@@ -24,7 +24,9 @@ pub fn check_path_component(name: &str) -> Result<(), String> {
         || chars > MAX_NAME_CHARS
         || name.starts_with('.')
         || name.trim() != name
-        || name.chars().any(|c| c == '/' || c == '\\' || c.is_control());
+        || name
+            .chars()
+            .any(|c| c == '/' || c == '\\' || c.is_control());
     if bad {
         Err(RULE.to_string())
     } else {

@@ -463,23 +463,34 @@ fn svg_title(body: &str) -> Option<String> {
 }
 
 /// The verdicts of a verification table (columns by name; a missing column
-/// shows empty).
+/// shows empty). The design studies' tables (`verify/verification.csv` of
+/// rsm and sensitivity) and he2019's (`verify/verification.csv` of the
+/// candidates: `group`, `scene`, `measured`, `mean_deg`, … in degrees) name
+/// the same quantities differently; each cell takes the first of its names
+/// the table has.
 fn verdict_table(table: &Table) -> VerdictTable {
-    let column = |name: &str| table.header.iter().position(|h| h == name);
+    let column = |names: &[&str]| {
+        names
+            .iter()
+            .find_map(|name| table.header.iter().position(|h| h == name))
+    };
     let cols: BTreeMap<&str, Option<usize>> = [
-        "point",
-        "response",
-        "n",
-        "mean",
-        "ci95_half_width",
-        "target",
-        "tost_p",
-        "verdict",
-        "seeds_to_decide",
-        "unresolved",
+        ("point", &["point", "group"][..]),
+        ("response", &["response", "scene"]),
+        ("n", &["n", "measured"]),
+        ("mean", &["mean", "mean_deg"]),
+        (
+            "ci95_half_width",
+            &["ci95_half_width", "ci95_half_width_deg"],
+        ),
+        ("target", &["target", "target_deg"]),
+        ("tost_p", &["tost_p"]),
+        ("verdict", &["verdict"]),
+        ("seeds_to_decide", &["seeds_to_decide"]),
+        ("unresolved", &["unresolved"]),
     ]
     .into_iter()
-    .map(|c| (c, column(c)))
+    .map(|(c, names)| (c, column(names)))
     .collect();
     let rows = table
         .rows
@@ -613,6 +624,48 @@ fn relative(from: &Path, to: &Path) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 54 item 7: a he2019 study's verification table (the candidates
+    /// stage's header, as `verify_candidates` writes it) left every cell but
+    /// the verdict empty.
+    #[test]
+    fn a_he2019_verification_table_fills_every_verdict_cell() {
+        let table = Table {
+            caption: "verify/verification.csv".into(),
+            header: [
+                "group",
+                "scene",
+                "seeds",
+                "measured",
+                "mean_deg",
+                "sd_deg",
+                "ci95_half_width_deg",
+                "target_deg",
+                "relative_error",
+                "tost_p",
+                "verdict",
+                "seeds_to_decide",
+                "unresolved",
+            ]
+            .map(String::from)
+            .to_vec(),
+            rows: vec![[
+                "0", "funnel", "7", "7", "48.3", "1.6", "1.47", "47.8", "0.01", "0.0104", "pass",
+                "", "",
+            ]
+            .map(String::from)
+            .to_vec()],
+        };
+        let v = &verdict_table(&table).rows[0];
+        assert_eq!(
+            (&v.point[..], &v.response[..], &v.n[..], &v.target[..]),
+            ("0", "funnel", "7", "47.8")
+        );
+        assert_eq!(v.mean, "48.300 ± 1.470");
+        assert_eq!(v.interval, "[46.830, 49.770]");
+        assert_eq!(v.tost_p, "0.010");
+        assert_eq!(v.verdict, "pass");
+    }
 
     #[test]
     fn relative_paths_climb_to_the_common_prefix() {

@@ -31,7 +31,7 @@ use crate::manifest::{SizeDistribution, Study};
 use crate::report::markdown::{Align, MarkdownTable};
 use crate::stats::gp::GpPrediction;
 use crate::stats::summary::{mean_ci, Z95};
-use crate::store::Store;
+use crate::store::{Lineage, Store};
 use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
 use crate::study::plan::calibration::{parameter_names, to_unit};
@@ -130,6 +130,7 @@ pub fn holdout(
     pilot: &Pilot,
     pilot_study: &Study,
 ) -> Result<Holdout, StudyError> {
+    check_pilot_study(pilot, pilot_study)?;
     let (r_model, r_pilot) = (radius(study)?, radius(pilot_study)?);
     // The model study's stated particle relative to the pilot study's.
     let own = r_model / r_pilot;
@@ -258,10 +259,48 @@ pub fn markdown(h: &Holdout) -> String {
     s
 }
 
-/// Reads a pilot's `pilot.json`.
+/// Reads a pilot's `pilot.json`, refusing one that its lineage record (the
+/// `pilot.json.lineage.json` `repose pilot` writes beside it, which `repose
+/// audit` checks) does not describe: edited, or moved without its record.
+/// Every refusal is the caller's input (exit 2) and names the file once.
 pub fn read_pilot(path: &Path) -> Result<Pilot, StudyError> {
-    Store::read_json(path).map_err(|e| StudyError::Inconsistent {
-        path: path.to_path_buf(),
-        message: format!("{e}: not a pilot.json of `repose pilot`"),
-    })
+    let refuse = |why: String| StudyError::Settings(format!("--pilot {}: {why}", path.display()));
+    let bytes = std::fs::read(path).map_err(|e| refuse(format!("cannot read it ({e})")))?;
+    let record = Lineage::path_beside(path);
+    let lineage = Lineage::read_beside(path).map_err(|_| {
+        refuse(format!(
+            "no readable lineage record {} beside it: give the pilot.json that `repose pilot` \
+             wrote (copy its record with it)",
+            record.display()
+        ))
+    })?;
+    if lineage.stage != "pilot" || !lineage.describes(&bytes) {
+        return Err(refuse(format!(
+            "it is not the file `repose pilot` wrote (its lineage record {} holds another \
+             hash or stage: edited after it was written?); run `repose pilot` again",
+            record.display()
+        )));
+    }
+    serde_json::from_slice(&bytes)
+        .map_err(|e| refuse(format!("not a pilot.json of `repose pilot` ({e})")))
+}
+
+/// Refuses a pilot that did not run `pilot_study` (by the study id it
+/// records).
+fn check_pilot_study(pilot: &Pilot, pilot_study: &Study) -> Result<(), StudyError> {
+    match &pilot.study {
+        Some(id) if *id == pilot_study.id() => Ok(()),
+        Some(id) => Err(StudyError::Settings(format!(
+            "--pilot-study {} (id {}) is not the study the pilot ran (id {}): the pilot's \
+             fine runs are the physics of that study",
+            pilot_study.name,
+            pilot_study.id().short(12),
+            id.short(12)
+        ))),
+        None => Err(StudyError::Settings(
+            "the pilot records no study id (written before pilots recorded it): run \
+             `repose pilot` again"
+                .into(),
+        )),
+    }
 }

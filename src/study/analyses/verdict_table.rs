@@ -8,8 +8,11 @@
 //! replicate (a run that could not measure the response), counted beside n;
 //! any other cell that is not a finite number is an error naming its line,
 //! column and value. The band is target × (1 ∓ tolerance), with the target
-//! a finite non-zero number and the tolerance in (0, 1).
+//! a finite non-zero number and the tolerance in (0, 1). A table without
+//! rows, and a group whose mean or spread is not a finite number, are
+//! refused rather than printed.
 
+use std::collections::HashMap;
 use std::path::Path;
 
 use serde::Serialize;
@@ -67,13 +70,13 @@ pub struct TableVerdicts {
 pub fn judge_table(path: &Path, spec: &VerdictSpec) -> Result<TableVerdicts, StudyError> {
     if !(spec.target.is_finite() && spec.target != 0.0) {
         return Err(StudyError::Settings(format!(
-            "--target = {}: must be a finite non-zero number",
+            "--target = {:?}: must be a finite non-zero number",
             spec.target
         )));
     }
     if !(spec.tolerance > 0.0 && spec.tolerance < 1.0) {
         return Err(StudyError::Settings(format!(
-            "--tolerance = {}: must lie in (0, 1) (a fraction of the target)",
+            "--tolerance = {:?}: must lie in (0, 1) (a fraction of the target)",
             spec.tolerance
         )));
     }
@@ -84,21 +87,47 @@ pub fn judge_table(path: &Path, spec: &VerdictSpec) -> Result<TableVerdicts, Stu
         .iter()
         .map(|g| table.require(path, g))
         .collect::<Result<Vec<_>, _>>()?;
+    if table.rows.is_empty() {
+        return Err(StudyError::Settings(format!(
+            "{}: the table has a header and no rows; there is nothing to judge",
+            path.display()
+        )));
+    }
     let band = band(spec.target, spec.tolerance);
+    // Groups in order of first appearance, found by a hash index (a linear
+    // search made a million groups quadratic).
     let mut groups: Vec<(Vec<String>, Vec<f64>, usize)> = Vec::new();
+    let mut index: HashMap<Vec<String>, usize> = HashMap::new();
     for (i, row) in table.rows.iter().enumerate() {
         let key: Vec<String> = keys.iter().map(|&k| row[k].clone()).collect();
-        let parsed = values[i];
-        let entry = match groups.iter().position(|g| g.0 == key) {
-            Some(k) => &mut groups[k],
-            None => {
-                groups.push((key, Vec::new(), 0));
-                groups.last_mut().expect("just pushed")
-            }
-        };
-        match parsed {
-            Some(v) => entry.1.push(v),
-            None => entry.2 += 1,
+        let k = *index.entry(key).or_insert_with_key(|key| {
+            groups.push((key.clone(), Vec::new(), 0));
+            groups.len() - 1
+        });
+        match values[i] {
+            Some(v) => groups[k].1.push(v),
+            None => groups[k].2 += 1,
+        }
+    }
+    let groups: Vec<GroupVerdict> = groups
+        .into_iter()
+        .map(|(group, values, missing)| GroupVerdict {
+            group,
+            missing,
+            judgement: judge(&values, band),
+        })
+        .collect();
+    for g in &groups {
+        let finite = g.judgement.tost.is_none_or(|t| {
+            t.mean.is_finite() && t.sd.is_finite() && t.ci95_half_width.is_finite()
+        });
+        if !finite {
+            return Err(StudyError::Settings(format!(
+                "group [{}] of {}: its mean or standard deviation is not a finite number \
+                 (values beyond the range of 64-bit floats); rescale the column",
+                g.group.join(", "),
+                path.display()
+            )));
         }
     }
     Ok(TableVerdicts {
@@ -108,14 +137,7 @@ pub fn judge_table(path: &Path, spec: &VerdictSpec) -> Result<TableVerdicts, Stu
         tolerance: spec.tolerance,
         band,
         rule: crate::study::acceptance::RULE.to_string(),
-        groups: groups
-            .into_iter()
-            .map(|(group, values, missing)| GroupVerdict {
-                group,
-                missing,
-                judgement: judge(&values, band),
-            })
-            .collect(),
+        groups,
     })
 }
 
@@ -138,17 +160,17 @@ pub fn markdown(v: &TableVerdicts) -> String {
         let j = &g.judgement;
         let mut row = g.group.clone();
         row.push(format!("{} ({})", j.n, g.missing));
-        row.push(j.mean.map_or("—".into(), |m| format!("{m:.4}")));
+        row.push(j.mean.map_or("—".into(), |m| number(m, 4)));
         match &j.tost {
             Some(t) => row.extend([
-                format!("{:.4}", t.sd),
+                number(t.sd, 4),
                 format!(
-                    "{:.4} – {:.4}",
-                    t.mean - t.ci95_half_width,
-                    t.mean + t.ci95_half_width
+                    "{} – {}",
+                    number(t.mean - t.ci95_half_width, 4),
+                    number(t.mean + t.ci95_half_width, 4)
                 ),
-                format!("{:.3} ({})", t.t_lower, p_text(t.p_lower)),
-                format!("{:.3} ({})", t.t_upper, p_text(t.p_upper)),
+                format!("{} ({})", number(t.t_lower, 3), p_text(t.p_lower)),
+                format!("{} ({})", number(t.t_upper, 3), p_text(t.p_upper)),
                 p_text(t.p),
             ]),
             None => row.extend(std::iter::repeat_n("—".to_string(), 5)),
@@ -158,15 +180,28 @@ pub fn markdown(v: &TableVerdicts) -> String {
         t.row(&row);
     }
     format!(
-        "`{}` against {} × (1 ∓ {}) = [{:.4}, {:.4}]: {}.\n\n{}",
+        "`{}` against {} × (1 ∓ {}) = [{}, {}]: {}.\n\n{}",
         v.value,
-        v.target,
+        number(v.target, 4),
         v.tolerance,
-        v.band.0,
-        v.band.1,
+        number(v.band.0, 4),
+        number(v.band.1, 4),
         v.rule,
         t.render()
     )
+}
+
+/// A statistic to `decimals` places, in scientific notation past 10¹⁵ (not
+/// 300 digits), and `—` for the 0/0 t of a mean exactly on a band edge with
+/// no spread (its p is 1: nothing rejects).
+fn number(v: f64, decimals: usize) -> String {
+    if v.is_nan() {
+        "—".to_string()
+    } else if v.is_finite() && v.abs() >= 1e15 {
+        format!("{v:.decimals$e}")
+    } else {
+        format!("{v:.decimals$}")
+    }
 }
 
 /// A p-value to four decimals, or in scientific notation below 10⁻⁴.

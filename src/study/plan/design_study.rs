@@ -355,9 +355,21 @@ impl DesignStudy {
         }
         // Every name that becomes a path component, checked by the one rule.
         let names = std::iter::once(("name".to_string(), &self.name))
-            .chain(self.scenes.keys().map(|n| ("scenes (a key)".to_string(), n)))
-            .chain(self.factors.keys().map(|n| ("factors (a key)".to_string(), n)))
-            .chain(self.responses.keys().map(|n| ("responses (a key)".to_string(), n)));
+            .chain(
+                self.scenes
+                    .keys()
+                    .map(|n| ("scenes (a key)".to_string(), n)),
+            )
+            .chain(
+                self.factors
+                    .keys()
+                    .map(|n| ("factors (a key)".to_string(), n)),
+            )
+            .chain(
+                self.responses
+                    .keys()
+                    .map(|n| ("responses (a key)".to_string(), n)),
+            );
         for (path, name) in names {
             if let Err(rule) = check_path_component(name) {
                 fail(path, string(name), rule);

@@ -17,9 +17,11 @@ use crate::exec::outcomes::{run_collect, Retry, RunOutcome};
 use crate::exec::Executor;
 use crate::manifest::{ContentId, Experiment, Study, TargetScene};
 use crate::report::table::{parse_number, Cell, CsvWriter, Table};
+use crate::scenes::plan::{plan, Limits};
 use crate::scenes::responses::response;
 use crate::stats::summary::{mean_ci, MeanCi};
 use crate::store::{ErrorRecord, RunDir, RunResult, RunState, Store, StoreError};
+use crate::study::plan::calibration::{to_physical, verified_size};
 use crate::study::sweeps::convergence::plan::{scaled, SurfaceEnergyRule};
 use crate::study::StudyError;
 
@@ -135,6 +137,47 @@ where
         runner,
         retry_failed,
     )
+}
+
+/// Refuses a study any of whose stages would start a run beyond `limits`,
+/// before the first run of any stage (issue 54: a fine size of 1e-9 once ran
+/// the noise, design and training stages before the fine runs were refused).
+/// A run's particle count and steps depend on its scene and particle size,
+/// not on the calibrated contact values, so one experiment per scene and
+/// size — at the centre of the ranges — stands for the stage's runs: the
+/// calibration scene at the study's size and at the verified size (the
+/// fine level's, [`crate::study::plan::calibration::verified_size`]), every
+/// verification scene at the verified size.
+pub fn check_limits(study: &Study, limits: &Limits) -> Result<(), StudyError> {
+    let names = crate::study::plan::calibration::parameter_names(study);
+    let centre = to_physical(study, &vec![0.5; names.len()]);
+    let values = names.into_iter().zip(centre).collect();
+    let verified = verified_size(study);
+    let mut cases = vec![(&study.calibration, 1.0)];
+    if verified != 1.0 {
+        cases.push((&study.calibration, verified));
+    }
+    cases.extend(study.verification.iter().map(|t| (t, verified)));
+    for (target, size) in cases {
+        let refuse = |why: String| {
+            StudyError::Settings(format!(
+                "scene {} at particle size x {size}: {why}; refused before the study's first \
+                 run (change the study, or raise the limits: --max-particles, \
+                 --max-particle-steps, --max-log-bytes)",
+                target.name
+            ))
+        };
+        let e = study
+            .replicate_experiment(&target.scene, &values, 0, 0)
+            .map_err(|errors| refuse(errors.to_string()))?;
+        let e = scaled(&e, size, Some(SurfaceEnergyRule::ConstantBond))
+            .map_err(|errors| refuse(errors.to_string()))?;
+        plan(&e)
+            .map_err(|errors| refuse(errors.to_string()))?
+            .check(limits)
+            .map_err(|excess| refuse(excess.to_string()))?;
+    }
+    Ok(())
 }
 
 /// [`run_replicated`] at particle size `size` × the study's (Γ ∝ R²: the

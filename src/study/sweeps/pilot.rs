@@ -77,6 +77,11 @@ pub struct PilotPoint {
 /// What the pilot measured and the two-level fit.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Pilot {
+    /// The id of the study the pilot ran (absent in pilots written before it
+    /// was recorded; `repose holdout` refuses those). A holdout checks it
+    /// against the `--pilot-study` it is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub study: Option<ContentId>,
     /// The scene's name in the study.
     pub scene: String,
     /// The response analysed.
@@ -244,6 +249,7 @@ pub fn pilot(
         .map(|p| crate::study::plan::calibration::to_unit(study, &p.point))
         .collect();
     let pilot = Pilot {
+        study: Some(study.id()),
         scene: target.name.clone(),
         response: response_name,
         parameters: crate::study::plan::calibration::parameter_names(study),
