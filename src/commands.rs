@@ -702,6 +702,7 @@ pub fn learning_curve(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let (study, dir) = open_sized_study(store_root, study_path, exec.max_runs)?;
+    learning_curve::check_sizes_of(&study, sizes)?;
     let settings = CalibrationSettings::defaults(&study, default_candidates(&study), false);
     if !dir.design_path().is_file() {
         let design = run_stages(
@@ -1081,6 +1082,12 @@ pub fn scene_noise(
 ) -> Result<(), CommandError> {
     let base = read_experiment(manifest).map_err(manifest_error(manifest))?;
     let name = manifest.display().to_string();
+    if seeds as u64 > exec.max_runs {
+        return Err(CommandError::Usage(format!(
+            "--seeds {seeds}: {seeds} runs, more than --max-runs {}; raise --max-runs to run them",
+            exec.max_runs
+        )));
+    }
     StudySpec::noise_floor(&name, base.id(), u32::try_from(seeds).unwrap_or(u32::MAX))
         .check_runs(exec.max_runs)
         .map_err(CommandError::Usage)?;
@@ -1375,8 +1382,12 @@ fn print_as<T: serde::Serialize>(
 }
 
 fn print_json<T: serde::Serialize>(value: &T, out: &mut dyn Write) -> Result<(), CommandError> {
-    serde_json::to_writer_pretty(&mut *out, value).map_err(io::Error::from)?;
-    writeln!(out)?;
+    // Buffered: standard output flushes at every line, and pretty JSON of a
+    // million verdicts has tens of millions of lines.
+    let mut buffered = io::BufWriter::new(&mut *out);
+    serde_json::to_writer_pretty(&mut buffered, value).map_err(io::Error::from)?;
+    writeln!(buffered)?;
+    buffered.flush()?;
     Ok(())
 }
 

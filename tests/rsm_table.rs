@@ -165,6 +165,12 @@ fn bad_table_options_name_what_is_wrong() {
     assert!(e.contains("--ranges `A=0.6:0.2`"), "{e}");
     let e = run(&["--factors", "A,B,C,D", "--ranges", "A=0.2:0.6,Z=0:1"]);
     assert!(e.contains("no range for factor `B`"), "{e}");
+    // Issue 54 (low): a factor listed twice was called "aliased"; the
+    // response among the factors was accepted.
+    let e = run(&["--factors", "A,A,B,C"]);
+    assert!(e.contains("`A` is listed twice"), "{e}");
+    let e = run(&["--factors", "A,B,C,y"]);
+    assert!(e.contains("--response `y` is also among --factors"), "{e}");
     // Issue 40 (low): a response cell that is not a number is an error
     // naming its line, column and value, not a silently missing value; a
     // repeated header is refused.

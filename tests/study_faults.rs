@@ -211,3 +211,114 @@ fn every_stages_run_limits_are_checked_before_the_first_run() {
         "{runs:?}"
     );
 }
+
+/// Issue 54, low: an empty `stages` list hashed as absent; a spelled
+/// `adaptive` on a two-level study was refused without the reason, and
+/// `repose stages --adaptive` dropped the flag silently there.
+#[test]
+fn stage_lists_that_say_nothing_or_the_impossible_are_refused_with_the_reason() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = tmp.path().join("store");
+    let empty = edit(
+        example("calibrate-smoke/study.json"),
+        "/stages",
+        Some(json!([])),
+    );
+    let path = write_study(tmp.path(), &empty);
+    let v = repose(&store, &["validate", &path]);
+    assert_eq!(v.status.code(), Some(2), "{}", stderr(&v));
+    assert!(stderr(&v).contains("an empty list"), "{}", stderr(&v));
+
+    let block = json!({ "replicates": 2, "noise_seeds": 8, "min_probability": 0.5,
+        "verification_seeds": 5, "adaptive": { "batch": 2, "max_runs": 8 },
+        "fidelity": { "fine_size": 0.75, "fine_points": 5, "fine_replicates": 3 } });
+    let two_level = edit(
+        example("calibrate-smoke/study.json"),
+        "/noise_aware",
+        Some(block),
+    );
+    let own = [
+        "noise", "design", "simulate", "fit", "fine", "search", "verify",
+    ];
+    let spelled = edit(two_level.clone(), "/stages", Some(json!(own)));
+    let path = write_study(tmp.path(), &spelled);
+    let v = repose(&store, &["validate", &path]);
+    assert_eq!(v.status.code(), Some(0), "its own list: {}", stderr(&v));
+    let s = repose(&store, &["stages", "--adaptive", &path]);
+    assert_eq!(s.status.code(), Some(2), "{}", stderr(&s));
+    assert!(
+        stderr(&s).contains("--adaptive = (given)"),
+        "{}",
+        stderr(&s)
+    );
+    let mut with_adaptive = own.to_vec();
+    with_adaptive.insert(4, "adaptive");
+    let path = write_study(
+        tmp.path(),
+        &edit(two_level, "/stages", Some(json!(with_adaptive))),
+    );
+    let v = repose(&store, &["validate", &path]);
+    assert_eq!(v.status.code(), Some(2), "{}", stderr(&v));
+    assert!(
+        stderr(&v).contains("which a two-level study (noise_aware.fidelity) does not run"),
+        "{}",
+        stderr(&v)
+    );
+}
+
+/// Issue 54, low: learning-curve simulated its 12-run batch before refusing
+/// `--sizes 0`; `noise --seeds 2^64-1` reported a saturated count.
+#[test]
+fn sweeps_refuse_their_sizes_and_counts_before_any_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = tmp.path().join("store");
+    let out = repose(
+        &store,
+        &[
+            "learning-curve",
+            "experiments/calibrate-smoke/study.json",
+            "--sizes",
+            "0",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("--sizes: 0 is not in [2, "),
+        "{}",
+        stderr(&out)
+    );
+    let runs = std::fs::read_dir(&store).map_or(0, |d| {
+        d.filter(|e| e.as_ref().unwrap().file_name() != "studies")
+            .count()
+    });
+    assert_eq!(runs, 0, "a run was started");
+    let out = repose(
+        &store,
+        &[
+            "noise",
+            "experiments/drum/smoke.json",
+            "--seeds",
+            "18446744073709551615",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("18446744073709551615 runs"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+/// Issue 54, low: a study refused before any stage wrote (a two-level
+/// factorial asked for a quadratic surface) left an empty study directory.
+#[test]
+fn a_study_refused_before_its_first_stage_leaves_no_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = tmp.path().join("store");
+    let out = repose(&store, &["rsm", "experiments/yan2015-smoke/study.json"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let studies: Vec<_> = std::fs::read_dir(store.join("studies"))
+        .map(|d| d.map(|e| e.unwrap().file_name()).collect())
+        .unwrap_or_default();
+    assert!(studies.is_empty(), "{studies:?}");
+}

@@ -74,7 +74,11 @@ pub struct Study {
     /// its blocks give; `repose stages FILE` prints it). When present it
     /// must be that list, and naming `adaptive` adds the adaptive rounds
     /// as `--adaptive` does (see `crate::study::plan`).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "crate::manifest::study::spelled_stages"
+    )]
     pub stages: Vec<String>,
 }
 
@@ -410,4 +414,20 @@ impl Study {
         validate_experiment(&experiment)?;
         Ok(experiment)
     }
+}
+
+/// Reads a study's `stages`: absent is the study's own list; an empty list is
+/// refused (it would hash as absent, so two different documents would share
+/// an id, and it says nothing a missing field does not).
+pub(crate) fn spelled_stages<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> Result<Vec<String>, D::Error> {
+    let stages = Vec::<String>::deserialize(deserializer)?;
+    if stages.is_empty() {
+        return Err(serde::de::Error::custom(
+            "stages = []: an empty list; leave `stages` out for the list the study's blocks \
+             give (repose stages FILE prints it)",
+        ));
+    }
+    Ok(stages)
 }

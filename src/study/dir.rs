@@ -104,6 +104,21 @@ impl StudyDir {
         crate::store::study_dir_path(store_root, study.name(), &study.id())
     }
 
+    /// Removes the directory when it holds nothing but its `study.json`: a
+    /// study refused before any stage wrote leaves no empty directory in
+    /// the store. Best effort (a failure leaves the directory as it was).
+    pub fn remove_if_unused(&self) {
+        let only_study = std::fs::read_dir(&self.path).is_ok_and(|entries| {
+            entries
+                .map(|e| e.map(|e| e.file_name()))
+                .collect::<Result<Vec<_>, _>>()
+                .is_ok_and(|names| names.iter().all(|n| *n == *STUDY_FILE))
+        });
+        if only_study {
+            let _ = std::fs::remove_dir_all(&self.path);
+        }
+    }
+
     /// The directory.
     pub fn path(&self) -> &Path {
         &self.path

@@ -169,6 +169,7 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
+    let new = !dir::StudyDir::path_in(store_root, study).exists();
     let dir = dir::StudyDir::prepare(store_root, study)?;
     let plan = Plan::design(study.clone(), analysis, levels);
     let mut log = |line: &str| {
@@ -183,7 +184,11 @@ where
         runner,
         log: &mut log,
     };
-    run::run(&plan, upto, env)
+    let outcome = run::run(&plan, upto, env);
+    if outcome.is_err() && new {
+        dir.remove_if_unused();
+    }
+    outcome
 }
 
 /// `repose rsm STUDY`: the design's runs, the analysis, the optimum, and the

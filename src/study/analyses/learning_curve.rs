@@ -46,6 +46,7 @@ use crate::study::dir::write_output;
 use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
 use crate::study::plan::calibration::parameter_names;
+use crate::study::plan::{Stage as PlanStage, StudySpec};
 use crate::study::records::{read_angles, AngleRow};
 use crate::study::stages::fit_network::input_scales;
 use crate::study::stages::search_tolerance::{find, SearchSettings};
@@ -135,6 +136,25 @@ fn check_sizes(sizes: &[usize], capacity: usize) -> Result<(), StudyError> {
         }
     }
     Ok(())
+}
+
+/// Refuses `sizes` (`None`: the defaults) that `study`'s design cannot
+/// give, before its batch runs: the capacity is the training part of the
+/// design's points as the study's stage list counts them.
+pub fn check_sizes_of(study: &Study, sizes: Option<&[usize]>) -> Result<(), StudyError> {
+    let Some(sizes) = sizes else {
+        return Ok(());
+    };
+    let spec = StudySpec::calibration(study, false, 1);
+    let points = spec
+        .stages
+        .iter()
+        .find_map(|s| match s {
+            PlanStage::Simulate { points, .. } => Some(*points),
+            _ => None,
+        })
+        .unwrap_or(0);
+    check_sizes(sizes, split_at(points as usize, DEFAULT_TRAIN_FRACTION))
 }
 
 /// Computes the learning curve of `study` from its batch (which must have run)

@@ -86,7 +86,11 @@ pub struct DesignStudy {
     /// be one of those lists, and it chooses the analysis: `search` for
     /// response surfaces (`repose rsm`), `sensitivity` for yan2015's levels
     /// (`repose sensitivity`); see `crate::study::plan`.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "crate::manifest::study::spelled_stages"
+    )]
     pub stages: Vec<String>,
 }
 

@@ -134,6 +134,26 @@ impl StudyFile {
             }
             (asked, spelled) => asked.or(spelled).unwrap_or(Analysis::ResponseSurface),
         };
+        if let StudyFile::Calibration(s) = self {
+            if s.fidelity().is_some() && (adaptive || self.spells_adaptive()) {
+                let (path, value) = if self.spells_adaptive() {
+                    (
+                        "stages".to_string(),
+                        format!("[{}]", self.spelled().join(", ")),
+                    )
+                } else {
+                    ("--adaptive".to_string(), "(given)".to_string())
+                };
+                return Err(ManifestError::Invalid(ValidationErrors(vec![FieldError {
+                    path,
+                    value,
+                    rule: "asks for the adaptive rounds, which a two-level study \
+                           (noise_aware.fidelity) does not run: its fine stage chooses the \
+                           fine points by the two-level model instead"
+                        .into(),
+                }])));
+            }
+        }
         let spec = StudySpec::of(self, analysis, adaptive || self.spells_adaptive());
         let names: Vec<&str> = spec.stages.iter().map(Stage::name).collect();
         if self.spelled().is_empty() || self.spelled() == names.as_slice() {

@@ -782,6 +782,18 @@ pub fn analyse_table(path: &Path, spec: &TableSpec) -> Result<ResponseAnalysis, 
             path.display()
         )));
     }
+    for (i, f) in spec.factors.iter().enumerate() {
+        if spec.factors[..i].contains(f) {
+            return Err(StudyError::Settings(format!(
+                "--factors: `{f}` is listed twice; name each column once"
+            )));
+        }
+        if *f == spec.response {
+            return Err(StudyError::Settings(format!(
+                "--response `{f}` is also among --factors: a response cannot explain itself"
+            )));
+        }
+    }
     let columns = spec
         .factors
         .iter()
