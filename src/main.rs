@@ -928,7 +928,7 @@ impl ConvergenceArgs {
             })?),
         };
         if let Some(r) = self.real_radius.filter(|r| !(r.is_finite() && *r > 0.0)) {
-            return Err(format!("--real-radius {r}: must be a length in m, > 0"));
+            return Err(format!("--real-radius {r:?}: must be a length in m, > 0"));
         }
         if let Some(t) = self.tolerance.filter(|t| !(t.is_finite() && *t > 0.0)) {
             return Err(format!("--tolerance {t}: must be a number > 0 (degrees)"));

@@ -322,3 +322,52 @@ fn a_study_refused_before_its_first_stage_leaves_no_directory() {
         .unwrap_or_default();
     assert!(studies.is_empty(), "{studies:?}");
 }
+
+/// Issue 54, low: the wrong kind of manifest was answered with serde's
+/// `unknown field physics_version`.
+#[test]
+fn a_manifest_of_the_wrong_kind_is_named_as_what_it_is() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = tmp.path().join("store");
+    let drum = "experiments/drum/smoke.json";
+    for args in [
+        vec!["pilot", drum, "--scene", "calibration"],
+        vec!["fine", drum],
+        vec!["report", drum],
+    ] {
+        let out = repose(&store, &args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(
+            stderr(&out).contains("this is an experiment manifest (it has `scene`)")
+                && !stderr(&out).contains("unknown field"),
+            "{args:?}: {}",
+            stderr(&out)
+        );
+    }
+    let out = repose(
+        &store,
+        &["convergence", "experiments/calibrate-smoke/study.json"],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(
+            "this is a calibration study (it has `calibration`); the command needs an \
+             experiment manifest"
+        ),
+        "{}",
+        stderr(&out)
+    );
+    let out = repose(
+        &store,
+        &[
+            "convergence",
+            "experiments/validation/pair_jkr_separation.json",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("no angle of repose to converge"),
+        "{}",
+        stderr(&out)
+    );
+}

@@ -66,9 +66,54 @@ pub enum ManifestError {
          `calibration` field (or pass --kind)"
     )]
     UnknownKind,
+    /// A document of another kind than the command reads (an experiment
+    /// given where a study is needed, or the reverse).
+    #[error("this is {found}; the command needs {needed}")]
+    WrongKind {
+        /// What the document is, in words.
+        found: &'static str,
+        /// What the command reads, in words.
+        needed: &'static str,
+    },
     /// Well-formed but violates one or more rules.
     #[error("{0}")]
     Invalid(ValidationErrors),
+}
+
+/// The experiment, as [`ManifestError::WrongKind`] names it.
+pub const AN_EXPERIMENT: &str = "an experiment manifest (it has `scene`)";
+/// The calibration study, as [`ManifestError::WrongKind`] names it.
+pub const A_CALIBRATION_STUDY: &str = "a calibration study (it has `calibration`)";
+/// The design study, as [`ManifestError::WrongKind`] names it.
+pub const A_DESIGN_STUDY: &str = "a design study (it has `factors`)";
+
+/// What a JSON document is by its top-level fields, in words, if it is one
+/// of the three kinds.
+fn kind_in_words(text: &str) -> Option<&'static str> {
+    let value: Value = serde_json::from_str(text).ok()?;
+    let object = value.as_object()?;
+    if object.get("factors").is_some_and(Value::is_object) {
+        Some(A_DESIGN_STUDY)
+    } else if object.contains_key("calibration") {
+        Some(A_CALIBRATION_STUDY)
+    } else if object.contains_key("scene") {
+        Some(AN_EXPERIMENT)
+    } else {
+        None
+    }
+}
+
+/// `text` parsed as `needed`'s type; when that fails on a document of
+/// another kind, the error says which kind it is instead of serde's first
+/// unknown field.
+pub(crate) fn parse_kind<T: DeserializeOwned>(
+    text: &str,
+    needed: &'static str,
+) -> Result<T, ManifestError> {
+    parse_typed(text).map_err(|error| match kind_in_words(text) {
+        Some(found) if found != needed => ManifestError::WrongKind { found, needed },
+        _ => error,
+    })
 }
 
 impl ManifestError {
@@ -188,14 +233,14 @@ fn syntax_error(text: &str, error: serde_json::Error) -> ManifestError {
 
 /// Parses and validates an experiment manifest.
 pub fn parse_experiment(text: &str) -> Result<Experiment, ManifestError> {
-    let e: Experiment = parse_typed(text)?;
+    let e: Experiment = parse_kind(text, AN_EXPERIMENT)?;
     validate_experiment(&e).map_err(ManifestError::Invalid)?;
     Ok(e)
 }
 
 /// Parses and validates a study manifest.
 pub fn parse_study(text: &str) -> Result<Study, ManifestError> {
-    let s: Study = parse_typed(text)?;
+    let s: Study = parse_kind(text, A_CALIBRATION_STUDY)?;
     validate_study(&s).map_err(ManifestError::Invalid)?;
     Ok(s)
 }

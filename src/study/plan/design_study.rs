@@ -777,7 +777,7 @@ pub fn read_design_study(path: &Path) -> Result<DesignStudy, crate::manifest::Ma
 
 /// Parses and validates a design study's JSON text.
 pub fn parse_design_study(text: &str) -> Result<DesignStudy, crate::manifest::ManifestError> {
-    let study: DesignStudy = serde_json::from_str(text)?;
+    let study: DesignStudy = crate::manifest::parse_kind(text, crate::manifest::A_DESIGN_STUDY)?;
     study
         .validate()
         .map_err(crate::manifest::ManifestError::Invalid)?;

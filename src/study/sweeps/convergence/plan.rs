@@ -100,6 +100,20 @@ pub enum PlanError {
          surface energy; leave --rule out"
     )]
     RuleWithCoarseGraining(&'static str),
+    /// A pair scene: two particles have no angle whose convergence a sweep
+    /// could measure.
+    #[error(
+        "the base manifest is a pair scene, which has no angle of repose to converge; \
+         convergence sweeps a lab scene (funnel_pile, baffle_lift, drum, hopper, static_pile)"
+    )]
+    PairScene,
+    /// A real particle radius that is not a positive finite number at most
+    /// the largest swept radius.
+    #[error(
+        "--real-radius {0:?}: must be a finite number > 0 and at most the largest swept \
+         radius, {1:?} m (the real powder is the finer end the sweep extrapolates to)"
+    )]
+    RealRadius(f64, f64),
     /// A level is not a valid experiment (e.g. a coarse-graining factor
     /// below 1, a slice thinner than the neighbour search allows).
     #[error("size factor {factor}: {errors}")]
@@ -148,6 +162,9 @@ pub fn plan(
     rule: Option<SurfaceEnergyRule>,
     real_radius_m: Option<f64>,
 ) -> Result<SizePlan, PlanError> {
+    if matches!(base.scene, crate::manifest::Scene::Pair(_)) {
+        return Err(PlanError::PairScene);
+    }
     if replicates < 2 {
         return Err(PlanError::Replicates(replicates));
     }
@@ -188,6 +205,10 @@ pub fn plan(
             })
         })
         .collect::<Result<Vec<_>, PlanError>>()?;
+    let largest = levels.iter().map(|l| l.radius_m).fold(0.0, f64::max);
+    if let Some(r) = real_radius_m.filter(|r| !(r.is_finite() && *r > 0.0 && *r <= largest)) {
+        return Err(PlanError::RealRadius(r, largest));
+    }
     Ok(SizePlan {
         levels,
         rule,
@@ -292,6 +313,27 @@ mod tests {
             };
             assert_eq!(ids(a), ids(b));
         }
+    }
+
+    /// Issue 54 (low): a pair scene and a real radius of 1e300 m were
+    /// accepted.
+    #[test]
+    fn pair_scenes_and_impossible_real_radii_are_refused() {
+        let pair = parse_experiment(include_str!(
+            "../../../../experiments/validation/pair_hertz_particle_particle.json"
+        ))
+        .unwrap();
+        assert!(matches!(
+            plan(&pair, &[1.0, 0.5], 2, None, None),
+            Err(PlanError::PairScene)
+        ));
+        let base =
+            parse_experiment(include_str!("../../../../experiments/drum/smoke.json")).unwrap();
+        for r in [1e300, 0.0, -1.0, f64::NAN] {
+            let e = plan(&base, &[1.0, 0.5], 2, None, Some(r)).unwrap_err();
+            assert!(matches!(e, PlanError::RealRadius(..)), "{r}: {e}");
+        }
+        assert!(plan(&base, &[1.0, 0.5], 2, None, Some(1e-4)).is_ok());
     }
 
     /// Under coarse graining the factor multiplies k and the manifest's rule
