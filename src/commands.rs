@@ -480,7 +480,16 @@ pub fn diff(
     out: &mut dyn Write,
 ) -> Result<(), CommandError> {
     let diff = tracking::diff::diff(&open_store(store_root)?, a, b)?;
-    print_as(&diff, json, |d| d.text(), out)
+    print_as(&diff, json, |d| d.text(), out)?;
+    // As `runs show`: a damaged run is shown, then reported (exit 1).
+    let damaged = match &diff {
+        tracking::diff::Diff::Runs(r) => r.status.iter().filter(|s| *s == "damaged").count(),
+        tracking::diff::Diff::Studies(_) => 0,
+    };
+    if damaged > 0 {
+        return Err(CommandError::Damaged { count: damaged });
+    }
+    Ok(())
 }
 
 /// `repose studies`: every study of the store with its method, stages, run

@@ -308,7 +308,16 @@ fn a_killed_writers_old_temp_files_in_a_study_are_removed() {
         .unwrap();
     let old = stage.join(".tmp-design.csv-4242-0");
     let fresh = stage.join(".tmp-design.csv-4242-1");
-    for p in [&old, &fresh] {
+    // Issue 54 (low): a fresh temp of a writer of this host that has ended
+    // (a stage killed and re-run at once) is a leftover too.
+    let ended = {
+        let mut child = Command::new("true").spawn().unwrap();
+        let pid = child.id();
+        child.wait().unwrap();
+        let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
+        stage.join(format!(".tmp-design.csv-{}-{pid}-0", host.trim()))
+    };
+    for p in [&old, &fresh, &ended] {
         std::fs::write(p, b"half a table").unwrap();
     }
     let hour_ago = std::time::SystemTime::now() - std::time::Duration::from_secs(3600);
@@ -324,9 +333,13 @@ fn a_killed_writers_old_temp_files_in_a_study_are_removed() {
         !old.exists(),
         "the killed writer's temp file is still there"
     );
+    assert!(
+        !ended.exists(),
+        "the ended writer's fresh temp file is still there"
+    );
     assert!(fresh.exists(), "a fresh temp file was removed");
     assert!(
-        common::stderr(&out).contains("removed 1 temp file(s)"),
+        common::stderr(&out).contains("removed 2 temp file(s)"),
         "{}",
         common::stderr(&out)
     );

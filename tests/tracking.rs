@@ -318,6 +318,47 @@ fn a_filter_that_cannot_mean_what_it_says_is_refused() {
     );
 }
 
+/// Issue 54, low: `diff good damaged` exited 0 and printed the seal's size
+/// of a damaged file; a prefix of a run id and of a study's name went to the
+/// run.
+#[test]
+fn diff_reports_a_damaged_run_and_refuses_an_ambiguous_prefix() {
+    let tmp = tempfile::tempdir().unwrap();
+    let store = Store::open(tmp.path()).unwrap();
+    let a = put(&store, &mu_seed(0.4, 0), Some(31.0));
+    let b = put(&store, &mu_seed(0.5, 0), Some(33.0));
+    let result = store.run_dir(&b).path().join("result.json");
+    let mut text = std::fs::read_to_string(&result).unwrap();
+    text.push_str("\n\n");
+    std::fs::write(&result, &text).unwrap();
+    let (ha, hb) = (a.to_string(), b.to_string());
+    let out = repose(tmp.path(), &["diff", &ha[..12], &hb[..12], "--json"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("damaged"), "{}", stderr(&out));
+    let d: Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let file = d["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["file"] == "result.json")
+        .unwrap();
+    assert_eq!(file["b"]["bytes"], json!(text.len()), "{file}");
+
+    // A study whose name starts with the run's first hex digit.
+    let first = &ha[..1];
+    let study = edit(cai_smoke(), "/name", Some(json!(format!("{first}study"))));
+    put_study(tmp.path(), &study, &[]);
+    let out = repose(tmp.path(), &["diff", first, &hb[..12]]);
+    assert_eq!(out.status.code(), Some(2), "{}", stdout(&out));
+    let err = stderr(&out);
+    assert!(
+        err.contains("is ambiguous")
+            && err.contains(&format!("run {ha}"))
+            && err.contains("study "),
+        "{err}"
+    );
+}
+
 #[test]
 fn diff_of_two_runs_reports_exactly_the_fields_that_differ() {
     let tmp = tempfile::tempdir().unwrap();
@@ -541,10 +582,11 @@ fn studies_lists_each_study_with_stages_run_counts_and_verdicts() {
     );
     let verify = a.join("verify");
     std::fs::create_dir_all(&verify).unwrap();
-    std::fs::write(
-        verify.join("verification.csv"),
-        "point,response,verdict\noptimum,dynamic_angle_deg,inconclusive\n\
+    repose::study::dir::write_output(
+        &verify.join("verification.csv"),
+        b"point,response,verdict\noptimum,dynamic_angle_deg,inconclusive\n\
          cai2024,dynamic_angle_deg,pass\nother,dynamic_angle_deg,pass\n",
+        &repose::store::Lineage::new("verify", json!({})),
     )
     .unwrap();
     let b =
@@ -583,8 +625,38 @@ fn studies_lists_each_study_with_stages_run_counts_and_verdicts() {
         "{text}"
     );
     assert!(
-        text.contains("verdicts:    1 inconclusive, 2 pass"),
+        text.contains("verdicts:    1 inconclusive, 2 pass\n"),
         "{text}"
+    );
+    assert_eq!(first["verdicts_edited"], json!(false));
+
+    // Issue 54 (low): an edited verdict is marked where it is shown, in
+    // `studies` and in the report's Verdicts section; a stage file that is
+    // not UTF-8 is marked on the page, which is still written.
+    let csv = verify.join("verification.csv");
+    let edited = std::fs::read_to_string(&csv)
+        .unwrap()
+        .replace("inconclusive", "pass");
+    std::fs::write(&csv, edited).unwrap();
+    let text = stdout(&repose(tmp.path(), &["studies"]));
+    assert!(
+        text.contains("verdicts:    3 pass (EDITED: verify/verification.csv is not what"),
+        "{text}"
+    );
+    std::fs::write(a.join("rsm").join("latin1.csv"), b"a,b\n\xe9t\xe9,1\n").unwrap();
+    let out = repose(
+        tmp.path(),
+        &["report", "experiments/cai2024-smoke/study.json"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let html = std::fs::read_to_string(stdout(&out).trim()).unwrap();
+    assert!(
+        html.contains("Verdicts of verify/verification.csv — EDITED: changed since the stage"),
+        "no EDITED mark on the verdicts"
+    );
+    assert!(
+        html.contains("rsm/latin1.csv — UNREADABLE"),
+        "no UNREADABLE mark"
     );
 }
 

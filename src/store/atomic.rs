@@ -69,19 +69,19 @@ fn split(path: &Path) -> io::Result<(&Path, &OsStr)> {
 
 /// Creates a fresh temp file for `name` in `dir` and returns it with its path.
 ///
-/// Names are `.tmp-<name>-<pid>-<counter>`, unique among this process's
-/// writers. The pid alone does not make them unique across processes: a
-/// killed process's leftovers carry a pid that a later process may get again
-/// (always, as PID 1 in a container). So the file is created with create-new,
-/// and a name some earlier process left behind is skipped for the next one.
+/// Names are `.tmp-<name>-<host>-<pid>-<counter>`, unique among this
+/// process's writers; the host and pid let a later process on the same host
+/// tell a leftover of an ended writer at once ([`writer_has_ended`]). The
+/// pid alone does not make them unique across processes: a killed process's
+/// leftovers carry a pid that a later process may get again (always, as
+/// PID 1 in a container). So the file is created with create-new, and a name
+/// some earlier process left behind is skipped for the next one.
 fn create_temp(dir: &Path, name: &OsStr) -> io::Result<(File, PathBuf)> {
     let mut last = None;
     for _ in 0..TEMP_ATTEMPTS {
-        let temp = dir.join(format!(
-            "{TEMP_PREFIX}{}-{}-{}",
-            name.to_string_lossy(),
-            std::process::id(),
-            TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+        let temp = dir.join(temp_name(
+            name,
+            TEMP_COUNTER.fetch_add(1, Ordering::Relaxed),
         ));
         match File::create_new(&temp) {
             Ok(file) => return Ok((file, temp)),
@@ -90,6 +90,59 @@ fn create_temp(dir: &Path, name: &OsStr) -> io::Result<(File, PathBuf)> {
         }
     }
     Err(last.unwrap_or_else(|| io::Error::other("no temp name tried")))
+}
+
+/// The temp file name of this process's `counter`-th write of `name`.
+fn temp_name(name: &OsStr, counter: u64) -> String {
+    format!(
+        "{TEMP_PREFIX}{}-{}-{}-{counter}",
+        name.to_string_lossy(),
+        host(),
+        std::process::id()
+    )
+}
+
+/// This machine's host name as temp names carry it (Linux's
+/// `/proc/sys/kernel/hostname`, every character outside `[A-Za-z0-9._-]`
+/// replaced by `_`), or empty where it cannot be read.
+fn host() -> &'static str {
+    static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    HOST.get_or_init(|| {
+        fs::read_to_string("/proc/sys/kernel/hostname")
+            .map(|h| {
+                h.trim()
+                    .chars()
+                    .map(|c| {
+                        if c.is_ascii_alphanumeric() || "._-".contains(c) {
+                            c
+                        } else {
+                            '_'
+                        }
+                    })
+                    .collect()
+            })
+            .unwrap_or_default()
+    })
+}
+
+/// Whether the temp file `file_name` was written by another process of this
+/// host that has ended (its pid is not in `/proc`): a killed writer's
+/// leftover, whatever its age. Names without this host's name (another
+/// machine on a shared file system, or an older repose) never are.
+fn writer_has_ended(file_name: &str) -> bool {
+    let host = host();
+    let mut parts = file_name.rsplitn(3, '-');
+    let (Some(counter), Some(pid), Some(rest)) = (parts.next(), parts.next(), parts.next()) else {
+        return false;
+    };
+    let Ok(pid) = pid.parse::<u32>() else {
+        return false;
+    };
+    !host.is_empty()
+        && counter.parse::<u64>().is_ok()
+        && rest.ends_with(&format!("-{host}"))
+        && pid != std::process::id()
+        && !Path::new("/proc").join(pid.to_string()).exists()
 }
 
 /// Removes every temp file ([`TEMP_PREFIX`]) directly inside `dir` and returns
@@ -130,10 +183,11 @@ fn remove_if_temp(
 pub const STALE_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(600);
 
 /// Removes every temp file ([`TEMP_PREFIX`]) in the tree under `dir` last
-/// modified at least `min_age` ago, and returns how many it removed. For
-/// directories without a claim (a study's stage outputs), where a fresh temp
-/// may be another client's write in progress; a missing `dir` removes
-/// nothing.
+/// modified at least `min_age` ago, or left by an ended writer of this host
+/// ([`writer_has_ended`]: a stage killed and re-run at once), and returns
+/// how many it removed. For directories without a claim (a study's stage
+/// outputs), where a fresh temp may be another client's write in progress;
+/// a missing `dir` removes nothing.
 pub fn remove_old_temps(dir: &Path, min_age: std::time::Duration) -> io::Result<usize> {
     let mut removed = 0;
     let mut stack = vec![dir.to_path_buf()];
@@ -150,6 +204,9 @@ pub fn remove_old_temps(dir: &Path, min_age: std::time::Duration) -> io::Result<
                 continue;
             }
             let old = |e: &fs::DirEntry| -> io::Result<bool> {
+                if e.file_name().to_str().is_some_and(writer_has_ended) {
+                    return Ok(true);
+                }
                 let age = e.metadata()?.modified()?.elapsed().unwrap_or_default();
                 Ok(age >= min_age)
             };
@@ -267,9 +324,7 @@ mod tests {
         // leftovers than they can plausibly use, but fewer than the attempts.
         let planted: Vec<PathBuf> = (next..next + 40)
             .map(|c| {
-                let p = dir
-                    .path()
-                    .join(format!("{TEMP_PREFIX}run.mcap-{}-{c}", std::process::id()));
+                let p = dir.path().join(temp_name(OsStr::new("run.mcap"), c));
                 fs::write(&p, b"leftover").unwrap();
                 p
             })

@@ -192,7 +192,24 @@ fn target(store: &Store, given: &str) -> Result<Target, TrackingError> {
         return Ok(Target::Study(given.into()));
     }
     let run_error = match store.resolve_prefix(given) {
-        Ok(id) => return Ok(Target::Run(id)),
+        Ok(id) => {
+            // A prefix of a run id and of a study's names neither alone.
+            return match resolve_study(store.root(), given) {
+                Ok(dir) => Err(TrackingError::AmbiguousStudy {
+                    given: given.to_string(),
+                    candidates: vec![
+                        format!("run {id}"),
+                        format!(
+                            "study {}",
+                            dir.file_name().map_or(dir.display().to_string(), |n| n
+                                .to_string_lossy()
+                                .into_owned())
+                        ),
+                    ],
+                }),
+                Err(_) => Ok(Target::Run(id)),
+            };
+        }
         Err(e @ crate::store::StoreError::Ambiguous { .. }) => return Err(e.into()),
         Err(e) => e,
     };
@@ -287,12 +304,21 @@ fn responses(a: &Record, b: &Record, records: &[Record]) -> Vec<ResponseChange> 
         .collect()
 }
 
-/// The sealed files of both runs (a run without a seal has none).
+/// The sealed files of both runs (a run without a seal has none), each as it
+/// is on disk now (size and hash of the file, not the seal's record of it:
+/// a damaged run shows what it holds; a sealed file now missing has none).
 fn files(store: &Store, a: &ContentId, b: &ContentId) -> Vec<FileChange> {
-    let seal = |id: &ContentId| {
-        Store::read_json::<Seal>(&store.run_dir(id).seal_path())
+    let seal = |id: &ContentId| -> BTreeMap<String, FileDigest> {
+        let dir = store.run_dir(id);
+        Store::read_json::<Seal>(&dir.seal_path())
             .map(|s| s.files)
             .unwrap_or_default()
+            .into_keys()
+            .filter_map(|name| {
+                let digest = FileDigest::of_file(&dir.path().join(&name)).ok()?;
+                Some((name, digest))
+            })
+            .collect()
     };
     let (sa, sb): (BTreeMap<_, _>, BTreeMap<_, _>) = (seal(a), seal(b));
     let names: BTreeSet<&String> = sa.keys().chain(sb.keys()).collect();

@@ -24,7 +24,7 @@ use super::study_files::{
 use super::TrackingError;
 use crate::manifest::ContentId;
 use crate::report::table::Table;
-use crate::store::{Depth, RunStatus, Store};
+use crate::store::{Depth, Lineage, RunStatus, Store};
 use crate::study::plan::{Method, StudyFile};
 
 /// The runs a study's tables name, by state.
@@ -57,6 +57,10 @@ pub struct StudyEntry {
     pub runs: RunCounts,
     /// Count of each verdict in verify/verification.csv (empty without one).
     pub verdicts: BTreeMap<String, usize>,
+    /// verify/verification.csv is not what its stage wrote (its lineage
+    /// record, missing or with another hash, does not describe it): the
+    /// verdicts above were edited.
+    pub verdicts_edited: bool,
     /// Newest modification time of its files, ISO-8601 UTC.
     pub last_change: String,
 }
@@ -88,6 +92,7 @@ fn entry(store: &Store, dir: &Path) -> Result<StudyEntry, TrackingError> {
         StudyFile::Design(_) if stages.iter().any(|s| s == "sensitivity") => Method::Sensitivity,
         StudyFile::Design(_) => Method::ResponseSurface,
     });
+    let verification = dir.join("verify").join("verification.csv");
     let mut runs = RunCounts::default();
     for id in run_ids(dir, &all)? {
         match store.check(&id, Depth::Sizes).status() {
@@ -104,9 +109,18 @@ fn entry(store: &Store, dir: &Path) -> Result<StudyEntry, TrackingError> {
         method,
         stages,
         runs,
-        verdicts: verdicts(&dir.join("verify").join("verification.csv")),
+        verdicts: verdicts(&verification),
+        verdicts_edited: verification.is_file() && !written_by_its_stage(&verification),
         last_change: iso8601(last_change(dir, &all)?),
     })
+}
+
+/// Whether `path` holds the bytes its lineage record was written for.
+fn written_by_its_stage(path: &Path) -> bool {
+    match (std::fs::read(path), Lineage::read_beside(path)) {
+        (Ok(bytes), Ok(lineage)) => lineage.output_sha256.is_some() && lineage.describes(&bytes),
+        _ => false,
+    }
 }
 
 /// The count of each value of the `verdict` column of `path` (empty when
@@ -140,7 +154,9 @@ pub fn studies_text(entries: &[StudyEntry], store_root: &Path) -> String {
             });
         let verdicts: Vec<String> = e.verdicts.iter().map(|(v, n)| format!("{n} {v}")).collect();
         let r = e.runs;
-        out.push_str(&format!("{} {}\n", e.name, e.id.short(12)));
+        // A name from an old or hand-made study.json may hold control
+        // characters: shown escaped, never sent to the terminal raw.
+        out.push_str(&format!("{} {}\n", e.name.escape_debug(), e.id.short(12)));
         out.push_str(&format!("  directory:   {}\n", e.directory.display()));
         out.push_str(&format!("  method:      {method}\n"));
         out.push_str(&format!(
@@ -152,8 +168,13 @@ pub fn studies_text(entries: &[StudyEntry], store_root: &Path) -> String {
             r.complete, r.failed, r.damaged, r.pending
         ));
         out.push_str(&format!(
-            "  verdicts:    {}\n",
-            or_none(&verdicts.join(", "))
+            "  verdicts:    {}{}\n",
+            or_none(&verdicts.join(", ")),
+            if e.verdicts_edited {
+                " (EDITED: verify/verification.csv is not what its stage wrote)"
+            } else {
+                ""
+            }
         ));
         out.push_str(&format!("  last change: {}\n", e.last_change));
     }

@@ -137,6 +137,9 @@ struct Page {
 
 /// One `verification.csv`.
 struct VerdictTable {
+    /// The file, relative to the study directory (as its lineage record's
+    /// output is shown).
+    source: String,
     caption: String,
     rows: Vec<Verdict>,
 }
@@ -245,7 +248,7 @@ impl Page {
             .iter()
             .map(|dir| stage(dir))
             .collect::<Result<Vec<_>, _>>()?;
-        let verdicts = stages
+        let mut verdicts: Vec<VerdictTable> = stages
             .iter()
             .flat_map(|s| s.groups.iter().flat_map(|g| &g.items))
             .filter_map(|item| match item {
@@ -258,6 +261,20 @@ impl Page {
             .iter()
             .map(|r| record(study_dir, r))
             .collect::<Result<Vec<_>, _>>()?;
+        for v in &mut verdicts {
+            // Verdicts are shown as the stage's only when its lineage
+            // record still describes the file.
+            match lineage.iter().find(|r| r.output == v.source) {
+                Some(r) if r.intact => {}
+                Some(r) => v.caption.push_str(&format!(
+                    " — EDITED: {} (these are not the stage's verdicts)",
+                    r.state
+                )),
+                None => v
+                    .caption
+                    .push_str(" — no lineage record: not shown to be the stage's verdicts"),
+            }
+        }
         let (runs, warnings) = runs(store, &lineage, out_dir)?;
         Ok(Page {
             title,
@@ -340,6 +357,23 @@ fn anchor(text: &str) -> String {
 /// How the page shows `file`: CSV as a table, SVG inline, Markdown and JSON
 /// as text; any other file is left out.
 fn item(file: &Path, caption: String, figure_id: String) -> Result<Option<Item>, PageError> {
+    match shown(file, caption.clone(), figure_id) {
+        // A file the page cannot read as its kind (not UTF-8, a broken
+        // CSV) is marked and shown as far as it goes, never the end of the
+        // page.
+        Err(PageError::Unreadable { message, .. }) => Ok(Some(Item::Text(Text {
+            caption: format!("{caption} — UNREADABLE: {message}"),
+            text: std::fs::read(file)
+                .map(|b| String::from_utf8_lossy(&b).into_owned())
+                .unwrap_or_default(),
+            open: false,
+        }))),
+        other => other,
+    }
+}
+
+/// [`item`] of a readable file.
+fn shown(file: &Path, caption: String, figure_id: String) -> Result<Option<Item>, PageError> {
     let extension = file
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
@@ -528,6 +562,7 @@ fn verdict_table(table: &Table) -> VerdictTable {
         })
         .collect();
     VerdictTable {
+        source: table.caption.clone(),
         caption: format!("Verdicts of {}", table.caption),
         rows,
     }
