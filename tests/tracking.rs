@@ -506,6 +506,20 @@ fn diff_of_two_studies_differing_in_one_factor_range() {
         let csv = format!("term,coefficient\nintercept,40\nA,{b_a}\nB,-1\n");
         std::fs::write(sub.join("coefficients.csv"), csv).unwrap();
     }
+    // Issue 54 (low): a JSON output that differs only in its measured times
+    // (two runs of one study) is listed apart; one that differs elsewhere
+    // too is a difference.
+    for (dir, wall, sd) in [(&a, 1.25, 0.5), (&b, 1.5, 0.5)] {
+        let noise = dir.join("noise");
+        std::fs::create_dir_all(&noise).unwrap();
+        let record = json!({"sd_deg": sd, "wall_s_per_run": wall,
+            "precision_per_cost_deg2_s": wall * sd * sd});
+        std::fs::write(noise.join("noise.json"), record.to_string()).unwrap();
+        let cost = json!({"fine_runs": 3, "fine_cpu_s": wall, "coarse_cpu_s": 2.0 * wall});
+        std::fs::write(noise.join("cost.json"), cost.to_string()).unwrap();
+        let other = json!({"sd_deg": sd + wall, "wall_s_per_run": wall});
+        std::fs::write(noise.join("other.json"), other.to_string()).unwrap();
+    }
     let out = repose(
         tmp.path(),
         &["diff", a.to_str().unwrap(), b.to_str().unwrap(), "--json"],
@@ -517,7 +531,14 @@ fn diff_of_two_studies_differing_in_one_factor_range() {
         d["spec"],
         json!([{"field": "factors.A.max", "a": 0.6, "b": 0.7}])
     );
-    let rsm = &d["stages"][0];
+    let noise = &d["stages"][0];
+    assert_eq!(noise["stage"], json!("noise"));
+    assert_eq!(noise["differ"], json!(["other.json"]));
+    assert_eq!(
+        noise["differ_in_times_only"],
+        json!(["cost.json", "noise.json"])
+    );
+    let rsm = &d["stages"][1];
     assert_eq!(rsm["stage"], json!("rsm"));
     assert_eq!(
         rsm["differ"],
@@ -552,7 +573,8 @@ fn diff_of_two_studies_differing_in_one_factor_range() {
     let out = repose(tmp.path(), &["diff", &id(&a), &id(&b)]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     assert!(
-        stdout(&out).contains("factors.A.max: 0.6 → 0.7"),
+        stdout(&out).contains("factors.A.max: 0.6 → 0.7")
+            && stdout(&out).contains("  differs in measured times only: noise.json\n"),
         "{}",
         stdout(&out)
     );

@@ -57,6 +57,20 @@ impl StudyDocument for DesignStudy {
     }
 }
 
+/// The fields of a study's JSON outputs that hold measured times (wall or
+/// CPU seconds, or a cost derived from them): `noise/noise.json`,
+/// `fine/cost.json` and `outcome.json` carry them, so two runs of one study
+/// differ there and nowhere else. `repose diff` compares those files without
+/// these fields; the Markdown reports that print them (`noise/noise.md`,
+/// the learning curve's) are named in the README.
+pub const MEASURED_TIME_FIELDS: [&str; 5] = [
+    "wall_s_per_run",
+    "precision_per_cost_deg2_s",
+    "coarse_cpu_s",
+    "fine_cpu_s",
+    "design_at_fine_size_cpu_s",
+];
+
 /// A stage's name: its directory under the study's.
 pub trait StageName {
     /// The directory name (`sample`, `rsm`, …).

@@ -8,6 +8,9 @@
 //! - Files: every file of each stage directory, compared byte for byte;
 //!   lineage records (`*.lineage.json`) are left out, as they name the study
 //!   id and so differ whenever the studies do (their outputs are compared).
+//!   A JSON file that differs only in its measured times
+//!   ([`MEASURED_TIME_FIELDS`]: two runs of one study measure different
+//!   seconds) is listed apart, as differing in measured times only.
 //! - Runs: the run ids the stage's CSV tables name
 //!   ([`super::study_files::run_ids`]), shared and one-sided.
 //! - Rows: in the tables that say what a stage found ([`ROW_TABLES`]: design
@@ -30,6 +33,7 @@ use super::TrackingError;
 use crate::manifest::ContentId;
 use crate::report::table::Table;
 use crate::store::StoreError;
+use crate::study::dir::MEASURED_TIME_FIELDS;
 
 /// The tables whose rows are compared, with how many leading columns key a
 /// row.
@@ -71,6 +75,10 @@ pub struct StageDiff {
     pub only_b: Vec<String>,
     /// Files both have, with different bytes.
     pub differ: Vec<String>,
+    /// JSON files both have that differ only in their measured times
+    /// ([`crate::study::dir::MEASURED_TIME_FIELDS`]), not listed in
+    /// `differ`.
+    pub differ_in_times_only: Vec<String>,
     /// Run ids both stages' tables name.
     pub shared_runs: Vec<ContentId>,
     /// How many run ids only A's tables name.
@@ -163,12 +171,16 @@ fn stage_diff(
     let (set_a, set_b): (BTreeSet<&PathBuf>, BTreeSet<&PathBuf>) =
         (files[0].iter().collect(), files[1].iter().collect());
     let name = |p: &&PathBuf| p.display().to_string();
-    let mut differ = Vec::new();
+    let (mut differ, mut times_only) = (Vec::new(), Vec::new());
     let mut tables = Vec::new();
     for f in set_a.intersection(&set_b) {
         let read = |d: &Path| std::fs::read(d.join(f)).map_err(StoreError::io(&d.join(f)));
         let (bytes_a, bytes_b) = (read(&da)?, read(&db)?);
         if bytes_a == bytes_b {
+            continue;
+        }
+        if equal_but_for_times(&bytes_a, &bytes_b) {
+            times_only.push(name(f));
             continue;
         }
         differ.push(name(f));
@@ -190,11 +202,37 @@ fn stage_diff(
         only_a: set_a.difference(&set_b).map(name).collect(),
         only_b: set_b.difference(&set_a).map(name).collect(),
         differ,
+        differ_in_times_only: times_only,
         shared_runs: ra.intersection(&rb).cloned().collect(),
         runs_only_a: ra.difference(&rb).count(),
         runs_only_b: rb.difference(&ra).count(),
         tables,
     })
+}
+
+/// Whether two JSON documents are equal once every measured-time field
+/// ([`MEASURED_TIME_FIELDS`], at any depth) is removed; false for anything
+/// that is not JSON.
+fn equal_but_for_times(a: &[u8], b: &[u8]) -> bool {
+    fn strip(v: &mut serde_json::Value) {
+        match v {
+            serde_json::Value::Object(map) => {
+                map.retain(|k, _| !MEASURED_TIME_FIELDS.contains(&k.as_str()));
+                map.values_mut().for_each(strip);
+            }
+            serde_json::Value::Array(items) => items.iter_mut().for_each(strip),
+            _ => {}
+        }
+    }
+    let parse = |bytes: &[u8]| serde_json::from_slice::<serde_json::Value>(bytes).ok();
+    match (parse(a), parse(b)) {
+        (Some(mut x), Some(mut y)) => {
+            strip(&mut x);
+            strip(&mut y);
+            x == y
+        }
+        _ => false,
+    }
 }
 
 /// The rows of `a` and `b` matched by their first `key` columns (module
@@ -274,6 +312,7 @@ impl StageDiff {
             ("only in A", &self.only_a),
             ("only in B", &self.only_b),
             ("differs", &self.differ),
+            ("differs in measured times only", &self.differ_in_times_only),
         ] {
             for f in list {
                 out.push_str(&format!("  {label}: {f}\n"));
