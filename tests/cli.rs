@@ -294,11 +294,13 @@ fn responses_lists_every_scene_or_one_and_refuses_an_unknown_one() {
 }
 
 /// Issue 40, low item: `--poll-seconds 1e300` panicked converting to a
-/// `Duration`; it is refused (exit 2) naming the option and its bound.
+/// `Duration`; it is refused (exit 2) naming the option and its bounds.
+/// Issue 54, low: 1e-12 was reported as `= 0`, and 1e300 printed with 300
+/// digits; each is shown as given.
 #[test]
-fn a_poll_interval_past_a_day_is_refused() {
+fn a_poll_interval_past_a_day_or_below_a_millisecond_is_refused() {
     let tmp = tempfile::tempdir().unwrap();
-    for value in ["1e300", "86401", "0", "NaN"] {
+    for value in ["1e300", "86401", "0", "NaN", "1e-12"] {
         let out = repose(
             tmp.path(),
             &[
@@ -312,10 +314,12 @@ fn a_poll_interval_past_a_day_is_refused() {
         );
         assert_eq!(out.status.code(), Some(2), "{value}: {}", stderr(&out));
         let err = stderr(&out);
+        let shown = value.parse::<f64>().unwrap();
         assert!(
-            err.contains("--poll-seconds") && err.contains("at most 86400"),
+            err.contains(&format!("--poll-seconds = {shown:?}: must lie in [0.001, 86400]")),
             "{err}"
         );
+        assert!(err.len() < 300, "{err}");
     }
 }
 
