@@ -144,13 +144,18 @@ impl StudyFile {
                 } else {
                     ("--adaptive".to_string(), "(given)".to_string())
                 };
+                let own = StudySpec::of(self, analysis, false);
+                let names: Vec<&str> = own.stages.iter().map(Stage::name).collect();
                 return Err(ManifestError::Invalid(ValidationErrors(vec![FieldError {
                     path,
                     value,
-                    rule: "asks for the adaptive rounds, which a two-level study \
-                           (noise_aware.fidelity) does not run: its fine stage chooses the \
-                           fine points by the two-level model instead"
-                        .into(),
+                    rule: format!(
+                        "asks for the adaptive rounds, which a two-level study \
+                         (noise_aware.fidelity) does not run: its fine stage chooses the fine \
+                         points by the two-level model instead; the stages the study's blocks \
+                         give: [{}]",
+                        names.join(", ")
+                    ),
                 }])));
             }
         }
