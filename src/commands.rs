@@ -27,6 +27,7 @@ use crate::store::{
 use crate::study::analyses::holdout;
 use crate::study::analyses::learning_curve;
 use crate::study::dir::StudyDir;
+use crate::study::plan::calibration::SearchSettings;
 use crate::study::plan::design_study::{is_design_study, DesignStudy};
 use crate::study::plan::{
     default_candidates, names_adaptive, Analysis, Method, StudyFile, StudySpec,
@@ -34,7 +35,6 @@ use crate::study::plan::{
 use crate::study::run::{CalibrationSettings, Env, Plan, StageOutcome, Upto};
 use crate::study::stages::design::{diagnose_table, SampleSettings};
 use crate::study::stages::fit_network::{train_table, TableSpec, TrainOptions};
-use crate::study::stages::search_tolerance::SearchSettings;
 use crate::study::sweeps::convergence;
 use crate::study::sweeps::pilot::{self, PilotSpec};
 use crate::study::sweeps::tradeoff as tradeoff_sweep;

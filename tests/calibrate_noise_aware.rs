@@ -16,6 +16,7 @@ use repose::study::dir::Stage;
 use repose::study::dir::StudyDir;
 use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome};
 use repose::study::plan::calibration::acceptance;
+use repose::study::plan::calibration::SearchSettings;
 use repose::study::plan::calibration::{ADAPTIVE_INDEX, NOISE_INDEX, ROUND_STRIDE, VERIFY_INDEX};
 use repose::study::run::CalibrationSettings;
 use repose::study::runs::replicated::read_replicates_csv;
@@ -23,7 +24,6 @@ use repose::study::stages::adaptive::Stop;
 use repose::study::stages::design::SampleSettings;
 use repose::study::stages::fit_network::TrainOptions;
 use repose::study::stages::noise::noise;
-use repose::study::stages::search_tolerance::SearchSettings;
 use repose::surrogate::ga_bp::DEFAULT_TRAIN_FRACTION;
 use serde_json::{json, Value};
 

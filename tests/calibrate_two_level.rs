@@ -17,12 +17,13 @@ use repose::study::acceptance::Verdict;
 use repose::study::analyses::holdout::{holdout, read_pilot};
 use repose::study::dir::StudyDir;
 use repose::study::pipeline::{calibrate_noise_aware, CalibrationOutcome};
+use repose::study::plan::calibration::SearchSettings;
 use repose::study::plan::{Stage, StudySpec};
 use repose::study::run::CalibrationSettings;
 use repose::study::stages::design::SampleSettings;
-use repose::study::stages::fine::{fine, load_two_level, Choice, SPACE_FILLING_POINTS};
+use repose::study::stages::fine::{load_two_level, Choice, SPACE_FILLING_POINTS};
+use repose::study::stages::fit_gp::read_gp;
 use repose::study::stages::fit_network::TrainOptions;
-use repose::study::stages::search_tolerance::SearchSettings;
 use repose::study::sweeps::pilot::{Pilot, PilotPoint};
 use serde_json::{json, Value};
 
@@ -228,7 +229,7 @@ fn a_two_level_calibration_verifies_at_the_fine_size_and_reproduces() {
     let store = Store::open(&root).unwrap();
     let pilot = pilot_of(&study);
     let h = holdout(&dir, &study, &store, &pilot, &study).unwrap();
-    let model = load_two_level(&dir).unwrap();
+    let model = load_two_level(&dir, read_gp(&dir).unwrap().process().unwrap()).unwrap();
     assert_eq!(h.model, "two_level");
     assert_eq!(h.points.len(), pilot.points.len());
     let mut ss = 0.0;
@@ -368,23 +369,17 @@ fn the_fine_stage_says_what_is_wrong() {
         assert!(err.contains(field), "{field} not named in: {err}");
     }
 
-    // The stage before train: it names the stage to run first.
+    // The stage before train: it names the stage to run first (the driver
+    // reads the fit stage's model before the fine stage starts).
     let (study, path) = study(tmp.path(), fidelity());
-    let store = Store::open(tmp.path()).unwrap();
-    let dir = StudyDir::new(tmp.path(), &study, &path);
-    let err = fine(
-        &dir,
-        &study,
-        &store,
-        &common::executor(1),
-        &fake,
-        &mut |_| {},
-    )
-    .unwrap_err()
-    .to_string();
+    let out = common::repose(&tmp.path().join("store"), &["fine", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", common::stderr(&out));
+    let err = common::stderr(&out);
     assert!(err.contains("repose train"), "{err}");
 
     // --adaptive is refused in a two-level study.
+    let store = Store::open(tmp.path()).unwrap();
+    let dir = StudyDir::new(tmp.path(), &study, &path);
     let options = CalibrationSettings {
         candidates: 1,
         adaptive: true,

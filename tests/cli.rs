@@ -316,7 +316,9 @@ fn a_poll_interval_past_a_day_or_below_a_millisecond_is_refused() {
         let err = stderr(&out);
         let shown = value.parse::<f64>().unwrap();
         assert!(
-            err.contains(&format!("--poll-seconds = {shown:?}: must lie in [0.001, 86400]")),
+            err.contains(&format!(
+                "--poll-seconds = {shown:?}: must lie in [0.001, 86400]"
+            )),
             "{err}"
         );
         assert!(err.len() < 300, "{err}");

@@ -313,7 +313,7 @@ fn a_full_factorial_study_runs_its_levels_in_standard_order_in_coded_units() {
     );
     let study = parse(v);
     study.validate().unwrap();
-    let coded = repose::study::stages::rsm::coded_design(&study).unwrap();
+    let coded = repose::study::plan::design_study::coded_design(&study).unwrap();
     assert_eq!(coded.len(), 2 * 3 * 2 * 2);
     // The first factor changes fastest.
     assert_eq!(coded[0], vec![-1.0, -1.0, -1.0, -1.0]);
@@ -326,7 +326,7 @@ fn a_full_factorial_study_runs_its_levels_in_standard_order_in_coded_units() {
 #[test]
 fn the_box_behnken_study_has_29_points_with_centres_last() {
     let study = parse(common::example("cai2024-quick/study.json"));
-    let coded = repose::study::stages::rsm::coded_design(&study).unwrap();
+    let coded = repose::study::plan::design_study::coded_design(&study).unwrap();
     assert_eq!(coded.len(), 29);
     assert!(coded[24..].iter().all(|r| r.iter().all(|x| *x == 0.0)));
 }

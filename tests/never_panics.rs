@@ -74,7 +74,7 @@ fn exercise(text: &str) {
     if let Ok(s) = serde_json::from_str::<repose::study::plan::design_study::DesignStudy>(text) {
         let _ = s.id();
         if s.validate().is_ok() {
-            let _ = repose::study::stages::rsm::coded_design(&s);
+            let _ = repose::study::plan::design_study::coded_design(&s);
         }
     }
 }

@@ -354,6 +354,32 @@ fn solve_normal(
     Ok((inverse * rhs, inverse))
 }
 
+/// The surrogate a calibration's search and verification answer to: the
+/// fine level of a two-level process, or a one-level GP.
+#[derive(Debug, Clone)]
+pub enum Predictor {
+    /// A two-level study's fine level.
+    TwoLevel(Box<TwoLevelGp>),
+    /// A one-level study's GP.
+    OneLevel(GaussianProcess),
+}
+
+impl Predictor {
+    /// The predictive mean and latent sd at `x` in the unit cube (the
+    /// response's units).
+    pub fn predict(&self, x: &[f64]) -> GpPrediction {
+        match self {
+            Predictor::TwoLevel(m) => m.predict(x),
+            Predictor::OneLevel(gp) => gp.predict(x),
+        }
+    }
+
+    /// Whether it is a two-level process's fine level.
+    pub fn is_two_level(&self) -> bool {
+        matches!(self, Predictor::TwoLevel(_))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -40,26 +40,26 @@ use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::store::{RunDir, RunResult, Store};
 use crate::study::dir::StudyDir;
-use crate::study::plan::calibration::noise_aware;
+use crate::study::plan::calibration::{noise_aware, SearchSettings};
 use crate::study::plan::design_study::DesignStudy;
 use crate::study::plan::{Analysis, Method, Stage, StudySpec};
 use crate::study::runs::replicated::{check_limits, check_response};
 use crate::study::stages::adaptive::{adaptive, AdaptiveOutcome};
 use crate::study::stages::design::{sample, SampleOutcome, SampleSettings};
-use crate::study::stages::fine::{fine, FineOutcome};
-use crate::study::stages::fit_gp::{train_gp, GpOutcome};
+use crate::study::stages::fine::{fine, predictor, FineOutcome};
+use crate::study::stages::fit_gp::{fit_model, read_gp, train_gp, GpOutcome};
 use crate::study::stages::fit_network::{train_study, TrainOptions, TrainOutcome};
 use crate::study::stages::noise::{noise, NoiseOutcome};
 use crate::study::stages::rsm::{rsm, RsmOutcome};
 use crate::study::stages::screen::{screen, Screen};
 use crate::study::stages::search_probability::{gp_search, GpSearchOutcome};
 use crate::study::stages::search_tolerance::{
-    load_model, search as tolerance_search, SearchOutcome, SearchSettings,
+    load_model, search as tolerance_search, SearchOutcome,
 };
 use crate::study::stages::sensitivity::{sensitivity, Levels, SensitivityOutcome};
 use crate::study::stages::simulate::{batch, BatchOutcome};
 use crate::study::stages::verify_candidates::{verify as verify_candidates, VerifyOutcome};
-use crate::study::stages::verify_optimum::{verify as verify_optimum, Verification};
+use crate::study::stages::verify_optimum::{verify as verify_optimum, Surface, Verification};
 use crate::study::StudyError;
 
 /// Every stage's settings in a he2019 calibration, from the study and the
@@ -405,6 +405,7 @@ where
                 pool,
                 train.settings.seed,
                 settings.candidates,
+                &|| fit_model(dir, study, train.settings.seed)?.process(),
                 runner,
                 &mut |m| log(m),
             )?;
@@ -414,10 +415,22 @@ where
             }
         }
         Stage::Fine { .. } => {
-            StageOutcome::Fine(fine(dir, study, store, pool, runner, &mut |m| log(m))?)
+            let coarse = read_gp(dir)?.process()?;
+            StageOutcome::Fine(fine(dir, study, &coarse, store, pool, runner, &mut |m| {
+                log(m)
+            })?)
         }
         Stage::Search { .. } if noise_aware => {
-            StageOutcome::ProbabilitySearch(gp_search(dir, study, &settings.search)?)
+            // Read here, so the search imports neither stage: the fit
+            // stage's model (its screening) and the predictor over it.
+            let model = read_gp(dir)?;
+            let predictor = predictor(dir, study, model.process()?)?;
+            StageOutcome::ProbabilitySearch(gp_search(
+                dir,
+                study,
+                (&predictor, &model.screening),
+                &settings.search,
+            )?)
         }
         Stage::Search { .. } => {
             StageOutcome::ToleranceSearch(tolerance_search(dir, study, &settings.search)?)
@@ -477,8 +490,14 @@ where
                 return Ok(None);
             };
             log("verification runs");
+            let predict = |response: &str, coded: &[f64]| surface.predict(response, coded);
+            let fitted = Surface {
+                responses: surface.responses(),
+                predict: &predict,
+                optimum: surface.optimum_actual.as_deref(),
+            };
             Some(StageOutcome::VerifyOptimum(verify_optimum(
-                dir, study, surface, store, pool, runner,
+                dir, study, &fitted, store, pool, runner,
             )?))
         }
         other => {

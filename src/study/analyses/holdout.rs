@@ -36,7 +36,8 @@ use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
 use crate::study::plan::calibration::{parameter_names, to_unit};
 use crate::study::runs::replicated::read_replicates_csv;
-use crate::study::stages::fine::FinePredictor;
+use crate::study::stages::fine::predictor;
+use crate::study::stages::fit_gp::read_gp;
 use crate::study::sweeps::pilot::Pilot;
 use crate::study::StudyError;
 
@@ -150,7 +151,7 @@ pub fn holdout(
         )));
     }
     check_ranges(study, pilot_study, own * own)?;
-    let model = FinePredictor::of(dir, study)?;
+    let model = predictor(dir, study, read_gp(dir)?.process()?)?;
     let mut points = Vec::new();
     for p in &pilot.points {
         let Some(s) = mean_ci(&p.fine) else {

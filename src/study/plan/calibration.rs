@@ -91,8 +91,12 @@
 
 use std::path::Path;
 
+use serde::{Deserialize, Serialize};
+
+use crate::doe::lhs::Placement;
 use crate::manifest::NoiseAware;
 use crate::manifest::Study;
+use crate::search::meanshift::Kernel;
 use crate::store::{write_atomic, StoreError};
 use crate::study::acceptance::{comparison_alpha, AcceptedTarget, Record};
 use crate::study::StudyError;
@@ -255,3 +259,50 @@ pub const ROUND_STRIDE: u64 = 1000;
 /// in a noise-aware study are drawn apart from the design's (whose indices
 /// start at 0), the noise floor's and the adaptive points'.
 pub const VERIFY_INDEX: u64 = 3_000_000_000;
+
+/// Options of the search stage.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SearchSettings {
+    /// Resampled points (he2019: 300).
+    pub samples: usize,
+    /// Seed of the resampling stream.
+    pub seed: u64,
+    /// Where a resampled point sits in its stratum.
+    pub placement: Placement,
+    /// Mean-shift kernel.
+    pub kernel: Kernel,
+    /// Bandwidth in unit-scaled parameters; `None` to estimate it.
+    pub bandwidth: Option<f64>,
+    /// Quantile of the bandwidth estimate (used when `bandwidth` is `None`).
+    pub quantile: f64,
+}
+
+impl SearchSettings {
+    /// he2019's 300 points, random placement within strata (Eq. 4), the flat
+    /// kernel, bandwidth estimated with quantile 0.3.
+    pub fn with_seed(seed: u64) -> SearchSettings {
+        SearchSettings {
+            samples: 300,
+            seed,
+            placement: Placement::Random,
+            kernel: Kernel::Flat,
+            bandwidth: None,
+            quantile: 0.3,
+        }
+    }
+
+    pub(crate) fn check(&self) -> Result<(), StudyError> {
+        let fail = |m: String| Err(StudyError::Settings(m));
+        if self.samples < 1 {
+            return fail("--samples = 0: must be >= 1".to_string());
+        }
+        if !(self.quantile > 0.0 && self.quantile <= 1.0) {
+            return fail(format!("--quantile = {}: must be in (0, 1]", self.quantile));
+        }
+        if let Some(h) = self.bandwidth.filter(|h| !(h.is_finite() && *h > 0.0)) {
+            return fail(format!("--bandwidth = {h}: must be a finite number > 0"));
+        }
+        Ok(())
+    }
+}

@@ -31,6 +31,9 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+use crate::doe::box_behnken::box_behnken;
+use crate::doe::factorial::full_factorial;
+use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::manifest::validate::{check_path_component, number, string};
 use crate::manifest::{
     validate_experiment, AtRest, CoarseGraining, Contact, ContentId, Experiment, ExperimentDoc,
@@ -41,6 +44,8 @@ use crate::scenes::responses::catalogue;
 #[cfg(doc)]
 use crate::streams::SeedRule;
 pub use crate::streams::SeedStage;
+use crate::streams::{rng, Stream};
+use crate::study::StudyError;
 
 /// A design study (see the module docs).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -789,4 +794,56 @@ pub fn is_design_study(text: &str) -> bool {
     serde_json::from_str::<Value>(text)
         .map(|v| v.get("factors").is_some_and(Value::is_object))
         .unwrap_or(false)
+}
+
+/// The design's points in coded units, in run order.
+pub fn coded_design(study: &DesignStudy) -> Result<Vec<Vec<f64>>, StudyError> {
+    let ranges = study.ranges();
+    Ok(match &study.design {
+        DesignSpec::BoxBehnken { centre_points } => {
+            box_behnken(study.factors.len(), *centre_points as usize)?
+        }
+        DesignSpec::FullFactorial { levels } => {
+            let lists: Vec<Vec<f64>> = study.factors.keys().map(|f| levels[f].clone()).collect();
+            full_factorial(&lists)?
+                .iter()
+                .map(|row| {
+                    row.iter()
+                        .zip(&ranges)
+                        .map(|(x, r)| r.to_coded(*x))
+                        .collect()
+                })
+                .collect()
+        }
+        DesignSpec::Lhs { points } => latin_hypercube(
+            *points as usize,
+            study.factors.len(),
+            Placement::Random,
+            &mut rng(study.seed, Stream::Design, 0),
+        )
+        .into_iter()
+        .map(|u| u.into_iter().map(|v| 2.0 * v - 1.0).collect())
+        .collect(),
+    })
+}
+
+/// The design's points in actual units, in run order: a full factorial's
+/// levels exactly as the study writes them (so every experiment carries the
+/// study's numbers, not a coded round trip of them), a Box–Behnken design
+/// decoded from the factor ranges.
+pub fn actual_design(study: &DesignStudy) -> Result<Vec<Vec<f64>>, StudyError> {
+    if let DesignSpec::FullFactorial { levels } = &study.design {
+        let lists: Vec<Vec<f64>> = study.factors.keys().map(|f| levels[f].clone()).collect();
+        return Ok(full_factorial(&lists)?);
+    }
+    let ranges = study.ranges();
+    Ok(coded_design(study)?
+        .iter()
+        .map(|c| {
+            c.iter()
+                .zip(&ranges)
+                .map(|(x, r)| r.to_actual(*x))
+                .collect()
+        })
+        .collect())
 }

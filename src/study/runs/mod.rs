@@ -285,3 +285,22 @@ pub fn incomplete_note(incomplete: usize) -> String {
         )
     }
 }
+
+/// The runs' points of a design given in actual units: point `i` is the
+/// design's row `i` (its `sample_index`), setting every factor's address.
+pub fn design_points(study: &DesignStudy, actual: &[Vec<f64>]) -> Vec<Point> {
+    actual
+        .iter()
+        .enumerate()
+        .map(|(i, row)| Point {
+            index: i as u64,
+            values: study
+                .factors
+                .values()
+                .zip(row)
+                .map(|(f, v)| (f.address.clone(), *v))
+                .collect(),
+            shown: row.clone(),
+        })
+        .collect()
+}

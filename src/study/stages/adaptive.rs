@@ -3,8 +3,8 @@
 //! acceptance rule in the calibration scene, or the run budget is spent
 //! (`noise_aware.adaptive` of the study).
 //!
-//! Each round: the GP is refitted to every point simulated so far
-//! ([`crate::study::stages::fit_gp::fit_model`]); a pool of [`POOL`] Latin-hypercube
+//! Each round: the GP is refitted to every point simulated so far (the fit
+//! stage's model, supplied by the driver as `refit`); a pool of [`POOL`] Latin-hypercube
 //! points (the adaptive stream, one sub-stream per round) is scored by the
 //! probability that its angle lies in the band. The best point is the
 //! round's **candidate** and runs the calibration scene's pre-registered
@@ -42,6 +42,7 @@ use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::exec::Executor;
 use crate::manifest::{Experiment, Study};
 use crate::search::acquisition::probability_in_band;
+use crate::stats::gp::GaussianProcess;
 use crate::store::{RunDir, RunResult, Store};
 use crate::streams::{rng, Stream};
 use crate::study::acceptance::RULE;
@@ -56,7 +57,6 @@ use crate::study::records::{passing, read_noise, Hit};
 use crate::study::runs::replicated::{
     read_replicates_csv, replicates_csv, run_replicated, Replicated,
 };
-use crate::study::stages::fit_gp::fit_model;
 use crate::study::StudyError;
 
 /// Points scored per round.
@@ -88,7 +88,9 @@ pub struct AdaptiveOutcome {
 }
 
 /// Runs the adaptive rounds (see the module docs), seeded by `seed`, for a
-/// calibration that will verify `candidates` search candidates beside them.
+/// calibration that will verify `candidates` search candidates beside them;
+/// `refit` fits the GP to every row simulated so far (the fit stage's model,
+/// which the driver supplies), before each round.
 #[allow(clippy::too_many_arguments)]
 pub fn adaptive<E, F>(
     dir: &StudyDir,
@@ -97,6 +99,7 @@ pub fn adaptive<E, F>(
     pool: &Executor,
     seed: u64,
     candidates: usize,
+    refit: &dyn Fn() -> Result<GaussianProcess, StudyError>,
     runner: F,
     progress: &mut dyn FnMut(&str),
 ) -> Result<AdaptiveOutcome, StudyError>
@@ -150,7 +153,7 @@ where
                 hit: None,
             });
         }
-        let gp = fit_model(dir, study, seed)?.process()?;
+        let gp = refit()?;
         let pool_points = latin_hypercube(
             POOL,
             names.len(),

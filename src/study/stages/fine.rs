@@ -61,8 +61,8 @@ use crate::exec::Executor;
 use crate::manifest::ContentId;
 use crate::manifest::{Experiment, Fidelity, Study};
 use crate::report::markdown::{Align, MarkdownTable};
-use crate::stats::gp::{GaussianProcess, GpHyper, GpPrediction, GpSettings};
-use crate::stats::gp_two_level::{LevelData, TwoLevelFit, TwoLevelGp};
+use crate::stats::gp::{GaussianProcess, GpHyper, GpSettings};
+use crate::stats::gp_two_level::{LevelData, Predictor, TwoLevelFit, TwoLevelGp};
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store};
 use crate::study::dir::Stage;
@@ -71,7 +71,6 @@ use crate::study::plan::calibration::{parameter_names, to_unit};
 use crate::study::runs::replicated::{
     pooled_variance, read_replicates_csv, replicates_csv, run_replicated_at, Replicated,
 };
-use crate::study::stages::fit_gp::read_gp;
 use crate::study::StudyError;
 
 /// Points chosen by space filling before the model chooses.
@@ -179,10 +178,10 @@ pub fn fidelity(study: &Study) -> Result<Fidelity, StudyError> {
     })
 }
 
-/// The two-level process the fine stage fitted, rebuilt from `gp.json` (the
-/// coarse level) and `two_level.json` (δ and the fine data).
-pub fn load_two_level(dir: &StudyDir) -> Result<TwoLevelGp, StudyError> {
-    let coarse = read_gp(dir)?.process()?;
+/// The two-level process the fine stage fitted, rebuilt from `coarse` (the
+/// trained GP of `train/gp.json`, which the caller reads) and
+/// `two_level.json` (δ and the fine data).
+pub fn load_two_level(dir: &StudyDir, coarse: GaussianProcess) -> Result<TwoLevelGp, StudyError> {
     let path = dir.require(dir.two_level_path(), Stage::Fine)?;
     let record: TwoLevelRecord = Store::read_json(&path).map_err(|e| StudyError::Inconsistent {
         path: path.clone(),
@@ -211,38 +210,18 @@ pub fn load_two_level(dir: &StudyDir) -> Result<TwoLevelGp, StudyError> {
 }
 
 /// The surrogate a study's search and verification answer to: the
-/// two-level process's fine level in a two-level study, the trained GP
-/// otherwise.
-#[derive(Debug, Clone)]
-pub enum FinePredictor {
-    /// A two-level study's fine level.
-    TwoLevel(Box<TwoLevelGp>),
-    /// A one-level study's GP.
-    OneLevel(GaussianProcess),
-}
-
-impl FinePredictor {
-    /// The study's predictor, read from its train (and fine) stage.
-    pub fn of(dir: &StudyDir, study: &Study) -> Result<FinePredictor, StudyError> {
-        Ok(if study.fidelity().is_some() {
-            FinePredictor::TwoLevel(Box::new(load_two_level(dir)?))
-        } else {
-            FinePredictor::OneLevel(read_gp(dir)?.process()?)
-        })
-    }
-
-    /// The predictive mean and latent sd at `x` in the unit cube (degrees).
-    pub fn predict(&self, x: &[f64]) -> GpPrediction {
-        match self {
-            FinePredictor::TwoLevel(m) => m.predict(x),
-            FinePredictor::OneLevel(gp) => gp.predict(x),
-        }
-    }
-
-    /// Whether it is a two-level study's.
-    pub fn is_two_level(&self) -> bool {
-        matches!(self, FinePredictor::TwoLevel(_))
-    }
+/// two-level process's fine level in a two-level study (read from the fine
+/// stage's record over `coarse`), the trained GP `coarse` otherwise.
+pub fn predictor(
+    dir: &StudyDir,
+    study: &Study,
+    coarse: GaussianProcess,
+) -> Result<Predictor, StudyError> {
+    Ok(if study.fidelity().is_some() {
+        Predictor::TwoLevel(Box::new(load_two_level(dir, coarse)?))
+    } else {
+        Predictor::OneLevel(coarse)
+    })
 }
 
 /// The fine points with a mean, as the fine level's data.
@@ -314,10 +293,12 @@ fn largest_sd(model: &TwoLevelGp, unit: &[Vec<f64>], chosen: &[usize]) -> Option
     best
 }
 
-/// Runs the fine stage (module docs); `log` gets one line per round.
+/// Runs the fine stage (module docs) over `coarse`, the trained GP of the
+/// fit stage (the driver reads it); `log` gets one line per round.
 pub fn fine<E, F>(
     dir: &StudyDir,
     study: &Study,
+    coarse: &GaussianProcess,
     store: &Store,
     pool: &Executor,
     runner: &F,
@@ -328,8 +309,6 @@ where
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
     let spec = fidelity(study)?;
-    let model = read_gp(dir)?;
-    let coarse = model.process()?;
     let design_file = dir.require(dir.replicates_path(), Stage::Batch)?;
     let design: Vec<Replicated> = read_replicates_csv(&design_file, study)?;
     let unit: Vec<Vec<f64>> = design.iter().map(|r| to_unit(study, &r.point)).collect();
@@ -352,7 +331,7 @@ where
                 round.push((i, Choice::SpaceFilling, None));
             }
         } else {
-            match fit_on(&coarse, &points, seed) {
+            match fit_on(coarse, &points, seed) {
                 Ok(m) => {
                     if let Some((i, sd)) = largest_sd(&m, &unit, &chosen) {
                         round.push((i, Choice::FineSd, Some(sd)));
@@ -415,7 +394,7 @@ where
         }
         pool_noise(&mut points, &runs);
     }
-    let fitted = fit_on(&coarse, &points, seed).map_err(|why| {
+    let fitted = fit_on(coarse, &points, seed).map_err(|why| {
         StudyError::Settings(format!(
             "the two-level process could not be fitted to the {} fine points: {why}",
             points.len()

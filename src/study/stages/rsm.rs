@@ -19,9 +19,6 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::doe::box_behnken::box_behnken;
-use crate::doe::factorial::full_factorial;
-use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::doe::Range;
 use crate::exec::Executor;
 use crate::manifest::Experiment;
@@ -30,86 +27,16 @@ use crate::report::table::{Cell, CsvWriter, Table};
 use crate::search::desirability::{maximise, Goal, Model, Search};
 use crate::stats::rsm::{fit_quadratic, AnovaRow, RsmFit};
 use crate::store::{RunDir, RunResult, Store};
-use crate::streams::{rng, Stream};
 use crate::study::dir::{json_bytes, write_output, StudyDir};
-use crate::study::plan::design_study::{DesignSpec, DesignStudy, FitChoice, SeedStage};
-use crate::study::runs::{run_points, write_table, Point, Runs};
+use crate::study::plan::design_study::{
+    actual_design, coded_design, DesignStudy, FitChoice, SeedStage,
+};
+use crate::study::runs::{design_points, run_points, write_table, Runs};
 use crate::study::stages::fit_gp_surface::{analyse_gp, GpAnalysis};
 use crate::study::StudyError;
 
 /// Starts of the desirability search.
 pub const OPTIMISER_STARTS: usize = 64;
-
-/// The design's points in coded units, in run order.
-pub fn coded_design(study: &DesignStudy) -> Result<Vec<Vec<f64>>, StudyError> {
-    let ranges = study.ranges();
-    Ok(match &study.design {
-        DesignSpec::BoxBehnken { centre_points } => {
-            box_behnken(study.factors.len(), *centre_points as usize)?
-        }
-        DesignSpec::FullFactorial { levels } => {
-            let lists: Vec<Vec<f64>> = study.factors.keys().map(|f| levels[f].clone()).collect();
-            full_factorial(&lists)?
-                .iter()
-                .map(|row| {
-                    row.iter()
-                        .zip(&ranges)
-                        .map(|(x, r)| r.to_coded(*x))
-                        .collect()
-                })
-                .collect()
-        }
-        DesignSpec::Lhs { points } => latin_hypercube(
-            *points as usize,
-            study.factors.len(),
-            Placement::Random,
-            &mut rng(study.seed, Stream::Design, 0),
-        )
-        .into_iter()
-        .map(|u| u.into_iter().map(|v| 2.0 * v - 1.0).collect())
-        .collect(),
-    })
-}
-
-/// The design's points in actual units, in run order: a full factorial's
-/// levels exactly as the study writes them (so every experiment carries the
-/// study's numbers, not a coded round trip of them), a Box–Behnken design
-/// decoded from the factor ranges.
-pub fn actual_design(study: &DesignStudy) -> Result<Vec<Vec<f64>>, StudyError> {
-    if let DesignSpec::FullFactorial { levels } = &study.design {
-        let lists: Vec<Vec<f64>> = study.factors.keys().map(|f| levels[f].clone()).collect();
-        return Ok(full_factorial(&lists)?);
-    }
-    let ranges = study.ranges();
-    Ok(coded_design(study)?
-        .iter()
-        .map(|c| {
-            c.iter()
-                .zip(&ranges)
-                .map(|(x, r)| r.to_actual(*x))
-                .collect()
-        })
-        .collect())
-}
-
-/// The runs' points of a design given in actual units: point `i` is the
-/// design's row `i` (its `sample_index`), setting every factor's address.
-pub fn design_points(study: &DesignStudy, actual: &[Vec<f64>]) -> Vec<Point> {
-    actual
-        .iter()
-        .enumerate()
-        .map(|(i, row)| Point {
-            index: i as u64,
-            values: study
-                .factors
-                .values()
-                .zip(row)
-                .map(|(f, v)| (f.address.clone(), *v))
-                .collect(),
-            shown: row.clone(),
-        })
-        .collect()
-}
 
 /// One response's analysis.
 #[derive(Debug, Clone, Serialize)]

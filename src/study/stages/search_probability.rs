@@ -45,6 +45,7 @@ use crate::report::table::{Cell, CsvWriter};
 use crate::search::acquisition::probability_in_band;
 use crate::search::band::{cluster_column, family, resample, select, Criterion, Family, Selection};
 use crate::search::screen::{fix_inactive, MainEffect};
+use crate::stats::gp_two_level::Predictor;
 use crate::study::dir::json_bytes;
 use crate::study::dir::write_output;
 use crate::study::dir::Stage;
@@ -52,9 +53,7 @@ use crate::study::dir::StudyDir;
 use crate::study::plan::calibration::noise_aware;
 use crate::study::plan::calibration::parameter_names;
 use crate::study::plan::calibration::to_physical;
-use crate::study::stages::fine::FinePredictor;
-use crate::study::stages::fit_gp::read_gp;
-use crate::study::stages::search_tolerance::SearchSettings;
+use crate::study::plan::calibration::SearchSettings;
 use crate::study::StudyError;
 use crate::surrogate::Prediction;
 
@@ -93,19 +92,18 @@ pub struct GpSearchOutcome {
     pub markdown: String,
 }
 
-/// Runs the noise-aware search (see the module docs).
+/// Runs the noise-aware search (see the module docs) on `predictor` (a
+/// two-level study's fine level, else the trained GP) with the fit stage's
+/// screening `effects` (the driver reads both from the earlier stages).
 pub fn gp_search(
     dir: &StudyDir,
     study: &Study,
+    (predictor, effects): (&Predictor, &[MainEffect]),
     settings: &SearchSettings,
 ) -> Result<GpSearchOutcome, StudyError> {
     let spec = noise_aware(study)?;
-    let model = read_gp(dir)?;
-    // A two-level study searches the fine level's prediction.
-    let predictor = FinePredictor::of(dir, study)?;
     let predict = |u: &[f64]| predictor.predict(u);
     let names = parameter_names(study);
-    let effects = &model.screening;
     let samples = settings.samples * RESAMPLE_FACTOR;
     let unit: Vec<Vec<f64>> = resample(samples, names.len(), settings.placement, settings.seed, 1)
         .iter()
@@ -268,7 +266,7 @@ pub fn gp_search(
         candidates,
         family,
         markdown,
-        screening: effects.clone(),
+        screening: effects.to_vec(),
     })
 }
 

@@ -15,72 +15,23 @@
 use std::fmt::Write;
 use std::path::PathBuf;
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use serde_json::json;
 
-use crate::doe::lhs::Placement;
 use crate::manifest::Study;
 use crate::report::markdown::MarkdownTable;
 use crate::report::svg::scatter_matrix;
 use crate::report::table::{Cell, CsvWriter};
 use crate::search::band::{cluster_column, resample, select, Criterion, Selection};
-use crate::search::meanshift::Kernel;
 use crate::study::dir::write_output;
 use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
-use crate::study::plan::calibration::parameter_names;
 use crate::study::plan::calibration::serde_name;
 use crate::study::plan::calibration::to_physical;
+use crate::study::plan::calibration::{parameter_names, SearchSettings};
 use crate::study::StudyError;
 use crate::surrogate::ga_bp::Model;
 use crate::surrogate::Prediction;
-
-/// Options of the search stage.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SearchSettings {
-    /// Resampled points (he2019: 300).
-    pub samples: usize,
-    /// Seed of the resampling stream.
-    pub seed: u64,
-    /// Where a resampled point sits in its stratum.
-    pub placement: Placement,
-    /// Mean-shift kernel.
-    pub kernel: Kernel,
-    /// Bandwidth in unit-scaled parameters; `None` to estimate it.
-    pub bandwidth: Option<f64>,
-    /// Quantile of the bandwidth estimate (used when `bandwidth` is `None`).
-    pub quantile: f64,
-}
-
-impl SearchSettings {
-    /// he2019's 300 points, random placement within strata (Eq. 4), the flat
-    /// kernel, bandwidth estimated with quantile 0.3.
-    pub fn with_seed(seed: u64) -> SearchSettings {
-        SearchSettings {
-            samples: 300,
-            seed,
-            placement: Placement::Random,
-            kernel: Kernel::Flat,
-            bandwidth: None,
-            quantile: 0.3,
-        }
-    }
-
-    fn check(&self) -> Result<(), StudyError> {
-        let fail = |m: String| Err(StudyError::Settings(m));
-        if self.samples < 1 {
-            return fail("--samples = 0: must be >= 1".to_string());
-        }
-        if !(self.quantile > 0.0 && self.quantile <= 1.0) {
-            return fail(format!("--quantile = {}: must be in (0, 1]", self.quantile));
-        }
-        if let Some(h) = self.bandwidth.filter(|h| !(h.is_finite() && *h > 0.0)) {
-            return fail(format!("--bandwidth = {h}: must be a finite number > 0"));
-        }
-        Ok(())
-    }
-}
 
 /// One cluster of kept points (a row of the Table 2 equivalent).
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -25,7 +25,6 @@ use crate::study::acceptance::{judge_at, AcceptedTarget, Judgement, Record};
 use crate::study::dir::{json_bytes, write_output, StudyDir};
 use crate::study::plan::design_study::{DesignStudy, SeedStage};
 use crate::study::runs::{run_points, write_table, Point};
-use crate::study::stages::rsm::RsmOutcome;
 use crate::study::StudyError;
 
 /// One response at one verified point.
@@ -70,12 +69,25 @@ pub struct Verification {
     pub incomplete: usize,
 }
 
-/// Verifies the optimum of `rsm` and the study's named points (see the
+/// What the verification needs of the fitted surface (the response-surface
+/// stage's outcome, which the driver hands over): the responses it models,
+/// its prediction of a response at a coded point, and its optimum in actual
+/// units, if one was found.
+pub struct Surface<'a> {
+    /// The modelled responses, in the stage's order.
+    pub responses: Vec<String>,
+    /// The prediction of `response` at a coded point.
+    pub predict: &'a dyn Fn(&str, &[f64]) -> Option<f64>,
+    /// The desirability optimum, actual units.
+    pub optimum: Option<&'a [f64]>,
+}
+
+/// Verifies the optimum of `surface` and the study's named points (see the
 /// module docs); `None` when the study has no verification block.
 pub fn verify<E, F>(
     dir: &StudyDir,
     study: &DesignStudy,
-    rsm: &RsmOutcome,
+    surface: &Surface<'_>,
     store: &Store,
     pool: &Executor,
     runner: &F,
@@ -91,15 +103,19 @@ where
             .zip(&ranges)
             .map(|(x, r)| r.to_coded(*x))
             .collect();
-        rsm.predict(response, &coded)
+        (surface.predict)(response, &coded)
     };
-    let responses = rsm.responses();
-    let optimum = rsm
-        .optimum_actual
-        .as_ref()
-        .map(|best| ("optimum", best.as_slice()));
+    let optimum = surface.optimum.map(|best| ("optimum", best));
     verify_points(
-        dir, "verify", study, optimum, &responses, &predict, store, pool, runner,
+        dir,
+        "verify",
+        study,
+        optimum,
+        &surface.responses,
+        &predict,
+        store,
+        pool,
+        runner,
     )
 }
 
