@@ -303,7 +303,7 @@ fn sweeps_refuse_their_sizes_and_counts_before_any_run() {
     );
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(
-        stderr(&out).contains("18446744073709551615 runs"),
+        stderr(&out).contains("up to 18,446,744,073,709,551,615 runs"),
         "{}",
         stderr(&out)
     );

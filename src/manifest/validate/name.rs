@@ -16,9 +16,9 @@ pub const MAX_NAME_CHARS: usize = 64;
 
 /// `Ok` when `name` is safe as one path component, else what is allowed.
 pub fn check_path_component(name: &str) -> Result<(), String> {
-    const RULE: &str = "must be a name usable as one file name: 1 to 64 characters, no path \
-                        separator (/ or \\), no control characters, not starting with '.' and \
-                        without leading or trailing spaces";
+    const RULE: &str = "must be a non-empty name usable as one file name: at most 64 \
+                        characters, no path separator (/ or \\), no control characters, not \
+                        starting with '.' and without leading or trailing spaces";
     let chars = name.chars().count();
     let bad = chars == 0
         || chars > MAX_NAME_CHARS

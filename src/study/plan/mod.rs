@@ -292,7 +292,7 @@ pub enum Stage {
     /// The noise floor: one point over packing seeds.
     Noise {
         /// Packing seeds.
-        seeds: u32,
+        seeds: u64,
     },
     /// One-factor screening with a one-way ANOVA.
     Screen {
@@ -413,7 +413,7 @@ impl Stage {
     /// `u64::MAX` reads as `u64::MAX`); 0 for a stage that runs nothing.
     pub fn runs(&self) -> u64 {
         match self {
-            Stage::Noise { seeds } => u64::from(*seeds),
+            Stage::Noise { seeds } => *seeds,
             Stage::Screen {
                 levels,
                 replicates,
@@ -525,7 +525,7 @@ impl StudySpec {
             Some(n) => {
                 let mut stages = vec![
                     Stage::Noise {
-                        seeds: n.noise_seeds,
+                        seeds: u64::from(n.noise_seeds),
                     },
                     Stage::Design { design, factors },
                     Stage::Simulate {
@@ -641,7 +641,7 @@ impl StudySpec {
     }
 
     /// The noise floor of one experiment over `seeds` packing seeds.
-    pub fn noise_floor(name: &str, id: ContentId, seeds: u32) -> StudySpec {
+    pub fn noise_floor(name: &str, id: ContentId, seeds: u64) -> StudySpec {
         StudySpec {
             name: name.to_string(),
             id,
