@@ -10,7 +10,7 @@
 //! | screen | [`screen`] | response surface |
 //! | design | [`design`] (he2019's LHS); the design studies' designs are built in [`rsm`] and [`sensitivity`] | all |
 //! | simulate | [`simulate`] | he2019 |
-//! | fit | [`fit_network`] (GA-BP), [`fit_gp`] (GP of he2019), [`fit_gp_surface`] (GP of a design study), [`rsm`] (quadratic) | all |
+//! | fit | [`fit_network`] (GA-BP), [`fit_gp`] (GP of he2019), [`rsm`] (quadratic, or a GP of a design study: `rsm::gp_surface`) | all |
 //! | fine | [`fine`] | he2019 two-level |
 //! | adaptive | [`adaptive`] | he2019 noise-aware |
 //! | search | [`search_tolerance`], [`search_probability`], desirability in [`rsm`] | all |
@@ -21,7 +21,6 @@ pub mod adaptive;
 pub mod design;
 pub mod fine;
 pub mod fit_gp;
-pub mod fit_gp_surface;
 pub mod fit_network;
 pub mod noise;
 pub mod rsm;

@@ -10,10 +10,12 @@
 //! [`analyse_table`] runs the same analysis on any CSV table.
 //!
 //! With `fit: "gp"` each response gets a Gaussian process instead
-//! ([`crate::study::stages::fit_gp_surface`]): no ANOVA, coefficients or contour, but gp.json
+//! ([`gp_surface`]): no ANOVA, coefficients or contour, but gp.json
 //! and a parity plot; the desirability optimum and the verification use the
 //! GP's mean. A Latin hypercube design (`design.kind: "lhs"`) is coded from
 //! the unit strata onto [−1, 1] and decoded through the factor ranges.
+
+pub mod gp_surface;
 
 use std::path::{Path, PathBuf};
 
@@ -32,8 +34,8 @@ use crate::study::plan::design_study::{
     actual_design, coded_design, DesignStudy, FitChoice, SeedStage,
 };
 use crate::study::runs::{design_points, run_points, write_table, Runs};
-use crate::study::stages::fit_gp_surface::{analyse_gp, GpAnalysis};
 use crate::study::StudyError;
+use gp_surface::{analyse_gp, GpAnalysis};
 
 /// Starts of the desirability search.
 pub const OPTIMISER_STARTS: usize = 64;
