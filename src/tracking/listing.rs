@@ -168,8 +168,8 @@ pub fn list_runs(store: &Store, options: &ListOptions) -> Result<Listing, Tracki
         });
     }
     for f in &filters {
-        let values: Vec<Value> = records.iter().filter_map(|r| r.get(&f.field)).collect();
-        f.check_kind(&values, is_catalogue_response(&f.field))?;
+        let values = records.iter().filter_map(|r| r.get(&f.field));
+        f.check_kind(values, is_catalogue_response(&f.field))?;
     }
     records.retain(|r| filters.iter().all(|f| f.accepts(r.get(&f.field).as_ref())));
     let rows: Vec<Row> = if options.group_seeds {

@@ -121,9 +121,9 @@ impl Filter {
     /// numbers, or an order (`< <= > >=`) of a number against a field of
     /// words. `numeric` says the field is known to hold numbers even when no
     /// run has it (a catalogue response).
-    pub fn check_kind<'a>(
+    pub fn check_kind(
         &self,
-        values: impl IntoIterator<Item = &'a Value>,
+        values: impl IntoIterator<Item = Value>,
         numeric: bool,
     ) -> Result<(), TrackingError> {
         let (mut numbers, mut words) = (numeric, false);

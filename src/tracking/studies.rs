@@ -92,7 +92,9 @@ fn entry(store: &Store, dir: &Path) -> Result<StudyEntry, TrackingError> {
         StudyFile::Design(_) if stages.iter().any(|s| s == "sensitivity") => Method::Sensitivity,
         StudyFile::Design(_) => Method::ResponseSurface,
     });
-    let verification = dir.join("verify").join("verification.csv");
+    // Read once: counted, and checked against its lineage record.
+    let verification_path = dir.join("verify").join("verification.csv");
+    let verification = std::fs::read(&verification_path).ok();
     let mut runs = RunCounts::default();
     for id in run_ids(dir, &all)? {
         match store.check(&id, Depth::Sizes).status() {
@@ -109,25 +111,27 @@ fn entry(store: &Store, dir: &Path) -> Result<StudyEntry, TrackingError> {
         method,
         stages,
         runs,
-        verdicts: verdicts(&verification),
-        verdicts_edited: verification.is_file() && !written_by_its_stage(&verification),
+        verdicts: verification.as_deref().map(verdicts).unwrap_or_default(),
+        verdicts_edited: verification
+            .as_deref()
+            .is_some_and(|bytes| !written_by_its_stage(&verification_path, bytes)),
         last_change: iso8601(last_change(dir, &all)?),
     })
 }
 
 /// Whether `path` holds the bytes its lineage record was written for.
-fn written_by_its_stage(path: &Path) -> bool {
-    match (std::fs::read(path), Lineage::read_beside(path)) {
-        (Ok(bytes), Ok(lineage)) => lineage.output_sha256.is_some() && lineage.describes(&bytes),
-        _ => false,
+fn written_by_its_stage(path: &Path, bytes: &[u8]) -> bool {
+    match Lineage::read_beside(path) {
+        Ok(lineage) => lineage.output_sha256.is_some() && lineage.describes(bytes),
+        Err(_) => false,
     }
 }
 
-/// The count of each value of the `verdict` column of `path` (empty when
-/// the table is absent or has no such column).
-fn verdicts(path: &Path) -> BTreeMap<String, usize> {
+/// The count of each value of the `verdict` column of a table's `bytes`
+/// (empty when they do not parse or have no such column).
+fn verdicts(bytes: &[u8]) -> BTreeMap<String, usize> {
     let mut counts = BTreeMap::new();
-    if let Ok(table) = Table::read(path) {
+    if let Ok(table) = Table::parse(&String::from_utf8_lossy(bytes)) {
         if let Some(i) = table.index("verdict") {
             for v in table.rows.iter().map(|r| &r[i]).filter(|v| !v.is_empty()) {
                 *counts.entry(v.clone()).or_insert(0) += 1;
