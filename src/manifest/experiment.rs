@@ -327,6 +327,9 @@ pub enum CoarseGrainingRule {
     SurfaceEnergyProportional,
     /// he2019 Eq. 1–3: the cohesion number is kept, Γ' = Γ (k m)^(2/5).
     CohesionNumber,
+    /// Γ' = k² Γ: the granular Bond number (JKR pull-off over weight) is
+    /// kept, so cohesion weighs as much against gravity at every size.
+    ConstantBond,
 }
 
 fn unit_factor() -> f64 {

@@ -59,6 +59,8 @@ pub enum ScalingRule {
     SurfaceEnergyProportional,
     /// he2019: Coh (Eq. 2) constant: Γ' = Γ (k m)^(2/5).
     CohesionNumber,
+    /// Bond number constant: Γ' = k² Γ (pull-off ∝ Γ R, weight ∝ R³).
+    ConstantBond,
 }
 
 /// A coarse-graining step and its effect, for result.json.
@@ -80,12 +82,13 @@ pub struct CoarseGraining {
     pub coh_after: f64,
 }
 
-/// Γ'/Γ under `rule` for size factor k and modulus factor m: k (cai2024) or
-/// (k m)^(2/5) (he2019's Coh kept).
+/// Γ'/Γ under `rule` for size factor k and modulus factor m: k (cai2024),
+/// (k m)^(2/5) (he2019's Coh kept) or k² (the Bond number kept).
 pub fn surface_energy_factor(rule: ScalingRule, size_factor: f64, modulus_factor: f64) -> f64 {
     match rule {
         ScalingRule::SurfaceEnergyProportional => size_factor,
         ScalingRule::CohesionNumber => (size_factor * modulus_factor).powf(0.4),
+        ScalingRule::ConstantBond => size_factor * size_factor,
     }
 }
 
@@ -205,6 +208,41 @@ mod tests {
         let c = coarse_grain(&s, ScalingRule::CohesionNumber, 10.0, 0.01, G).unwrap();
         assert!((c.after.surface_energy_j_m2 - 0.0214 * 0.1f64.powf(0.4)).abs() < 1e-12);
         assert!((c.after.surface_energy_j_m2 - 4.0).abs() > 3.9);
+    }
+
+    /// Each rule keeps its own invariant over k = 2 … 10 with m = 1: the
+    /// JKR pull-off 1.5 π Γ R* over the weight ρ g (4/3) π R³ (constant
+    /// Bond), the pull-off over R² (a cohesive stress: proportional) and
+    /// Eq. 2 (cohesion number).
+    #[test]
+    fn each_rule_keeps_its_invariant() {
+        let s = CohesionState {
+            surface_energy_j_m2: 0.06,
+            effective_modulus_pa: 5e6,
+            effective_radius_m: 1.5e-3,
+            density_kg_m3: 1500.0,
+        };
+        let pull_off = |c: &CohesionState| {
+            1.5 * std::f64::consts::PI * c.surface_energy_j_m2 * c.effective_radius_m
+        };
+        let weight = |c: &CohesionState| c.density_kg_m3 * G * (2.0 * c.effective_radius_m).powi(3);
+        let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-12;
+        for k in [2.0, 5.0, 10.0] {
+            let bond = coarse_grain(&s, ScalingRule::ConstantBond, k, 1.0, G).unwrap();
+            assert!(close(
+                pull_off(&bond.after) / weight(&bond.after),
+                pull_off(&s) / weight(&s)
+            ));
+            let stress =
+                coarse_grain(&s, ScalingRule::SurfaceEnergyProportional, k, 1.0, G).unwrap();
+            let r2 = |c: &CohesionState| c.effective_radius_m.powi(2);
+            assert!(close(
+                pull_off(&stress.after) / r2(&stress.after),
+                pull_off(&s) / r2(&s)
+            ));
+            let coh = coarse_grain(&s, ScalingRule::CohesionNumber, k, 1.0, G).unwrap();
+            assert!(close(coh.coh_after, coh.coh_before));
+        }
     }
 
     #[test]

@@ -52,6 +52,7 @@ fn scaling_rule(rule: CoarseGrainingRule) -> ScalingRule {
     match rule {
         CoarseGrainingRule::SurfaceEnergyProportional => ScalingRule::SurfaceEnergyProportional,
         CoarseGrainingRule::CohesionNumber => ScalingRule::CohesionNumber,
+        CoarseGrainingRule::ConstantBond => ScalingRule::ConstantBond,
     }
 }
 

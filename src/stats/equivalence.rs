@@ -94,24 +94,69 @@ pub fn tost(values: &[f64], band: (f64, f64)) -> Option<Tost> {
     }
     let (mean, sd) = mean_sd(values);
     let df = (n - 1) as f64;
-    let se = sd / (n as f64).sqrt();
-    let t_lower = (mean - band.0) / se;
-    let t_upper = (mean - band.1) / se;
-    let p_lower = upper_tail(t_lower, df);
-    let p_upper = upper_tail(-t_upper, df);
+    let test = tost_estimate(mean, sd / (n as f64).sqrt(), df, band);
     Some(Tost {
         n,
         mean,
         sd,
+        df,
+        t_lower: test.t_lower,
+        p_lower: test.p_lower,
+        t_upper: test.t_upper,
+        p_upper: test.p_upper,
+        p: test.p,
+        ci90_half_width: test.ci90_half_width,
+        ci95_half_width: test.ci95_half_width,
+    })
+}
+
+/// TOST of any estimate with a t-distributed error, against a band: the
+/// core of [`tost`] (whose estimate is a mean), also used for a fitted
+/// quantity such as a trend's change over a range (statsmodels has no
+/// one-call form for it; the test gives the scipy calls).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct EstimateTost {
+    /// The estimate.
+    pub estimate: f64,
+    /// Its standard error.
+    pub std_error: f64,
+    /// Degrees of freedom of the t distribution.
+    pub df: f64,
+    /// (estimate − lo)/se.
+    pub t_lower: f64,
+    /// P(T ≥ t_lower).
+    pub p_lower: f64,
+    /// (estimate − hi)/se.
+    pub t_upper: f64,
+    /// P(T ≤ t_upper).
+    pub p_upper: f64,
+    /// The TOST p-value, max(p_lower, p_upper).
+    pub p: f64,
+    /// Half-width of the 90 % interval, t₀.₉₅(df)·se.
+    pub ci90_half_width: f64,
+    /// Half-width of the 95 % interval, t₀.₉₇₅(df)·se.
+    pub ci95_half_width: f64,
+}
+
+/// [`EstimateTost`] of `estimate` with standard error `std_error` on `df`
+/// degrees of freedom against `band` = (lo, hi).
+pub fn tost_estimate(estimate: f64, std_error: f64, df: f64, band: (f64, f64)) -> EstimateTost {
+    let t_lower = (estimate - band.0) / std_error;
+    let t_upper = (estimate - band.1) / std_error;
+    let p_lower = upper_tail(t_lower, df);
+    let p_upper = upper_tail(-t_upper, df);
+    EstimateTost {
+        estimate,
+        std_error,
         df,
         t_lower,
         p_lower,
         t_upper,
         p_upper,
         p: p_lower.max(p_upper),
-        ci90_half_width: t_quantile(0.95, df) * se,
-        ci95_half_width: t_quantile(0.975, df) * se,
-    })
+        ci90_half_width: t_quantile(0.95, df) * std_error,
+        ci95_half_width: t_quantile(0.975, df) * std_error,
+    }
 }
 
 /// Intervals of Simpson's rule in [`tost_power`]'s integral over the chi

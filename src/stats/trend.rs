@@ -177,6 +177,17 @@ impl LineFit {
         ))
     }
 
+    /// The line's change over an x range of width `span` (b·span), with its
+    /// standard error (|span|·se(b)) and degrees of freedom: how much the
+    /// response moves across the measured sizes.
+    pub fn change(&self, span: f64) -> (f64, f64, f64) {
+        (
+            self.slope * span,
+            span.abs() * self.covariance[1][1].max(0.0).sqrt(),
+            self.df_residual as f64,
+        )
+    }
+
     /// Half-width of the 95 % interval of the slope.
     pub fn slope_half_width(&self) -> f64 {
         t_quantile(0.975, self.df_residual as f64) * self.covariance[1][1].max(0.0).sqrt()

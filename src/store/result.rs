@@ -90,7 +90,8 @@ impl ResolutionFigure {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CoarseGrainingReport {
-    /// The surface-energy rule (`surface_energy_proportional` or `cohesion_number`).
+    /// The surface-energy rule (`surface_energy_proportional`, `cohesion_number`
+    /// or `constant_bond`).
     pub rule: String,
     /// Simulated / real radius.
     pub size_factor: f64,

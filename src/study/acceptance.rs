@@ -39,7 +39,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::stats::equivalence::{self, tost_power, Tost};
+use crate::stats::equivalence::{self, tost_power, EstimateTost, Tost};
 use crate::stats::summary::t_quantile;
 
 /// Level of each one-sided test of a single comparison (and the tails of
@@ -155,14 +155,9 @@ pub fn judge_at(values: &[f64], band: (f64, f64), alpha: f64) -> Judgement {
     let mean = (n > 0).then(|| values.iter().sum::<f64>() / n as f64);
     let tost = equivalence::tost(values, band);
     let verdict = match tost {
-        Some(t) if t.p < alpha => Verdict::Pass,
         Some(t) => {
             let half = t_quantile(1.0 - alpha / 2.0, t.df) * t.sd / (t.n as f64).sqrt();
-            if t.mean + half < band.0 || t.mean - half > band.1 {
-                Verdict::Fail
-            } else {
-                Verdict::Inconclusive
-            }
+            rule(t.p, t.mean, half, band, alpha)
         }
         None => Verdict::Inconclusive,
     };
@@ -179,6 +174,27 @@ pub fn judge_at(values: &[f64], band: (f64, f64), alpha: f64) -> Judgement {
         tost,
         verdict,
         seeds_to_decide,
+    }
+}
+
+/// The rule (module docs) applied to an estimate other than a mean of
+/// replicates — a fitted quantity with a t-distributed error, such as a
+/// convergence trend's change over its sizes — at level `alpha`.
+pub fn judge_estimate(test: &EstimateTost, band: (f64, f64), alpha: f64) -> Verdict {
+    let half = t_quantile(1.0 - alpha / 2.0, test.df) * test.std_error;
+    rule(test.p, test.estimate, half, band, alpha)
+}
+
+/// Pass when the TOST p-value is below `alpha`; fail when the (1 − α)
+/// interval (estimate ± `half`) lies wholly outside `band`; inconclusive
+/// otherwise.
+fn rule(p: f64, estimate: f64, half: f64, band: (f64, f64), alpha: f64) -> Verdict {
+    if p < alpha {
+        Verdict::Pass
+    } else if estimate + half < band.0 || estimate - half > band.1 {
+        Verdict::Fail
+    } else {
+        Verdict::Inconclusive
     }
 }
 

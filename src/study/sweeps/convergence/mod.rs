@@ -33,6 +33,17 @@
 //! neither a standard size nor a needed size is read from it: the response
 //! has not converged to any trend a line can carry to the real size.
 //!
+//! # Size effect
+//! With a tolerance T, each response gets an equivalence test of "no size
+//! effect over the swept sizes": the line's change across the measured d/D
+//! range, b·(x_max − x_min), with its standard error on the fit's residual
+//! degrees of freedom, judged by the acceptance rule against ±T/2
+//! ([`SizeEffect`]). Size-independent means the 90 % interval of that
+//! change lies inside ±T/2: a calibration at any swept size then carries to
+//! the others within half the tolerance. This is the criterion a
+//! coarse-graining rule is chosen by (issue 55): the rule under which the
+//! scenes' angles are size-independent.
+//!
 //! # The cost law
 //! CPU-seconds per run against d/D as a power law, a line in logs over the
 //! individual runs (CPU time of the run's thread, `timing.json`; its wall
@@ -50,9 +61,11 @@ use serde::Serialize;
 use crate::exec::{ExecError, Executor};
 use crate::manifest::{ContentId, Experiment};
 use crate::scenes::responses::{catalogue, response};
+use crate::stats::equivalence::{tost_estimate, EstimateTost};
 use crate::stats::nlls::LackOfFit;
 use crate::stats::summary::{mean_ci, MeanCi};
 use crate::stats::trend::{weighted_line, LineFit, LinePrediction};
+use crate::study::acceptance::{judge_estimate, Verdict, ALPHA};
 use crate::study::plan::StudySpec;
 use crate::study::sweeps::tradeoff::{self, Outcome};
 use crate::study::StudyError;
@@ -167,6 +180,28 @@ pub struct Trend {
     /// The d/D at which |bias| reaches tolerance / 2 (when a tolerance and a
     /// non-zero slope are known), and the size factor it means.
     pub needed: Option<Needed>,
+    /// Whether the response is size-independent over the swept sizes (when
+    /// a tolerance is given).
+    pub size_effect: Option<SizeEffect>,
+}
+
+/// The equivalence test of "no size effect": the line's change over the
+/// swept d/D range against ± half the tolerance, by the acceptance rule
+/// (TOST at α = 0.05: size-independent when the 90 % interval of the change
+/// lies inside ±T/2; size-dependent when the 95 % interval lies wholly
+/// outside it).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct SizeEffect {
+    /// The swept d/D range (largest − smallest measured d/D).
+    pub span: f64,
+    /// Half the tolerance, units of the response.
+    pub margin: f64,
+    /// The change b·span with its error, TOST p and intervals.
+    pub test: EstimateTost,
+    /// The verdict; `None` when the line misses the sizes (lack of fit
+    /// p < [`LACK_OF_FIT_ALPHA`]): the levels differ by more than their
+    /// scatter allows, so the change is not one number.
+    pub verdict: Option<Verdict>,
 }
 
 /// The size at which a response's bias reaches half the tolerance.
@@ -571,9 +606,11 @@ fn trend(
             bias: vec![None; levels.len()],
             standard_factor: None,
             needed: None,
+            size_effect: None,
         };
     };
     let lack_of_fit = line.lack_of_fit(&x, &y, &w);
+    let size_effect = tolerance.map(|t| size_effect(&line, &x, 0.5 * t, lack_of_fit.as_ref()));
     // A line the levels contradict says nothing about the real size: no
     // standard size and no needed size from it.
     let tolerance = tolerance.filter(|_| {
@@ -617,6 +654,27 @@ fn trend(
         bias,
         standard_factor,
         needed,
+        size_effect,
+    }
+}
+
+/// The size-effect test of `line` over the d/D values `x` at ± `margin`
+/// (see [`SizeEffect`]).
+fn size_effect(line: &LineFit, x: &[f64], margin: f64, lof: Option<&LackOfFit>) -> SizeEffect {
+    let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let span = hi - lo;
+    let (change, std_error, df) = line.change(span);
+    let band = (-margin, margin);
+    let test = tost_estimate(change, std_error, df, band);
+    let verdict = lof
+        .is_none_or(|l| l.p_value >= LACK_OF_FIT_ALPHA)
+        .then(|| judge_estimate(&test, band, ALPHA));
+    SizeEffect {
+        span,
+        margin,
+        test,
+        verdict,
     }
 }
 
@@ -638,4 +696,68 @@ fn cost_law(levels: &[LevelRow]) -> Option<CostLaw> {
         exponent: (fit.slope, fit.slope_half_width()),
         log_coefficient: fit.intercept,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// stats::trend's fixture: three sizes × five runs, weights one over
+    /// each level's variance.
+    fn fixture() -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let levels = [
+            (0.064, [40.1, 44.3, 38.7, 42.9, 45.6]),
+            (0.048, [43.0, 41.2, 44.8, 42.5, 43.9]),
+            (0.032, [44.6, 45.1, 43.7, 45.9, 44.2]),
+        ];
+        let (mut x, mut y, mut w) = (vec![], vec![], vec![]);
+        for (xl, ys) in levels {
+            let m = ys.iter().sum::<f64>() / 5.0;
+            let v = ys.iter().map(|v| (v - m).powi(2)).sum::<f64>() / 4.0;
+            for yv in ys {
+                x.push(xl);
+                y.push(yv);
+                w.push(1.0 / v);
+            }
+        }
+        (x, y, w)
+    }
+
+    /// Against statsmodels 0.15.0 and scipy (scratch venv), on the fixture:
+    /// ```python
+    /// r = sm.WLS(y, sm.add_constant(x), weights=w).fit(); span = 0.064 - 0.032
+    /// c, se, df = r.params[1]*span, r.bse[1]*span, r.df_resid
+    /// p = max(stats.t.sf((c + m)/se, df), stats.t.cdf((c - m)/se, df))
+    /// stats.t.ppf(0.95, df)*se, stats.t.ppf(0.975, df)*se
+    /// r.t_test(([0, span], [-m]))   # the same change, its 95 % interval
+    /// ```
+    /// The change is −2.774 (95 % interval −4.975 … −0.572): inside ±5
+    /// (p 0.0239, size-independent), wholly outside ±0.5 (size-dependent),
+    /// neither at ±2 or ±1 (p 0.769, 0.947: inconclusive).
+    #[test]
+    fn the_size_effect_matches_scipy_and_follows_the_acceptance_rule() {
+        let (x, y, w) = fixture();
+        let line = weighted_line(&x, &y, &w).unwrap();
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * b.abs().max(1e-3);
+        for (margin, p, verdict) in [
+            (5.0, 0.023913313002018106, Verdict::Pass),
+            (2.0, 0.769373844329569, Verdict::Inconclusive),
+            (1.0, 0.9473178271532101, Verdict::Inconclusive),
+            (0.5, 0.9780475825393826, Verdict::Fail),
+        ] {
+            let e = size_effect(&line, &x, margin, None);
+            assert!(close(e.span, 0.032), "{}", e.span);
+            assert!(close(e.test.estimate, -2.77371671216259));
+            assert!(close(e.test.std_error, 1.0190613019957122));
+            assert_eq!(e.test.df, 13.0);
+            assert!(close(e.test.p, p), "±{margin}: p {} vs {p}", e.test.p);
+            assert!(close(e.test.ci90_half_width, 1.8046896922620705));
+            assert!(close(e.test.ci95_half_width, 2.2015480958456997));
+            assert_eq!(e.verdict, Some(verdict), "±{margin}");
+        }
+        // A line the levels contradict gives no verdict.
+        let lof = LackOfFit::from_sums(40.0, 12.0, 1, 12);
+        assert!(lof.p_value < LACK_OF_FIT_ALPHA);
+        assert_eq!(size_effect(&line, &x, 5.0, Some(&lof)).verdict, None);
+    }
 }

@@ -8,6 +8,7 @@ use std::fmt::Write as _;
 use super::{Convergence, LevelRow};
 use crate::report::markdown::{Align, MarkdownTable};
 use crate::report::plots::{size_trends, CostPanel, PlotError, TrendPanel};
+use crate::study::acceptance::Verdict;
 
 /// CSV header. CPU and wall time are measured (they vary run to run); every
 /// other column is deterministic.
@@ -227,6 +228,7 @@ pub fn markdown(c: &Convergence, title: &str) -> String {
         ]);
     }
     out.push_str(&trends.render());
+    size_effects(&mut out, c);
     if let Some(cost) = &c.cost {
         let _ = writeln!(
             out,
@@ -255,6 +257,51 @@ pub fn markdown(c: &Convergence, title: &str) -> String {
         _ => {}
     }
     out
+}
+
+/// The table of the size-effect tests (when a tolerance was given).
+fn size_effects(out: &mut String, c: &Convergence) {
+    let rows: Vec<_> = c
+        .trends
+        .iter()
+        .filter_map(|t| Some((t, t.size_effect?)))
+        .collect();
+    let Some((_, first)) = rows.first() else {
+        return;
+    };
+    let _ = writeln!(
+        out,
+        "\n### Size effect over the swept sizes (the line's change across d/D {:.3e}, \
+         TOST against ±{} = half the tolerance, α = 0.05)\n",
+        first.span, first.margin
+    );
+    let mut table = MarkdownTable::new(&[
+        "response",
+        "change (°)",
+        "90 % interval (°)",
+        "TOST p",
+        "size-independent",
+    ]);
+    for (t, e) in rows {
+        let verdict = match e.verdict {
+            Some(Verdict::Pass) => "yes: the change is within ±T/2".to_string(),
+            Some(Verdict::Fail) => "no: the change exceeds T/2".to_string(),
+            Some(Verdict::Inconclusive) => "inconclusive".to_string(),
+            None => "not a line: the sizes differ beyond their scatter".to_string(),
+        };
+        table.row(&[
+            t.response.clone(),
+            format!("{:+.2} ± {:.2}", e.test.estimate, e.test.ci95_half_width),
+            format!(
+                "{:+.2} … {:+.2}",
+                e.test.estimate - e.test.ci90_half_width,
+                e.test.estimate + e.test.ci90_half_width
+            ),
+            format!("{:.3}", e.test.p),
+            verdict,
+        ]);
+    }
+    out.push_str(&table.render());
 }
 
 /// The figure: one panel per response and the cost panel.
