@@ -5,9 +5,11 @@
 //! and a one-way ANOVA across the levels; a factor is marked significant
 //! for a response when its p-value is below `screening.alpha`.
 
+use std::path::Path;
+
 use serde::Serialize;
 
-use crate::doe::ofat::one_factor_at_a_time;
+use crate::doe::ofat::{one_factor_at_a_time, OfatRun};
 use crate::exec::Executor;
 use crate::manifest::Experiment;
 use crate::report::plots::{level_means, LevelPanel};
@@ -16,8 +18,8 @@ use crate::stats::oneway::one_way_anova;
 use crate::stats::summary::mean_ci;
 use crate::store::{RunDir, RunResult, Store};
 use crate::study::dir::{write_output, StudyDir};
-use crate::study::plan::design_study::{DesignStudy, SeedStage};
-use crate::study::runs::{run_points, write_table, Point};
+use crate::study::plan::design_study::{DesignStudy, ScreenFactor, SeedStage};
+use crate::study::runs::{run_points, write_table, Point, Runs};
 use crate::study::StudyError;
 
 /// One level of one screened factor, for one response.
@@ -67,6 +69,9 @@ pub struct Screen {
     pub incomplete: usize,
 }
 
+/// A screened factor: its name and its screening settings.
+type Screened<'a> = (&'a String, &'a ScreenFactor);
+
 /// Runs the screening (see the module docs) and writes its outputs.
 pub fn screen<E, F>(
     dir: &StudyDir,
@@ -85,18 +90,45 @@ where
             study.name
         )));
     };
+    let factors: Vec<Screened> = plan.factors.iter().collect();
+    let levels: Vec<Vec<f64>> = factors.iter().map(|(_, f)| f.levels.clone()).collect();
+    let base: Vec<f64> = levels.iter().map(|l| l[0]).collect();
+    let design = one_factor_at_a_time(&base, &levels)?;
+    let points = screen_points(study, &factors, &design);
+    let stage = dir.create_stage("screen")?;
+    let runs = run_points(
+        study,
+        store,
+        pool,
+        runner,
+        SeedStage::Screen,
+        vec!["factor_index".into(), "level".into()],
+        points,
+        plan.replicates,
+    )?;
+    write_table(dir, "screen", study, &runs, &stage.join("responses.csv"))?;
+    let outcome = Screen {
+        alpha: plan.alpha,
+        effects: effects(study, plan.alpha, &factors, &design, &runs),
+        runs: runs.total,
+        cached: runs.cached,
+        incomplete: runs.incomplete(),
+    };
+    write_outputs(dir, &stage, study, plan.replicates, &outcome)?;
+    Ok(outcome)
+}
+
+/// The screening's run points: each design run's screened factor at its
+/// level, every other design factor at the centre of its range. A point is
+/// shown as (factor index, level).
+fn screen_points(study: &DesignStudy, factors: &[Screened], design: &[OfatRun]) -> Vec<Point> {
     let centre: Vec<(String, f64)> = study
         .factors
         .values()
         .map(|f| (f.address.clone(), 0.5 * (f.min + f.max)))
         .collect();
     // The base value of a screened address is not needed: each run sets it.
-    let factors: Vec<(&String, &crate::study::plan::design_study::ScreenFactor)> =
-        plan.factors.iter().collect();
-    let levels: Vec<Vec<f64>> = factors.iter().map(|(_, f)| f.levels.clone()).collect();
-    let base: Vec<f64> = levels.iter().map(|l| l[0]).collect();
-    let design = one_factor_at_a_time(&base, &levels)?;
-    let points: Vec<Point> = design
+    design
         .iter()
         .enumerate()
         .map(|(i, run)| {
@@ -113,19 +145,18 @@ where
                 shown: vec![run.factor as f64, run.point[run.factor]],
             }
         })
-        .collect();
-    let stage = dir.create_stage("screen")?;
-    let runs = run_points(
-        study,
-        store,
-        pool,
-        runner,
-        SeedStage::Screen,
-        vec!["factor_index".into(), "level".into()],
-        points,
-        plan.replicates,
-    )?;
-    write_table(dir, "screen", study, &runs, &stage.join("responses.csv"))?;
+        .collect()
+}
+
+/// Per response and screened factor: the mean ± 95 % CI per level and the
+/// one-way ANOVA across the measured levels, significant below `alpha`.
+fn effects(
+    study: &DesignStudy,
+    alpha: f64,
+    factors: &[Screened],
+    design: &[OfatRun],
+    runs: &Runs,
+) -> Vec<Effect> {
     let mut effects = Vec::new();
     for response in study.responses.keys() {
         let values = runs.by_point(response);
@@ -163,54 +194,32 @@ where
                 levels,
                 f: anova.as_ref().map(|a| a.f),
                 p,
-                significant: p.is_some_and(|p| p < plan.alpha),
+                significant: p.is_some_and(|p| p < alpha),
             });
         }
     }
-    let outcome = Screen {
-        alpha: plan.alpha,
-        effects,
-        runs: runs.total,
-        cached: runs.cached,
-        incomplete: runs.incomplete(),
-    };
+    effects
+}
+
+/// Writes the screening's outputs with their lineage (the settings and the
+/// response table): one level-means plot per response, `levels.csv` and
+/// `screen.md`.
+fn write_outputs(
+    dir: &StudyDir,
+    stage: &Path,
+    study: &DesignStudy,
+    replicates: u32,
+    outcome: &Screen,
+) -> Result<(), StudyError> {
     let lineage = dir
         .lineage(
             "screen",
-            serde_json::json!({ "replicates": plan.replicates, "alpha": plan.alpha }),
+            serde_json::json!({ "replicates": replicates, "alpha": outcome.alpha }),
         )
         .with_input(dir.input("responses", &stage.join("responses.csv"))?);
     for response in study.responses.keys() {
-        let panels: Vec<LevelPanel> = outcome
-            .effects
-            .iter()
-            .filter(|e| &e.response == response)
-            .filter(|e| e.levels.iter().any(|l| l.mean.is_some()))
-            .map(|e| {
-                let shown: Vec<&Level> = e.levels.iter().filter(|l| l.mean.is_some()).collect();
-                let missing = e.levels.len() - shown.len();
-                let p =
-                    e.p.map_or("ANOVA: n/a".into(), |p| format!("one-way ANOVA p = {p:.3}"));
-                LevelPanel {
-                    factor: e.factor.clone(),
-                    unit: String::new(),
-                    response: response.clone(),
-                    levels: shown.iter().map(|l| l.value).collect(),
-                    means: shown.iter().filter_map(|l| l.mean).collect(),
-                    ci_half: shown
-                        .iter()
-                        .map(|l| l.ci95_half_width.unwrap_or(0.0))
-                        .collect(),
-                    note: if missing > 0 {
-                        format!("{p}; {missing} level(s) unmeasured")
-                    } else {
-                        p
-                    },
-                }
-            })
-            .collect();
         let svg = level_means(
-            &panels,
+            &panels(outcome, response),
             &format!("{}: {response} by factor level", study.name),
         )
         .map_err(|e| StudyError::Plot(e.to_string()))?;
@@ -222,15 +231,47 @@ where
     }
     write_output(
         &stage.join("levels.csv"),
-        levels_csv(&outcome).as_bytes(),
+        levels_csv(outcome).as_bytes(),
         &lineage,
     )?;
     write_output(
         &stage.join("screen.md"),
-        markdown(study, &outcome).as_bytes(),
+        markdown(study, outcome).as_bytes(),
         &lineage,
-    )?;
-    Ok(outcome)
+    )
+}
+
+/// The level-means panels of `response`: one per factor with a measured
+/// level, its unmeasured levels left out and counted in the note.
+fn panels(outcome: &Screen, response: &str) -> Vec<LevelPanel> {
+    outcome
+        .effects
+        .iter()
+        .filter(|e| e.response == response)
+        .filter(|e| e.levels.iter().any(|l| l.mean.is_some()))
+        .map(|e| {
+            let shown: Vec<&Level> = e.levels.iter().filter(|l| l.mean.is_some()).collect();
+            let missing = e.levels.len() - shown.len();
+            let p =
+                e.p.map_or("ANOVA: n/a".into(), |p| format!("one-way ANOVA p = {p:.3}"));
+            LevelPanel {
+                factor: e.factor.clone(),
+                unit: String::new(),
+                response: response.to_string(),
+                levels: shown.iter().map(|l| l.value).collect(),
+                means: shown.iter().filter_map(|l| l.mean).collect(),
+                ci_half: shown
+                    .iter()
+                    .map(|l| l.ci95_half_width.unwrap_or(0.0))
+                    .collect(),
+                note: if missing > 0 {
+                    format!("{p}; {missing} level(s) unmeasured")
+                } else {
+                    p
+                },
+            }
+        })
+        .collect()
 }
 
 fn levels_csv(s: &Screen) -> String {

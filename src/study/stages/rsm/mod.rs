@@ -28,7 +28,7 @@ use crate::report::plots::{contour, curves, predicted_vs_actual, ContourGrid, Cu
 use crate::report::table::{Cell, CsvWriter, Table};
 use crate::search::desirability::{maximise, Goal, Model, Search};
 use crate::stats::rsm::{fit_quadratic, AnovaRow, RsmFit};
-use crate::store::{RunDir, RunResult, Store};
+use crate::store::{Lineage, RunDir, RunResult, Store};
 use crate::study::dir::{json_bytes, write_output, StudyDir};
 use crate::study::plan::design_study::{
     actual_design, coded_design, DesignStudy, FitChoice, SeedStage,
@@ -156,16 +156,7 @@ where
     )?;
     write_table(dir, "rsm", study, &runs, &stage.join("responses.csv"))?;
     let ranges = study.ranges();
-    let (mut analyses, mut gp) = (Vec::new(), Vec::new());
-    for response in study.responses.keys() {
-        let (x, y, missing) = observations(&runs, &coded, response);
-        match study.fit {
-            FitChoice::Quadratic => {
-                analyses.push(analyse(response, &x, &y, &names, &ranges, missing)?)
-            }
-            FitChoice::Gp => gp.push(analyse_gp(response, &x, &y, &names, missing, study.seed)?),
-        }
-    }
+    let (analyses, gp) = fit_responses(study, &runs, &coded)?;
     let optimum = joint_optimum(study, &analyses, &gp);
     let optimum_actual = optimum.as_ref().and_then(|s| {
         s.optima.first().map(|o| {
@@ -176,85 +167,6 @@ where
                 .collect()
         })
     });
-    // The response table is hashed once; every output's lineage names it.
-    let table_input = dir.input("responses", &stage.join("responses.csv"))?;
-    let lineage_of = |what: &str| {
-        dir.lineage(
-            "rsm",
-            serde_json::json!({ "model": model_name(study.fit), "output": what, "optimiser_starts": OPTIMISER_STARTS }),
-        )
-        .with_input(table_input.clone())
-    };
-    let hold: Vec<f64> = optimum
-        .as_ref()
-        .and_then(|s| s.optima.first().map(|o| o.coded.clone()))
-        .unwrap_or_else(|| vec![0.0; names.len()]);
-    for a in &analyses {
-        let sub = stage.join(&a.response);
-        let lineage = lineage_of(&a.response);
-        write_output(
-            &sub.join("anova.csv"),
-            anova_csv(&a.fit).as_bytes(),
-            &lineage,
-        )?;
-        write_output(
-            &sub.join("coefficients.csv"),
-            coefficients_csv(a).as_bytes(),
-            &lineage,
-        )?;
-        write_output(&sub.join("fit.json"), &json_bytes(a), &lineage)?;
-        let pairs: Vec<(f64, f64)> = y_of(&runs, &a.response)
-            .into_iter()
-            .zip(a.fit.fitted.iter().copied())
-            .collect();
-        let parity =
-            predicted_vs_actual(&pairs, &format!("{}: predicted vs actual", a.response), "")
-                .map_err(|e| StudyError::Plot(e.to_string()))?;
-        write_output(&sub.join("parity.svg"), parity.as_bytes(), &lineage)?;
-        // Two or more factors: a contour of the two that matter most; one
-        // factor: the fitted curve through the runs.
-        let (file, svg) = match contour_grid(study, a, &hold) {
-            Some(grid) => (
-                "contour.svg",
-                contour(
-                    &grid,
-                    &format!("{} (other factors at the optimum)", a.response),
-                ),
-            ),
-            None => {
-                let (x, y, _) = observations(&runs, &coded, &a.response);
-                ("curve.svg", response_curve(study, a, &x, &y))
-            }
-        };
-        let svg = svg.map_err(|e| StudyError::Plot(e.to_string()))?;
-        write_output(&sub.join(file), svg.as_bytes(), &lineage)?;
-        write_output(
-            &sub.join("anova.md"),
-            anova_markdown(study, a).as_bytes(),
-            &lineage,
-        )?;
-    }
-    for g in &gp {
-        let sub = stage.join(&g.response);
-        let lineage = lineage_of(&g.response);
-        write_output(&sub.join("gp.json"), &json_bytes(g), &lineage)?;
-        let pairs: Vec<(f64, f64)> = y_of(&runs, &g.response)
-            .into_iter()
-            .zip(g.fitted.iter().copied())
-            .collect();
-        let parity =
-            predicted_vs_actual(&pairs, &format!("{}: GP mean vs simulated", g.response), "")
-                .map_err(|e| StudyError::Plot(e.to_string()))?;
-        write_output(&sub.join("parity.svg"), parity.as_bytes(), &lineage)?;
-    }
-    if let Some(search) = &optimum {
-        let lineage = lineage_of("optimum");
-        write_output(
-            &stage.join("optimum.csv"),
-            optimum_csv(study, search).as_bytes(),
-            &lineage,
-        )?;
-    }
     let outcome = RsmOutcome {
         study: study.name.clone(),
         study_id: study.id().to_string(),
@@ -270,14 +182,158 @@ where
         gp,
         optimum,
         optimum_actual,
-        dir: stage.clone(),
+        dir: stage,
     };
+    write_outputs(dir, study, &runs, &coded, &outcome)?;
+    Ok(outcome)
+}
+
+/// Fits every response of the study over the design's runs: a quadratic
+/// with its ANOVA, or a Gaussian process, as the study asks.
+fn fit_responses(
+    study: &DesignStudy,
+    runs: &Runs,
+    coded: &[Vec<f64>],
+) -> Result<(Vec<ResponseAnalysis>, Vec<GpAnalysis>), StudyError> {
+    let names = study.factor_names();
+    let ranges = study.ranges();
+    let (mut analyses, mut gp) = (Vec::new(), Vec::new());
+    for response in study.responses.keys() {
+        let (x, y, missing) = observations(runs, coded, response);
+        match study.fit {
+            FitChoice::Quadratic => {
+                analyses.push(analyse(response, &x, &y, &names, &ranges, missing)?)
+            }
+            FitChoice::Gp => gp.push(analyse_gp(response, &x, &y, &names, missing, study.seed)?),
+        }
+    }
+    Ok((analyses, gp))
+}
+
+/// Writes the stage's outputs into `outcome.dir`, each with its lineage (the
+/// model, the output and the response table): per response its fit, ANOVA,
+/// parity plot and contour or curve (quadratic) or its GP and parity plot;
+/// `optimum.csv` when there is an optimum; `rsm.md`.
+fn write_outputs(
+    dir: &StudyDir,
+    study: &DesignStudy,
+    runs: &Runs,
+    coded: &[Vec<f64>],
+    outcome: &RsmOutcome,
+) -> Result<(), StudyError> {
+    let stage = &outcome.dir;
+    // The response table is hashed once; every output's lineage names it.
+    let table_input = dir.input("responses", &stage.join("responses.csv"))?;
+    let lineage_of = |what: &str| {
+        dir.lineage(
+            "rsm",
+            serde_json::json!({ "model": model_name(study.fit), "output": what, "optimiser_starts": OPTIMISER_STARTS }),
+        )
+        .with_input(table_input.clone())
+    };
+    let hold: Vec<f64> = outcome
+        .optimum
+        .as_ref()
+        .and_then(|s| s.optima.first().map(|o| o.coded.clone()))
+        .unwrap_or_else(|| vec![0.0; study.factors.len()]);
+    let data = Data { study, runs, coded };
+    for a in &outcome.analyses {
+        write_quadratic(
+            &stage.join(&a.response),
+            &lineage_of(&a.response),
+            &data,
+            a,
+            &hold,
+        )?;
+    }
+    for g in &outcome.gp {
+        let sub = stage.join(&g.response);
+        let lineage = lineage_of(&g.response);
+        write_output(&sub.join("gp.json"), &json_bytes(g), &lineage)?;
+        let pairs: Vec<(f64, f64)> = y_of(runs, &g.response)
+            .into_iter()
+            .zip(g.fitted.iter().copied())
+            .collect();
+        let parity =
+            predicted_vs_actual(&pairs, &format!("{}: GP mean vs simulated", g.response), "")
+                .map_err(|e| StudyError::Plot(e.to_string()))?;
+        write_output(&sub.join("parity.svg"), parity.as_bytes(), &lineage)?;
+    }
+    if let Some(search) = &outcome.optimum {
+        let lineage = lineage_of("optimum");
+        write_output(
+            &stage.join("optimum.csv"),
+            optimum_csv(study, search).as_bytes(),
+            &lineage,
+        )?;
+    }
     write_output(
         &stage.join("rsm.md"),
-        summary_markdown(&outcome).as_bytes(),
+        summary_markdown(outcome).as_bytes(),
         &lineage_of("summary"),
+    )
+}
+
+/// What a response's plots are drawn from: the study, its runs and the
+/// coded design.
+struct Data<'a> {
+    study: &'a DesignStudy,
+    runs: &'a Runs,
+    coded: &'a [Vec<f64>],
+}
+
+/// Writes one quadratic response's outputs into `sub`: `anova.csv`,
+/// `coefficients.csv`, `fit.json`, `parity.svg`, a contour of the two
+/// factors that matter most with the others at `hold` (coded) or, with one
+/// factor, the fitted curve through the runs, and `anova.md`.
+fn write_quadratic(
+    sub: &Path,
+    lineage: &Lineage,
+    data: &Data<'_>,
+    a: &ResponseAnalysis,
+    hold: &[f64],
+) -> Result<(), StudyError> {
+    let Data { study, runs, coded } = *data;
+    write_output(
+        &sub.join("anova.csv"),
+        anova_csv(&a.fit).as_bytes(),
+        lineage,
     )?;
-    Ok(outcome)
+    write_output(
+        &sub.join("coefficients.csv"),
+        coefficients_csv(a).as_bytes(),
+        lineage,
+    )?;
+    write_output(&sub.join("fit.json"), &json_bytes(a), lineage)?;
+    let pairs: Vec<(f64, f64)> = y_of(runs, &a.response)
+        .into_iter()
+        .zip(a.fit.fitted.iter().copied())
+        .collect();
+    let parity = predicted_vs_actual(&pairs, &format!("{}: predicted vs actual", a.response), "")
+        .map_err(|e| StudyError::Plot(e.to_string()))?;
+    write_output(&sub.join("parity.svg"), parity.as_bytes(), lineage)?;
+    // Two or more factors: a contour of the two that matter most; one
+    // factor: the fitted curve through the runs.
+    let (file, svg) = match contour_grid(study, a, hold) {
+        Some(grid) => (
+            "contour.svg",
+            contour(
+                &grid,
+                &format!("{} (other factors at the optimum)", a.response),
+            ),
+        ),
+        None => {
+            let (x, y, _) = observations(runs, coded, &a.response);
+            ("curve.svg", response_curve(study, a, &x, &y))
+        }
+    };
+    let svg = svg.map_err(|e| StudyError::Plot(e.to_string()))?;
+    write_output(&sub.join(file), svg.as_bytes(), lineage)?;
+    write_output(
+        &sub.join("anova.md"),
+        anova_markdown(study, a).as_bytes(),
+        lineage,
+    )
 }
 
 fn y_of(runs: &Runs, response: &str) -> Vec<f64> {
