@@ -466,72 +466,12 @@ pub fn train_gp(
     let (rows, files) = gather(dir, study)?;
     let all: Vec<&(String, Replicated)> = rows.iter().collect();
     let noise = row_noise(&all)?;
-    let design_rows = rows.iter().filter(|r| r.0 == "design").count();
-    let cut = (design_rows as f64 * train_fraction).round() as usize;
-    let mut seen = 0usize;
-    let (mut train, mut validation) = (Vec::new(), Vec::new());
-    for r in &rows {
-        if r.0 == "design" {
-            if seen < cut {
-                train.push(r);
-            } else {
-                validation.push(r);
-            }
-            seen += 1;
-        } else {
-            train.push(r);
-        }
-    }
+    let (train, validation) = split(&rows, train_fraction);
     let train_data = data_of(study, &train, &noise);
     let val_data = data_of(study, &validation, &noise);
-    let gp = fit(&train_data, seed)?;
-    let mut gp_pred = Vec::new();
-    let mut gp_half = Vec::new();
-    for (x, nv) in val_data.x_unit.iter().zip(&val_data.noise_var) {
-        let p = gp.predict(x);
-        gp_pred.push(p.mean);
-        gp_half.push(Z95 * gp.observation_sd(&p, *nv));
-    }
-    let mut table = vec![metrics(
-        "gp",
-        train_data.y.len(),
-        &val_data.y,
-        &val_data.noise_var,
-        &gp_pred,
-        &gp_half,
-    )];
+    let mut table = vec![validate_gp("gp", &train_data, &val_data, seed)?];
     if let Some(net) = network {
-        let design_train: Vec<&&(String, Replicated)> =
-            train.iter().filter(|r| r.0 == "design").collect();
-        let fitted: Vec<(f64, f64)> = design_train
-            .iter()
-            .filter_map(|r| r.1.mean().map(|m| (m, net(&r.1.point))))
-            .collect();
-        let (obs, pred): (Vec<f64>, Vec<f64>) = fitted.into_iter().unzip();
-        let train_rmse = if obs.is_empty() {
-            0.0
-        } else {
-            mse(&obs, &pred).sqrt()
-        };
-        let mut v_obs = Vec::new();
-        let mut v_noise = Vec::new();
-        let mut v_pred = Vec::new();
-        for r in &validation {
-            if let Some(m) = r.1.mean() {
-                v_obs.push(m);
-                v_noise.push(noise.mean_var(&r.1.values()));
-                v_pred.push(net(&r.1.point));
-            }
-        }
-        let half = vec![Z95 * train_rmse; v_obs.len()];
-        table.push(metrics(
-            "ga_bp",
-            obs.len(),
-            &v_obs,
-            &v_noise,
-            &v_pred,
-            &half,
-        ));
+        table.push(validate_network(net, &train, &validation, &noise));
     }
     let data = data_of(study, &all, &noise);
     let full = fit(&data, seed)?;
@@ -549,24 +489,120 @@ pub fn train_gp(
             ..d.clone()
         };
         let (t, v) = (keep(&train_data), keep(&val_data));
-        let reduced = fit(&t, seed)?;
-        let (mut pred, mut half) = (Vec::new(), Vec::new());
-        for (x, nv) in v.x_unit.iter().zip(&v.noise_var) {
-            let p = reduced.predict(x);
-            pred.push(p.mean);
-            half.push(Z95 * reduced.observation_sd(&p, *nv));
-        }
-        table.push(metrics(
-            "gp_screened",
-            t.y.len(),
-            &v.y,
-            &v.noise_var,
-            &pred,
-            &half,
-        ));
+        table.push(validate_gp("gp_screened", &t, &v, seed)?);
     }
     let mut model = model_of(&full, noise, data);
     model.screening = screening;
+    let mut markdown = markdown(study, &model, &table);
+    let screen_on = study.noise_aware.as_ref().is_some_and(|n| n.screen);
+    markdown.push_str(&screening_markdown(
+        &model.screening,
+        model.noise.pooled_variance_deg2.sqrt(),
+        screen_on,
+    ));
+    let outcome = GpOutcome {
+        model,
+        metrics: table,
+        markdown,
+    };
+    write_outputs(dir, study, (train_fraction, seed), &files, &outcome)?;
+    Ok(outcome)
+}
+
+/// Some of the simulated points, with their source.
+type Rows<'a> = Vec<&'a (String, Replicated)>;
+
+/// The training and validation rows: the first `train_fraction` of the
+/// design rows train, the rest validate; every other row trains.
+fn split(rows: &[(String, Replicated)], train_fraction: f64) -> (Rows<'_>, Rows<'_>) {
+    let design_rows = rows.iter().filter(|r| r.0 == "design").count();
+    let cut = (design_rows as f64 * train_fraction).round() as usize;
+    let mut seen = 0usize;
+    let (mut train, mut validation) = (Vec::new(), Vec::new());
+    for r in rows {
+        if r.0 == "design" {
+            if seen < cut {
+                train.push(r);
+            } else {
+                validation.push(r);
+            }
+            seen += 1;
+        } else {
+            train.push(r);
+        }
+    }
+    (train, validation)
+}
+
+/// The metrics of a GP fitted to `train` predicting the means of
+/// `validation`, with 95 % intervals of the latent and the row's noise
+/// variance.
+fn validate_gp(
+    name: &str,
+    train: &GpData,
+    validation: &GpData,
+    seed: u64,
+) -> Result<SurrogateMetrics, StudyError> {
+    let gp = fit(train, seed)?;
+    let (mut pred, mut half) = (Vec::new(), Vec::new());
+    for (x, nv) in validation.x_unit.iter().zip(&validation.noise_var) {
+        let p = gp.predict(x);
+        pred.push(p.mean);
+        half.push(Z95 * gp.observation_sd(&p, *nv));
+    }
+    Ok(metrics(
+        name,
+        train.y.len(),
+        &validation.y,
+        &validation.noise_var,
+        &pred,
+        &half,
+    ))
+}
+
+/// The metrics of he2019's network `net` predicting the validation rows'
+/// means, its interval ± 1.96 × its RMSE on its own (design) training rows.
+fn validate_network(
+    net: Predictor,
+    train: &[&(String, Replicated)],
+    validation: &[&(String, Replicated)],
+    noise: &RowNoise,
+) -> SurrogateMetrics {
+    let fitted: Vec<(f64, f64)> = train
+        .iter()
+        .filter(|r| r.0 == "design")
+        .filter_map(|r| r.1.mean().map(|m| (m, net(&r.1.point))))
+        .collect();
+    let (obs, pred): (Vec<f64>, Vec<f64>) = fitted.into_iter().unzip();
+    let train_rmse = if obs.is_empty() {
+        0.0
+    } else {
+        mse(&obs, &pred).sqrt()
+    };
+    let mut v_obs = Vec::new();
+    let mut v_noise = Vec::new();
+    let mut v_pred = Vec::new();
+    for r in validation {
+        if let Some(m) = r.1.mean() {
+            v_obs.push(m);
+            v_noise.push(noise.mean_var(&r.1.values()));
+            v_pred.push(net(&r.1.point));
+        }
+    }
+    let half = vec![Z95 * train_rmse; v_obs.len()];
+    metrics("ga_bp", obs.len(), &v_obs, &v_noise, &v_pred, &half)
+}
+
+/// Writes the train stage's GP outputs with their lineage (the settings
+/// `(train_fraction, seed)` and every replicates file read): `screening.csv`,
+/// `surrogates.md`, `surrogates.json` and `gp.json`.
+fn write_outputs(
+    dir: &StudyDir,
+    study: &Study,
+    (train_fraction, seed): (f64, u64),
+    files: &[PathBuf],
+    outcome: &GpOutcome,
+) -> Result<(), StudyError> {
     dir.prepare_stage(study, Stage::Train)?;
     let mut lineage = dir.lineage(
         Stage::Train,
@@ -575,30 +611,26 @@ pub fn train_gp(
                  when Bartlett's test rejects homogeneity; no nugget",
                 "homogeneity_alpha": HOMOGENEITY_ALPHA, "prior_df": PRIOR_DF }),
     );
-    for f in &files {
+    for f in files {
         lineage = lineage.with_input(dir.input("replicates", f)?);
     }
-    let mut markdown = markdown(study, &model, &table);
-    let screen_on = study.noise_aware.as_ref().is_some_and(|n| n.screen);
-    markdown.push_str(&screening_markdown(
-        &model.screening,
-        model.noise.pooled_variance_deg2.sqrt(),
-        screen_on,
-    ));
     let out = dir.stage(Stage::Train);
     write_output(
         &out.join("screening.csv"),
-        screening_csv(&model.screening).as_bytes(),
+        screening_csv(&outcome.model.screening).as_bytes(),
         &lineage,
     )?;
-    write_output(&out.join("surrogates.md"), markdown.as_bytes(), &lineage)?;
-    write_output(&out.join("surrogates.json"), &json_bytes(&table), &lineage)?;
-    write_output(&dir.gp_path(), &json_bytes(&model), &lineage)?;
-    Ok(GpOutcome {
-        model,
-        metrics: table,
-        markdown,
-    })
+    write_output(
+        &out.join("surrogates.md"),
+        outcome.markdown.as_bytes(),
+        &lineage,
+    )?;
+    write_output(
+        &out.join("surrogates.json"),
+        &json_bytes(&outcome.metrics),
+        &lineage,
+    )?;
+    write_output(&dir.gp_path(), &json_bytes(&outcome.model), &lineage)
 }
 
 /// Points of the cube (the search stream's sub-stream 2 of the training

@@ -44,7 +44,9 @@ use crate::report::svg::scatter_matrix;
 use crate::report::table::{Cell, CsvWriter};
 use crate::search::acquisition::probability_in_band;
 use crate::search::band::{cluster_column, family, resample, select, Criterion, Family, Selection};
+use crate::search::meanshift::Clustering;
 use crate::search::screen::{fix_inactive, MainEffect};
+use crate::stats::gp::GpPrediction;
 use crate::stats::gp_two_level::Predictor;
 use crate::study::dir::json_bytes;
 use crate::study::dir::write_output;
@@ -92,6 +94,34 @@ pub struct GpSearchOutcome {
     pub markdown: String,
 }
 
+/// The resampled points of one search and what the GP says of each.
+struct Resampled {
+    /// The points, unit cube of the ranges, inactive parameters fixed.
+    unit: Vec<Vec<f64>>,
+    /// The GP's mean and latent sd of the angle at each point, degrees.
+    predictions: Vec<GpPrediction>,
+    /// Each point's probability of an angle in the band.
+    probability: Vec<f64>,
+}
+
+/// What one search found, ready to be written.
+struct Found<'a> {
+    /// The parameter names, in order.
+    names: Vec<String>,
+    /// The resampled points.
+    resampled: &'a Resampled,
+    /// The kept points and their clusters.
+    selection: &'a Selection,
+    /// The candidates, largest cluster first.
+    candidates: &'a [Candidate],
+    /// The family report.
+    family: &'a Family,
+    /// The target band [lo, hi], degrees.
+    band: (f64, f64),
+    /// The probability a kept point needs.
+    min_probability: f64,
+}
+
 /// Runs the noise-aware search (see the module docs) on `predictor` (a
 /// two-level study's fine level, else the trained GP) with the fit stage's
 /// screening `effects` (the driver reads both from the earlier stages).
@@ -102,7 +132,6 @@ pub fn gp_search(
     settings: &SearchSettings,
 ) -> Result<GpSearchOutcome, StudyError> {
     let spec = noise_aware(study)?;
-    let predict = |u: &[f64]| predictor.predict(u);
     let names = parameter_names(study);
     let samples = settings.samples * RESAMPLE_FACTOR;
     let unit: Vec<Vec<f64>> = resample(samples, names.len(), settings.placement, settings.seed, 1)
@@ -110,12 +139,52 @@ pub fn gp_search(
         .map(|u| fix_inactive(u, effects))
         .collect();
     let (lo, hi) = study.calibration.band_deg();
-    let predictions: Vec<_> = unit.iter().map(|u| predict(u)).collect();
     let criterion = Criterion::Probability {
         lo,
         hi,
         min: spec.min_probability,
     };
+    let resampled = score(predictor, &criterion, unit);
+    let Some(selection) = select(
+        &resampled.unit,
+        &resampled.probability,
+        &criterion,
+        settings.kernel,
+        settings.bandwidth,
+        settings.quantile,
+    ) else {
+        return Err(nothing_kept(
+            study,
+            predictor,
+            &resampled,
+            spec.min_probability,
+        ));
+    };
+    let candidates = candidates(study, predictor, &selection.clustering, (lo, hi));
+    let ranges = crate::study::plan::calibration::ranges(study);
+    let family = family(&names, &ranges, &selection.kept_unit, samples);
+    let found = Found {
+        names,
+        resampled: &resampled,
+        selection: &selection,
+        candidates: &candidates,
+        family: &family,
+        band: (lo, hi),
+        min_probability: spec.min_probability,
+    };
+    let markdown = write_outputs(dir, study, (predictor, effects), settings, &found)?;
+    Ok(GpSearchOutcome {
+        candidates,
+        family,
+        markdown,
+        screening: effects.to_vec(),
+    })
+}
+
+/// The GP's prediction at every point of `unit` and its score under
+/// `criterion` (the probability of the band).
+fn score(predictor: &Predictor, criterion: &Criterion, unit: Vec<Vec<f64>>) -> Resampled {
+    let predictions: Vec<GpPrediction> = unit.iter().map(|u| predictor.predict(u)).collect();
     let probability: Vec<f64> = predictions
         .iter()
         .map(|p| {
@@ -125,54 +194,71 @@ pub fn gp_search(
             })
         })
         .collect();
-    let Some(Selection {
-        kept,
-        kept_unit,
-        bandwidth,
-        clustering,
-    }) = select(
-        &unit,
-        &probability,
-        &criterion,
-        settings.kernel,
-        settings.bandwidth,
-        settings.quantile,
-    )
-    else {
-        let best = (0..unit.len())
-            .max_by(|&a, &b| probability[a].total_cmp(&probability[b]))
-            .unwrap_or(0);
-        let (model, remedy) = if predictor.is_two_level() {
-            (
-                "the two-level GP's fine level",
-                "more fine points (noise_aware.fidelity.fine_points)",
-            )
-        } else {
-            ("the GP", "more runs near the target (`--adaptive`)")
-        };
-        return Err(StudyError::NothingKept(format!(
-            "none of the {samples} resampled points has probability >= {} of an angle in \
-             {lo:.2}–{hi:.2} deg under {model}; the best has {:.3} (mean {:.2} ± {:.2} deg) at \
-             {}: {remedy} or a lower min_probability",
-            spec.min_probability,
-            probability[best],
-            predictions[best].mean,
-            predictions[best].sd,
-            to_physical(study, &unit[best])
-                .iter()
-                .zip(&names)
-                .map(|(v, n)| format!("{n} = {v:.4}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
+    Resampled {
+        unit,
+        predictions,
+        probability,
+    }
+}
+
+/// The refusal when no resampled point reaches `min_probability`: the best
+/// point, its probability and prediction, and what would help.
+fn nothing_kept(
+    study: &Study,
+    predictor: &Predictor,
+    resampled: &Resampled,
+    min_probability: f64,
+) -> StudyError {
+    let Resampled {
+        unit,
+        predictions,
+        probability,
+    } = resampled;
+    let samples = unit.len();
+    let (lo, hi) = study.calibration.band_deg();
+    let best = (0..unit.len())
+        .max_by(|&a, &b| probability[a].total_cmp(&probability[b]))
+        .unwrap_or(0);
+    let (model, remedy) = if predictor.is_two_level() {
+        (
+            "the two-level GP's fine level",
+            "more fine points (noise_aware.fidelity.fine_points)",
+        )
+    } else {
+        ("the GP", "more runs near the target (`--adaptive`)")
     };
-    let candidates: Vec<Candidate> = clustering
+    StudyError::NothingKept(format!(
+        "none of the {samples} resampled points has probability >= {} of an angle in \
+         {lo:.2}–{hi:.2} deg under {model}; the best has {:.3} (mean {:.2} ± {:.2} deg) at \
+         {}: {remedy} or a lower min_probability",
+        min_probability,
+        probability[best],
+        predictions[best].mean,
+        predictions[best].sd,
+        to_physical(study, &unit[best])
+            .iter()
+            .zip(&parameter_names(study))
+            .map(|(v, n)| format!("{n} = {v:.4}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ))
+}
+
+/// One candidate per cluster of `clustering`, at its centre, with the GP's
+/// prediction and the probability of the band `(lo, hi)` there.
+fn candidates(
+    study: &Study,
+    predictor: &Predictor,
+    clustering: &Clustering,
+    (lo, hi): (f64, f64),
+) -> Vec<Candidate> {
+    clustering
         .centres
         .iter()
         .zip(&clustering.sizes)
         .enumerate()
         .map(|(k, (c, &size))| {
-            let p = predict(c);
+            let p = predictor.predict(c);
             Candidate {
                 group: k + 1,
                 size,
@@ -182,11 +268,31 @@ pub fn gp_search(
                 probability: probability_in_band(p.mean, p.sd, lo, hi),
             }
         })
-        .collect();
-    let ranges = crate::study::plan::calibration::ranges(study);
-    let family = family(&names, &ranges, &kept_unit, samples);
+        .collect()
+}
 
-    let label = cluster_column(unit.len(), &kept, &clustering.labels);
+/// Writes the search's outputs with their lineage (the settings, the GP and
+/// the two-level process it read): `points.csv`, `scatter.svg`,
+/// `family.json`, `clusters.md` and the candidates' table; returns the
+/// Markdown report.
+fn write_outputs(
+    dir: &StudyDir,
+    study: &Study,
+    (predictor, effects): (&Predictor, &[MainEffect]),
+    settings: &SearchSettings,
+    found: &Found<'_>,
+) -> Result<String, StudyError> {
+    let Found {
+        names,
+        resampled,
+        selection,
+        candidates,
+        family,
+        band: (lo, hi),
+        min_probability,
+    } = found;
+    let (lo, hi, min_probability) = (*lo, *hi, *min_probability);
+    let samples = resampled.unit.len();
     let out = dir.stage(Stage::Search);
     dir.prepare_stage(study, Stage::Search)?;
     let surrogate = if predictor.is_two_level() {
@@ -198,15 +304,55 @@ pub fn gp_search(
         .lineage(
             Stage::Search,
             json!({ "settings": settings, "surrogate": surrogate, "resampled": samples,
-                    "min_probability": spec.min_probability, "band_deg": [lo, hi],
+                    "min_probability": min_probability, "band_deg": [lo, hi],
                     "fixed_by_screening": effects.iter().filter(|e| !e.active)
                         .map(|e| e.parameter.clone()).collect::<Vec<_>>(),
-                    "bandwidth_used": bandwidth }),
+                    "bandwidth_used": selection.bandwidth }),
         )
         .with_input(dir.input("gp", &dir.gp_path())?);
     if predictor.is_two_level() {
         lineage = lineage.with_input(dir.input("two_level", &dir.two_level_path())?);
     }
+    let ranges = crate::study::plan::calibration::ranges(study);
+    let svg = scatter_matrix(
+        names,
+        &ranges,
+        &selection.kept_unit,
+        &selection.clustering.labels,
+        &selection.clustering.centres,
+        &format!(
+            "{} of {samples} points with P(angle in {lo:.1}–{hi:.1} deg) >= {}",
+            selection.kept.len(),
+            min_probability
+        ),
+    );
+    let markdown = markdown(names, candidates, family, min_probability, (lo, hi));
+    write_output(
+        &out.join("points.csv"),
+        points_csv(study, names, resampled, selection).as_bytes(),
+        &lineage,
+    )?;
+    write_output(&out.join("scatter.svg"), svg.as_bytes(), &lineage)?;
+    write_output(&out.join("family.json"), &json_bytes(family), &lineage)?;
+    write_output(&out.join("clusters.md"), markdown.as_bytes(), &lineage)?;
+    write_output(
+        &dir.clusters_path(),
+        clusters_csv(names, candidates).as_bytes(),
+        &lineage,
+    )?;
+    Ok(markdown)
+}
+
+/// Every resampled point, physical units, with its prediction, probability
+/// and cluster (empty when not kept).
+fn points_csv(
+    study: &Study,
+    names: &[String],
+    resampled: &Resampled,
+    selection: &Selection,
+) -> String {
+    let unit = &resampled.unit;
+    let label = cluster_column(unit.len(), &selection.kept, &selection.clustering.labels);
     let mut header = vec!["point".to_string()];
     header.extend(names.iter().cloned());
     header.extend(
@@ -222,17 +368,22 @@ pub fn gp_search(
     for (i, u) in unit.iter().enumerate() {
         let mut cells = vec![Cell::Integer(i as u64)];
         cells.extend(to_physical(study, u).into_iter().map(Cell::Number));
-        cells.push(Cell::Number(predictions[i].mean));
-        cells.push(Cell::Number(predictions[i].sd));
-        cells.push(Cell::Number(probability[i]));
+        cells.push(Cell::Number(resampled.predictions[i].mean));
+        cells.push(Cell::Number(resampled.predictions[i].sd));
+        cells.push(Cell::Number(resampled.probability[i]));
         cells.push(label[i].map_or(Cell::Empty, |l| Cell::Integer(l as u64)));
         points.row(&cells);
     }
+    points.finish()
+}
+
+/// The candidates' table: group, size, centre and its prediction.
+fn clusters_csv(names: &[String], candidates: &[Candidate]) -> String {
     let mut header = vec!["group".to_string(), "size".to_string()];
     header.extend(names.iter().cloned());
     header.extend(["predicted_angle_deg", "predicted_sd_deg", "probability"].map(String::from));
     let mut clusters = CsvWriter::new(&header);
-    for c in &candidates {
+    for c in candidates {
         let mut cells = vec![Cell::Integer(c.group as u64), Cell::Integer(c.size as u64)];
         cells.extend(c.centre.iter().map(|v| Cell::Number(*v)));
         cells.push(Cell::Number(c.predicted_deg));
@@ -240,34 +391,7 @@ pub fn gp_search(
         cells.push(Cell::Number(c.probability));
         clusters.row(&cells);
     }
-    let svg = scatter_matrix(
-        &names,
-        &ranges,
-        &kept_unit,
-        &clustering.labels,
-        &clustering.centres,
-        &format!(
-            "{} of {samples} points with P(angle in {lo:.1}–{hi:.1} deg) >= {}",
-            kept.len(),
-            spec.min_probability
-        ),
-    );
-    let markdown = markdown(&names, &candidates, &family, spec.min_probability, (lo, hi));
-    write_output(
-        &out.join("points.csv"),
-        points.finish().as_bytes(),
-        &lineage,
-    )?;
-    write_output(&out.join("scatter.svg"), svg.as_bytes(), &lineage)?;
-    write_output(&out.join("family.json"), &json_bytes(&family), &lineage)?;
-    write_output(&out.join("clusters.md"), markdown.as_bytes(), &lineage)?;
-    write_output(&dir.clusters_path(), clusters.finish().as_bytes(), &lineage)?;
-    Ok(GpSearchOutcome {
-        candidates,
-        family,
-        markdown,
-        screening: effects.to_vec(),
-    })
+    clusters.finish()
 }
 
 fn markdown(
