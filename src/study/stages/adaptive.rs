@@ -40,12 +40,12 @@ use serde_json::json;
 
 use crate::doe::lhs::{latin_hypercube, Placement};
 use crate::exec::Executor;
-use crate::manifest::{Experiment, Study};
+use crate::manifest::{Experiment, NoiseAware, Study};
 use crate::search::acquisition::probability_in_band;
 use crate::stats::gp::GaussianProcess;
 use crate::store::{RunDir, RunResult, Store};
 use crate::streams::{rng, Stream};
-use crate::study::acceptance::RULE;
+use crate::study::acceptance::{Record, RULE};
 use crate::study::dir::json_bytes;
 use crate::study::dir::write_output;
 use crate::study::dir::Stage;
@@ -114,8 +114,6 @@ where
     } else {
         Vec::new()
     };
-    let (lo, hi) = study.calibration.band_deg();
-    let names = parameter_names(study);
     let noise_sd = read_noise(dir).ok().and_then(|f| f.sd_deg);
     let rule = acceptance(study, noise_sd, comparisons(study, candidates, true));
     // The rule goes on record before the first round.
@@ -126,81 +124,23 @@ where
         &dir.lineage(Stage::Adaptive, json!({ "record": "acceptance rule" })),
     )?;
     let seeds = rule.targets[0].seeds;
-    let explore = spec.replicates as usize;
     let round_runs = round_runs(&spec, seeds);
-    let budget = spec.adaptive.max_runs as usize;
     loop {
-        let rounds = points
-            .iter()
-            .map(|p| (p.index - ADAPTIVE_INDEX) / ROUND_STRIDE + 1)
-            .max()
-            .unwrap_or(0) as usize;
-        let runs: usize = points.iter().map(|p| p.runs.len()).sum();
-        let hit = passing(&points, &rule);
-        if hit.is_some() {
-            return Ok(AdaptiveOutcome {
-                rounds,
-                runs,
-                stop: Stop::Reached,
-                hit,
-            });
+        let budget = spec.adaptive.max_runs as usize;
+        if let Some(outcome) = stopped(&points, &rule, round_runs, budget) {
+            return Ok(outcome);
         }
-        if runs + round_runs > budget {
-            return Ok(AdaptiveOutcome {
-                rounds,
-                runs,
-                stop: Stop::Budget,
-                hit: None,
-            });
-        }
+        let rounds = rounds_run(&points);
         let gp = refit()?;
-        let pool_points = latin_hypercube(
-            POOL,
-            names.len(),
-            Placement::Random,
-            &mut rng(seed, Stream::Adaptive, rounds as u64),
-        );
-        let mut scored: Vec<(f64, usize)> = pool_points
-            .iter()
-            .enumerate()
-            .map(|(i, u)| {
-                let p = gp.predict(u);
-                (probability_in_band(p.mean, p.sd, lo, hi), i)
-            })
-            .collect();
-        scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        let mut chosen: Vec<&Vec<f64>> = Vec::new();
-        for (_, i) in &scored {
-            let u = &pool_points[*i];
-            let far = chosen.iter().all(|c| {
-                c.iter()
-                    .zip(u)
-                    .map(|(a, b)| (a - b) * (a - b))
-                    .sum::<f64>()
-                    .sqrt()
-                    >= MIN_SEPARATION
-            });
-            if far {
-                chosen.push(u);
-                if chosen.len() == spec.adaptive.batch as usize {
-                    break;
-                }
-            }
-        }
-        let first = ADAPTIVE_INDEX + ROUND_STRIDE * rounds as u64;
-        let mut new: Vec<(u64, Vec<f64>)> = chosen
-            .iter()
-            .enumerate()
-            .map(|(k, u)| (first + k as u64, to_physical(study, u)))
-            .collect();
+        let (mut new, best) = next_points(study, &gp, seed, rounds, spec.adaptive.batch as usize);
         progress(&format!(
-            "adaptive round {}: candidate x {seeds} seeds (P(in band) {:.2}), {} more point(s) x {explore} seeds",
+            "adaptive round {}: candidate x {seeds} seeds (P(in band) {:.2}), {} more point(s) x {} seeds",
             rounds + 1,
-            scored.first().map_or(0.0, |s| s.0),
+            best,
             new.len().saturating_sub(1),
+            spec.replicates as usize,
         ));
         let explorers = new.split_off(1.min(new.len()));
-        let mut ran = Vec::new();
         for (group, replicates) in [(&new, seeds as u32), (&explorers, spec.replicates)] {
             let (r, _) = run_replicated(
                 study,
@@ -212,27 +152,129 @@ where
                 &runner,
                 false,
             )?;
-            ran.extend(r);
+            points.extend(r);
         }
-        points.extend(ran);
-        let mut lineage = dir.lineage(
-            Stage::Adaptive,
-            json!({ "batch": spec.adaptive.batch, "max_runs": budget, "pool": POOL,
-                    "min_separation": MIN_SEPARATION, "seed": seed,
-                    "candidate_seeds": seeds, "explore_seeds": explore,
-                    "rule": RULE, "alpha": rule.alpha, "comparisons": rule.comparisons,
-                    "score": "probability of the target band under the GP" }),
-        );
-        for r in points.iter().flat_map(|p| &p.runs) {
-            let file = store.run_dir(&r.id).result_path();
-            if file.is_file() {
-                lineage = lineage.with_input(dir.input("result", &file)?);
+        write_points(dir, study, store, (&spec, &rule, seed), &points)?;
+    }
+}
+
+/// Rounds run so far: one past the highest round among `points`' indices.
+fn rounds_run(points: &[Replicated]) -> usize {
+    points
+        .iter()
+        .map(|p| (p.index - ADAPTIVE_INDEX) / ROUND_STRIDE + 1)
+        .max()
+        .unwrap_or(0) as usize
+}
+
+/// The outcome when the stage stops before another round: a candidate of
+/// `points` passed `rule`, or the next round's `round_runs` would take the
+/// runs past `budget`; `None` while it goes on.
+fn stopped(
+    points: &[Replicated],
+    rule: &Record,
+    round_runs: usize,
+    budget: usize,
+) -> Option<AdaptiveOutcome> {
+    let runs: usize = points.iter().map(|p| p.runs.len()).sum();
+    let hit = passing(points, rule);
+    let stop = if hit.is_some() {
+        Stop::Reached
+    } else if runs + round_runs > budget {
+        Stop::Budget
+    } else {
+        return None;
+    };
+    Some(AdaptiveOutcome {
+        rounds: rounds_run(points),
+        runs,
+        stop,
+        hit,
+    })
+}
+
+/// Round `round`'s points, physical units, indexed from its first index:
+/// the [`POOL`] points of its sub-stream of the adaptive stream scored by
+/// `gp`'s probability of the band, the best first, then the next best at
+/// least [`MIN_SEPARATION`] from every point taken, up to `batch` in all;
+/// and the best point's probability (0 with an empty pool).
+fn next_points(
+    study: &Study,
+    gp: &GaussianProcess,
+    seed: u64,
+    round: usize,
+    batch: usize,
+) -> (Vec<(u64, Vec<f64>)>, f64) {
+    let (lo, hi) = study.calibration.band_deg();
+    let pool_points = latin_hypercube(
+        POOL,
+        parameter_names(study).len(),
+        Placement::Random,
+        &mut rng(seed, Stream::Adaptive, round as u64),
+    );
+    let mut scored: Vec<(f64, usize)> = pool_points
+        .iter()
+        .enumerate()
+        .map(|(i, u)| {
+            let p = gp.predict(u);
+            (probability_in_band(p.mean, p.sd, lo, hi), i)
+        })
+        .collect();
+    scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let mut chosen: Vec<&Vec<f64>> = Vec::new();
+    for (_, i) in &scored {
+        let u = &pool_points[*i];
+        let far = chosen.iter().all(|c| {
+            c.iter()
+                .zip(u)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                .sqrt()
+                >= MIN_SEPARATION
+        });
+        if far {
+            chosen.push(u);
+            if chosen.len() == batch {
+                break;
             }
         }
-        write_output(
-            &path,
-            replicates_csv(study, &[(&study.calibration.name, &points)]).as_bytes(),
-            &lineage,
-        )?;
     }
+    let first = ADAPTIVE_INDEX + ROUND_STRIDE * round as u64;
+    let new = chosen
+        .iter()
+        .enumerate()
+        .map(|(k, u)| (first + k as u64, to_physical(study, u)))
+        .collect();
+    (new, scored.first().map_or(0.0, |s| s.0))
+}
+
+/// Rewrites `adaptive/replicates.csv` with every adaptive point so far,
+/// its lineage the stage's settings (the noise-aware block, the acceptance
+/// `rule` and the adaptive `seed`) and every run's result.
+fn write_points(
+    dir: &StudyDir,
+    study: &Study,
+    store: &Store,
+    (spec, rule, seed): (&NoiseAware, &Record, u64),
+    points: &[Replicated],
+) -> Result<(), StudyError> {
+    let mut lineage = dir.lineage(
+        Stage::Adaptive,
+        json!({ "batch": spec.adaptive.batch, "max_runs": spec.adaptive.max_runs as usize, "pool": POOL,
+                "min_separation": MIN_SEPARATION, "seed": seed,
+                "candidate_seeds": rule.targets[0].seeds, "explore_seeds": spec.replicates as usize,
+                "rule": RULE, "alpha": rule.alpha, "comparisons": rule.comparisons,
+                "score": "probability of the target band under the GP" }),
+    );
+    for r in points.iter().flat_map(|p| &p.runs) {
+        let file = store.run_dir(&r.id).result_path();
+        if file.is_file() {
+            lineage = lineage.with_input(dir.input("result", &file)?);
+        }
+    }
+    write_output(
+        &dir.adaptive_path(),
+        replicates_csv(study, &[(&study.calibration.name, points)]).as_bytes(),
+        &lineage,
+    )
 }

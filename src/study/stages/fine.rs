@@ -53,6 +53,7 @@
 //! every other output of the stage is the same bytes on any executor.
 
 use std::fmt::Write as _;
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 use serde_json::json;
@@ -293,6 +294,21 @@ fn largest_sd(model: &TwoLevelGp, unit: &[Vec<f64>], chosen: &[usize]) -> Option
     best
 }
 
+/// A round's picks: the design row, how it was chosen and the model's
+/// fine-level sd there (degrees) when the model chose.
+type Pick = (usize, Choice, Option<f64>);
+
+/// The fine points chosen so far, in order, and their runs.
+#[derive(Default)]
+struct Chosen {
+    /// Their design rows.
+    rows: Vec<usize>,
+    /// The fine points.
+    points: Vec<FinePoint>,
+    /// Their fine runs.
+    runs: Vec<Replicated>,
+}
+
 /// Runs the fine stage (module docs) over `coarse`, the trained GP of the
 /// fit stage (the driver reads it); `log` gets one line per round.
 pub fn fine<E, F>(
@@ -314,39 +330,9 @@ where
     let unit: Vec<Vec<f64>> = design.iter().map(|r| to_unit(study, &r.point)).collect();
     let wanted = (spec.fine_points as usize).min(design.len());
     let seed = study.design.seed;
-    let mut chosen: Vec<usize> = Vec::new();
-    let mut points: Vec<FinePoint> = Vec::new();
-    let mut runs: Vec<Replicated> = Vec::new();
-    while chosen.len() < wanted {
-        // The next round: the space-filling start together, then one point
-        // at a time by the model.
-        let mut round: Vec<(usize, Choice, Option<f64>)> = Vec::new();
-        if chosen.len() < SPACE_FILLING_POINTS {
-            let mut picked = chosen.clone();
-            while picked.len() < SPACE_FILLING_POINTS.min(wanted) {
-                let Some(i) = space_filling(&unit, &picked) else {
-                    break;
-                };
-                picked.push(i);
-                round.push((i, Choice::SpaceFilling, None));
-            }
-        } else {
-            match fit_on(coarse, &points, seed) {
-                Ok(m) => {
-                    if let Some((i, sd)) = largest_sd(&m, &unit, &chosen) {
-                        round.push((i, Choice::FineSd, Some(sd)));
-                    }
-                }
-                Err(why) => {
-                    log(&format!(
-                        "fine: the two-level fit failed ({why}); space filling picks"
-                    ));
-                    if let Some(i) = space_filling(&unit, &chosen) {
-                        round.push((i, Choice::SpaceFillingFallback, None));
-                    }
-                }
-            }
-        }
+    let mut chosen = Chosen::default();
+    while chosen.rows.len() < wanted {
+        let round = next_round(coarse, &unit, &chosen, wanted, seed, log);
         if round.is_empty() {
             break;
         }
@@ -365,35 +351,12 @@ where
             runner,
             false,
         )?;
-        for ((i, choice, sd), r) in round.into_iter().zip(done) {
-            let values = r.values();
-            let summary = mean_ci(&values);
-            log(&format!(
-                "fine: design point {} ({choice:?}{}): {}",
-                r.index,
-                sd.map_or(String::new(), |s| format!(", predicted sd {s:.2} deg")),
-                summary
-                    .as_ref()
-                    .map_or("fewer than 2 seeds measured".into(), |m| {
-                        format!("{:.2} ± {:.2} deg", m.mean, m.half_width)
-                    })
-            ));
-            points.push(FinePoint {
-                index: r.index,
-                x_unit: unit[i].clone(),
-                chosen_by: choice,
-                predicted_sd_deg: sd,
-                coarse_mean_deg: design[i].mean(),
-                seeds: r.runs.len(),
-                mean_deg: summary.as_ref().map(|m| m.mean),
-                measured: values.len(),
-                noise_var: None,
-            });
-            chosen.push(i);
-            runs.push(r);
+        for (pick, r) in round.into_iter().zip(done) {
+            add_point(&mut chosen, pick, r, (&design, &unit), log);
         }
-        pool_noise(&mut points, &runs);
+        pool_noise(&mut chosen.points, &chosen.runs);
     }
+    let Chosen { points, runs, .. } = chosen;
     let fitted = fit_on(coarse, &points, seed).map_err(|why| {
         StudyError::Settings(format!(
             "the two-level process could not be fitted to the {} fine points: {why}",
@@ -413,12 +376,108 @@ where
         },
     };
     let cost = level_cost(store, &design, &runs);
-    let markdown = markdown(&record, cost.coarse_runs);
+    let outcome = FineOutcome {
+        runs: runs.iter().map(|r| r.runs.len()).sum(),
+        markdown: markdown(&record, cost.coarse_runs),
+        record,
+        cost,
+    };
+    write_outputs(dir, study, store, (&design_file, &runs), &outcome)?;
+    Ok(outcome)
+}
+
+/// The next round's picks: the space-filling start together, then one
+/// point at a time by the model (space filling again, logged, when the
+/// two-level fit fails); empty when no row is left.
+fn next_round(
+    coarse: &GaussianProcess,
+    unit: &[Vec<f64>],
+    chosen: &Chosen,
+    wanted: usize,
+    seed: u64,
+    log: &mut dyn FnMut(&str),
+) -> Vec<Pick> {
+    let mut round: Vec<Pick> = Vec::new();
+    if chosen.rows.len() < SPACE_FILLING_POINTS {
+        let mut picked = chosen.rows.clone();
+        while picked.len() < SPACE_FILLING_POINTS.min(wanted) {
+            let Some(i) = space_filling(unit, &picked) else {
+                break;
+            };
+            picked.push(i);
+            round.push((i, Choice::SpaceFilling, None));
+        }
+    } else {
+        match fit_on(coarse, &chosen.points, seed) {
+            Ok(m) => {
+                if let Some((i, sd)) = largest_sd(&m, unit, &chosen.rows) {
+                    round.push((i, Choice::FineSd, Some(sd)));
+                }
+            }
+            Err(why) => {
+                log(&format!(
+                    "fine: the two-level fit failed ({why}); space filling picks"
+                ));
+                if let Some(i) = space_filling(unit, &chosen.rows) {
+                    round.push((i, Choice::SpaceFillingFallback, None));
+                }
+            }
+        }
+    }
+    round
+}
+
+/// Adds the fine point `pick` of the coarse `design` (its rows in the unit
+/// cube `unit`) with its fine runs `r` to `chosen`, logging its mean.
+fn add_point(
+    chosen: &mut Chosen,
+    (i, choice, sd): Pick,
+    r: Replicated,
+    (design, unit): (&[Replicated], &[Vec<f64>]),
+    log: &mut dyn FnMut(&str),
+) {
+    let values = r.values();
+    let summary = mean_ci(&values);
+    log(&format!(
+        "fine: design point {} ({choice:?}{}): {}",
+        r.index,
+        sd.map_or(String::new(), |s| format!(", predicted sd {s:.2} deg")),
+        summary
+            .as_ref()
+            .map_or("fewer than 2 seeds measured".into(), |m| {
+                format!("{:.2} ± {:.2} deg", m.mean, m.half_width)
+            })
+    ));
+    chosen.points.push(FinePoint {
+        index: r.index,
+        x_unit: unit[i].clone(),
+        chosen_by: choice,
+        predicted_sd_deg: sd,
+        coarse_mean_deg: design[i].mean(),
+        seeds: r.runs.len(),
+        mean_deg: summary.as_ref().map(|m| m.mean),
+        measured: values.len(),
+        noise_var: None,
+    });
+    chosen.rows.push(i);
+    chosen.runs.push(r);
+}
+
+/// Writes the stage's outputs with their lineage (the fidelity block, the
+/// GP, the coarse design file and every fine run's result): `runs.csv`,
+/// `two_level.json`, `fine.md` and `cost.json`.
+fn write_outputs(
+    dir: &StudyDir,
+    study: &Study,
+    store: &Store,
+    (design_file, runs): (&Path, &[Replicated]),
+    outcome: &FineOutcome,
+) -> Result<(), StudyError> {
     dir.prepare_stage(study, Stage::Fine)?;
     let mut lineage = dir
-        .lineage(Stage::Fine, json!({ "fidelity": spec }))
+        .lineage(Stage::Fine, json!({ "fidelity": outcome.record.fidelity }))
         .with_input(dir.input("gp", &dir.gp_path())?)
-        .with_input(dir.input("design", &design_file)?);
+        .with_input(dir.input("design", design_file)?);
     for r in runs.iter().flat_map(|p| &p.runs) {
         let file = store.run_dir(&r.id).result_path();
         if file.is_file() {
@@ -429,18 +488,16 @@ where
     let scene = study.calibration.name.as_str();
     write_output(
         &out.join("runs.csv"),
-        replicates_csv(study, &[(scene, runs.as_slice())]).as_bytes(),
+        replicates_csv(study, &[(scene, runs)]).as_bytes(),
         &lineage,
     )?;
-    write_output(&dir.two_level_path(), &json_bytes(&record), &lineage)?;
-    write_output(&out.join("fine.md"), markdown.as_bytes(), &lineage)?;
-    write_output(&out.join("cost.json"), &json_bytes(&cost), &lineage)?;
-    Ok(FineOutcome {
-        runs: runs.iter().map(|r| r.runs.len()).sum(),
-        record,
-        cost,
-        markdown,
-    })
+    write_output(
+        &dir.two_level_path(),
+        &json_bytes(&outcome.record),
+        &lineage,
+    )?;
+    write_output(&out.join("fine.md"), outcome.markdown.as_bytes(), &lineage)?;
+    write_output(&out.join("cost.json"), &json_bytes(&outcome.cost), &lineage)
 }
 
 /// Sets every fine mean's noise variance to the fine points' pooled

@@ -20,7 +20,7 @@ use crate::study::dir::write_output;
 use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
 use crate::study::plan::calibration::parameter_names;
-use crate::study::runs::replicated::{replicates_csv, run_replicated};
+use crate::study::runs::replicated::{replicates_csv, run_replicated, Replicated};
 use crate::study::StudyError;
 
 /// One row of design.csv.
@@ -297,6 +297,68 @@ where
             })
         })
         .collect();
+    let table = write_replicated(dir, study, store, design, &runs, replicates)?;
+    Ok(BatchOutcome {
+        total,
+        cached: tally.not_simulated,
+        computed: total - tally.not_simulated - tally.failed_now,
+        failures,
+        table,
+    })
+}
+
+/// Writes `replicates.csv` (every replicate's run) and `angles.csv` (each
+/// design row's replicate mean, count and spread) with their lineage (the
+/// response, the replicates, the design and every run's result); returns
+/// the path of `angles.csv`.
+fn write_replicated(
+    dir: &StudyDir,
+    study: &Study,
+    store: &Store,
+    design: &[DesignRow],
+    runs: &[Replicated],
+    replicates: u32,
+) -> Result<PathBuf, StudyError> {
+    let mut lineage = dir
+        .lineage(
+            Stage::Batch,
+            json!({ "angle": study.calibration.response.clone()
+                        .unwrap_or_else(|| "headline_angle_deg".into()),
+                    "replicates": replicates, "value": "mean of the measured replicates" }),
+        )
+        .with_input(dir.input("design", &dir.design_path())?);
+    for p in runs {
+        for r in &p.runs {
+            let file = store.run_dir(&r.id).result_path();
+            if file.is_file() {
+                lineage = lineage.with_input(dir.input("result", &file)?);
+            }
+        }
+    }
+    crate::study::plan::calibration::create_dir(&dir.stage(Stage::Batch))?;
+    write_output(
+        &dir.replicates_path(),
+        replicates_csv(study, &[(&study.calibration.name, runs)]).as_bytes(),
+        &lineage,
+    )?;
+    let table = dir.angles_path();
+    write_output(
+        &table,
+        replicated_angles_csv(study, design, runs, replicates).as_bytes(),
+        &lineage,
+    )?;
+    Ok(table)
+}
+
+/// `angles.csv` of a replicated batch: per design row its replicates' mean
+/// angle (degrees), status (failed when no replicate measured), replicate
+/// and measured counts and the angles' sd (degrees).
+fn replicated_angles_csv(
+    study: &Study,
+    design: &[DesignRow],
+    runs: &[Replicated],
+    replicates: u32,
+) -> String {
     let names = parameter_names(study);
     let mut header = vec!["index".to_string()];
     header.extend(names.iter().cloned());
@@ -312,23 +374,7 @@ where
         .map(String::from),
     );
     let mut csv = CsvWriter::new(&header);
-    let mut lineage = dir
-        .lineage(
-            Stage::Batch,
-            json!({ "angle": study.calibration.response.clone()
-                        .unwrap_or_else(|| "headline_angle_deg".into()),
-                    "replicates": replicates, "value": "mean of the measured replicates" }),
-        )
-        .with_input(dir.input("design", &dir.design_path())?);
-    for p in &runs {
-        for r in &p.runs {
-            let file = store.run_dir(&r.id).result_path();
-            if file.is_file() {
-                lineage = lineage.with_input(dir.input("result", &file)?);
-            }
-        }
-    }
-    for (row, p) in design.iter().zip(&runs) {
+    for (row, p) in design.iter().zip(runs) {
         let values = p.values();
         let mut cells = vec![Cell::Integer(row.index as u64)];
         cells.extend(row.point.iter().map(|v| Cell::Number(*v)));
@@ -345,19 +391,5 @@ where
         cells.push(p.summary().map_or(Cell::Empty, |s| Cell::Number(s.std)));
         csv.row(&cells);
     }
-    crate::study::plan::calibration::create_dir(&dir.stage(Stage::Batch))?;
-    write_output(
-        &dir.replicates_path(),
-        replicates_csv(study, &[(&study.calibration.name, &runs)]).as_bytes(),
-        &lineage,
-    )?;
-    let table = dir.angles_path();
-    write_output(&table, csv.finish().as_bytes(), &lineage)?;
-    Ok(BatchOutcome {
-        total,
-        cached: tally.not_simulated,
-        computed: total - tally.not_simulated - tally.failed_now,
-        failures,
-        table,
-    })
+    csv.finish()
 }

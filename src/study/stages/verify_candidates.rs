@@ -58,13 +58,13 @@
 //! them), and it is judged in every other scene like the search's.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use crate::exec::Executor;
-use crate::manifest::{Experiment, Study};
+use crate::manifest::{Experiment, Study, TargetScene};
 use crate::report::markdown::MarkdownTable;
 use crate::report::table::{Cell, CsvWriter, Table};
 use crate::scenes::resolution::unresolved_figures;
@@ -177,20 +177,9 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    // A two-level study verifies at the fine size, where the noise floor
-    // (measured at the study's size) says nothing of the seeds needed.
+    // A two-level study verifies at the fine size.
     let size = verified_size(study);
-    let noise_sd = if study.fidelity().is_none() {
-        read_noise(dir).ok().and_then(|f| f.sd_deg)
-    } else {
-        None
-    };
-    let ran_adaptive = dir.adaptive_path().is_file();
-    let rule = acceptance(
-        study,
-        noise_sd,
-        comparisons(study, candidates, ran_adaptive),
-    );
+    let rule = acceptance_rule(dir, study, candidates);
     let (clusters_file, centres) = read_candidates(dir, study, candidates)?;
     let mut points: Vec<(u64, Vec<f64>)> = centres
         .into_iter()
@@ -202,16 +191,8 @@ where
     }
 
     // The rule goes on record before any verification run.
-    dir.prepare_stage(study, Stage::Verify)?;
-    let mut rule_lineage = dir
-        .lineage(Stage::Verify, json!({ "record": "acceptance rule" }))
-        .with_input(dir.input("clusters", &clusters_file)?);
-    if adaptive.is_some() {
-        rule_lineage = rule_lineage.with_input(dir.input("adaptive", &dir.adaptive_path())?);
-    }
-    write_output(&dir.acceptance_path(), &json_bytes(&rule), &rule_lineage)?;
-
-    let targets: Vec<_> = std::iter::once(&study.calibration)
+    write_rule(dir, study, &rule, &clusters_file, adaptive.is_some())?;
+    let targets: Vec<&TargetScene> = std::iter::once(&study.calibration)
         .chain(&study.verification)
         .collect();
     let mut per_scene: Vec<Vec<Replicated>> = Vec::new();
@@ -231,9 +212,80 @@ where
             .0,
         );
     }
+    let rows = rows(store, &rule, &points, (&targets, &per_scene))?;
+    let all_runs = || per_scene.iter().flatten().flat_map(|p| &p.runs);
+    let failed_runs = all_runs()
+        .filter(|r| store.status(&r.id) == RunStatus::Failed)
+        .count();
+    let outcome = VerifyOutcome {
+        markdown: markdown(&rule, &rows),
+        acceptance: rule,
+        rows,
+        table: dir.verification_path(),
+        failed_runs,
+        runs: all_runs().count(),
+    };
+    write_outputs(
+        dir,
+        study,
+        store,
+        (candidates, &clusters_file),
+        (&targets, &per_scene),
+        &outcome,
+    )?;
+    Ok(outcome)
+}
+
+/// The acceptance rule of a verification of `candidates` search candidates
+/// (and the adaptive one, when the adaptive stage ran), with the noise
+/// floor's sd when it describes the verified size.
+fn acceptance_rule(dir: &StudyDir, study: &Study, candidates: usize) -> Record {
+    // A two-level study verifies at the fine size, where the noise floor
+    // (measured at the study's size) says nothing of the seeds needed.
+    let noise_sd = if study.fidelity().is_none() {
+        read_noise(dir).ok().and_then(|f| f.sd_deg)
+    } else {
+        None
+    };
+    let ran_adaptive = dir.adaptive_path().is_file();
+    acceptance(
+        study,
+        noise_sd,
+        comparisons(study, candidates, ran_adaptive),
+    )
+}
+
+/// Writes the acceptance record `rule` with its lineage (the clusters file
+/// and, when an adaptive candidate is verified, the adaptive table).
+fn write_rule(
+    dir: &StudyDir,
+    study: &Study,
+    rule: &Record,
+    clusters_file: &Path,
+    adaptive: bool,
+) -> Result<(), StudyError> {
+    dir.prepare_stage(study, Stage::Verify)?;
+    let mut rule_lineage = dir
+        .lineage(Stage::Verify, json!({ "record": "acceptance rule" }))
+        .with_input(dir.input("clusters", clusters_file)?);
+    if adaptive {
+        rule_lineage = rule_lineage.with_input(dir.input("adaptive", &dir.adaptive_path())?);
+    }
+    write_output(&dir.acceptance_path(), &json_bytes(rule), &rule_lineage)
+}
+
+/// One row per verified point and scene: the measured seeds judged by
+/// `rule` against the scene's target, with the failed seeds and the
+/// unresolved resolution figures.
+fn rows(
+    store: &Store,
+    rule: &Record,
+    points: &[(u64, Vec<f64>)],
+    (targets, per_scene): (&[&TargetScene], &[Vec<Replicated>]),
+) -> Result<Vec<VerifyRow>, StudyError> {
     let mut rows = Vec::new();
     for (k, (index, _)) in points.iter().enumerate() {
-        for (j, (target, runs)) in targets.iter().zip(&per_scene).enumerate() {
+        for (j, (target, runs)) in targets.iter().zip(per_scene).enumerate() {
             let r = &runs[k];
             let values = r.values();
             let judgement = rule.judge(j, &values);
@@ -264,11 +316,26 @@ where
             });
         }
     }
+    Ok(rows)
+}
+
+/// Writes the stage's outputs with their lineage (the number of
+/// `candidates`, the clusters file, the acceptance record and every run's
+/// result): `runs.csv` (every scene's runs), `verification.md` and
+/// `verification.csv`.
+fn write_outputs(
+    dir: &StudyDir,
+    study: &Study,
+    store: &Store,
+    (candidates, clusters_file): (usize, &Path),
+    (targets, per_scene): (&[&TargetScene], &[Vec<Replicated>]),
+    outcome: &VerifyOutcome,
+) -> Result<(), StudyError> {
     let mut lineage = dir
         .lineage(Stage::Verify, json!({ "candidates": candidates }))
-        .with_input(dir.input("clusters", &clusters_file)?)
+        .with_input(dir.input("clusters", clusters_file)?)
         .with_input(dir.input("acceptance", &dir.acceptance_path())?);
-    for runs in &per_scene {
+    for runs in per_scene {
         for r in runs.iter().flat_map(|p| &p.runs) {
             let file = store.run_dir(&r.id).result_path();
             if file.is_file() {
@@ -279,7 +346,7 @@ where
     let out = dir.stage(Stage::Verify);
     let blocks: Vec<(&str, &[Replicated])> = targets
         .iter()
-        .zip(&per_scene)
+        .zip(per_scene)
         .map(|(t, runs)| (t.name.as_str(), runs.as_slice()))
         .collect();
     write_output(
@@ -287,22 +354,12 @@ where
         replicates_csv(study, &blocks).as_bytes(),
         &lineage,
     )?;
-    let markdown = markdown(&rule, &rows);
-    write_output(&out.join("verification.md"), markdown.as_bytes(), &lineage)?;
-    let table = dir.verification_path();
-    write_output(&table, csv(&rows).as_bytes(), &lineage)?;
-    let all_runs = || per_scene.iter().flatten().flat_map(|p| &p.runs);
-    let failed_runs = all_runs()
-        .filter(|r| store.status(&r.id) == RunStatus::Failed)
-        .count();
-    Ok(VerifyOutcome {
-        acceptance: rule,
-        rows,
-        markdown,
-        table,
-        failed_runs,
-        runs: all_runs().count(),
-    })
+    write_output(
+        &out.join("verification.md"),
+        outcome.markdown.as_bytes(),
+        &lineage,
+    )?;
+    write_output(&outcome.table, csv(&outcome.rows).as_bytes(), &lineage)
 }
 
 /// The candidate number of a verified point: the cluster group of a search
