@@ -19,7 +19,9 @@
 //!   [`records`]: what a stage wrote that a later one reads, read back
 //!   through the layout.
 //! - [`runs`]: points × replicates × scenes → [`crate::exec`] → a response
-//!   table; [`acceptance`]: the one acceptance rule; [`dir`]: the one layout
+//!   table; [`acceptance`]: the one acceptance rule; [`verification`]: a
+//!   design study's named points re-simulated and judged by it (the step
+//!   `verify` and `sensitivity` share); [`dir`]: the one layout
 //!   of a study's outputs and the stage-name vocabulary; [`pipeline`]: a
 //!   he2019 calibration's whole list and its outcome record.
 //!
@@ -36,6 +38,7 @@ pub mod run;
 pub mod runs;
 pub mod stages;
 pub mod sweeps;
+pub mod verification;
 
 use std::path::Path;
 

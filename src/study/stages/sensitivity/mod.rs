@@ -46,13 +46,15 @@ use crate::exec::Executor;
 use crate::manifest::Experiment;
 use crate::scenes::responses::{flow_rate_curve, observations};
 use crate::stats::nlls::{Model, PowerLaw};
-use crate::store::{Depth, Lineage, RunDir, RunResult, RunState, Store, StoreError, TEMP_PREFIX};
+use crate::store::{
+    Depth, InputRef, Lineage, RunDir, RunResult, RunState, Store, StoreError, TEMP_PREFIX,
+};
 use crate::study::dir::{json_bytes, write_output, StudyDir};
 use crate::study::plan::design_study::actual_design;
 use crate::study::plan::design_study::{DesignStudy, SeedStage};
 use crate::study::runs::design_points;
-use crate::study::runs::{needed_scenes, run_points, write_table, Runs};
-use crate::study::stages::verify_optimum::{verify_points, Verification};
+use crate::study::runs::{needed_scenes, run_points, write_table, Point, Runs};
+use crate::study::verification::{verify_points, Checked, Verification};
 use crate::study::StudyError;
 use level1::{CurveInput, Level1, Observation};
 use level2::Level2;
@@ -172,6 +174,73 @@ fn clear_stage(stage: &Path) -> Result<(), StoreError> {
     Ok(())
 }
 
+/// The design the levels read: the study, its factors, its run points and
+/// the scene whose experiments levels 2 and 3 build.
+struct Design<'a> {
+    /// The study.
+    study: &'a DesignStudy,
+    /// The factor names, in order.
+    factors: Vec<String>,
+    /// The factors' (name, label), for the reports.
+    labels: Vec<(String, String)>,
+    /// The design's points, actual units.
+    points: Vec<Point>,
+    /// The scene of the study's responses.
+    scene: String,
+}
+
+impl<'a> Design<'a> {
+    /// The design of `study`.
+    fn of(study: &'a DesignStudy) -> Result<Self, StudyError> {
+        let actual = actual_design(study)?;
+        Ok(Design {
+            study,
+            factors: study.factor_names(),
+            labels: study
+                .factors
+                .iter()
+                .map(|(n, f)| (n.clone(), f.display_name()))
+                .collect(),
+            points: design_points(study, &actual),
+            scene: needed_scenes(study)
+                .into_iter()
+                .next()
+                .expect("a validated study has a response, hence a scene"),
+        })
+    }
+
+    /// The experiment of a design point from its (address, value) pairs
+    /// and index.
+    fn experiment_at(
+        &self,
+        values: &[(String, f64)],
+        index: u64,
+    ) -> Result<Experiment, StudyError> {
+        let values: Vec<(&str, f64)> = values.iter().map(|(a, v)| (a.as_str(), *v)).collect();
+        self.study
+            .experiment(&self.scene, &values, index, 0)
+            .map_err(|errors| StudyError::InvalidPoint {
+                point: index,
+                scene: self.scene.clone(),
+                errors,
+            })
+    }
+}
+
+/// What levels 1 and 2 and the verification of the named points give.
+#[derive(Default)]
+struct WithRuns {
+    /// Runs of the design, of those cached, and replicates lacking a
+    /// response.
+    counts: (usize, usize, usize),
+    /// Level 1.
+    level1: Option<Level1>,
+    /// Level 2.
+    level2: Option<Level2>,
+    /// The named points' replicates.
+    verification: Option<Verification>,
+}
+
 /// Runs the levels asked for (see the module docs) and writes the reports.
 pub fn sensitivity<E, F>(
     dir: &StudyDir,
@@ -185,242 +254,304 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let announce = |what: &str| {
-        if pool.progress {
-            eprintln!("{}: {what}", study.name);
+    let root = dir.create_stage("sensitivity")?;
+    let design = Design::of(study)?;
+    let mut stages = Vec::new();
+    let level3 = if levels.three {
+        announce(pool, study, "level 3 (contact-law sensitivities, no runs)");
+        Some(level3_stage(dir, &design, &mut stages)?)
+    } else {
+        None
+    };
+    let with_runs = if levels.one || levels.two {
+        design_levels(dir, &design, levels, (store, pool, runner), &mut stages)?
+    } else {
+        WithRuns::default()
+    };
+    let WithRuns {
+        counts: (runs, cached_runs, incomplete),
+        level1,
+        level2,
+        verification,
+    } = with_runs;
+    let outcome = SensitivityOutcome {
+        study: study.name.clone(),
+        study_id: study.id().to_string(),
+        dir: root,
+        runs,
+        cached_runs,
+        incomplete,
+        level1,
+        level2,
+        level3,
+        verification,
+        stages,
+    };
+    let lineage = dir.lineage("sensitivity", serde_json::json!({ "summary": true }));
+    write_output(
+        &outcome.dir.join("sensitivity.md"),
+        summary_markdown(study, &design.labels, &outcome).as_bytes(),
+        &lineage,
+    )?;
+    Ok(outcome)
+}
+
+/// Says on stderr which part of the analysis of `study` starts, when the
+/// executor shows progress.
+fn announce(pool: &Executor, study: &DesignStudy, what: &str) {
+    if pool.progress {
+        eprintln!("{}: {what}", study.name);
+    }
+}
+
+/// The design's runs (`responses.csv`), then levels 1 and 2 as asked and
+/// the named points' verification when the study has one.
+fn design_levels<E, F>(
+    dir: &StudyDir,
+    design: &Design<'_>,
+    levels: Levels,
+    (store, pool, runner): (&Store, &Executor, &F),
+    stages: &mut Vec<StageState>,
+) -> Result<WithRuns, StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let study = design.study;
+    announce(pool, study, "design runs");
+    let runs = run_points(
+        study,
+        store,
+        pool,
+        runner,
+        SeedStage::Design,
+        design.factors.clone(),
+        design.points.clone(),
+        study.replicates,
+    )?;
+    let table = dir.stage("sensitivity").join("responses.csv");
+    write_table(dir, "sensitivity", study, &runs, &table)?;
+    let table_input = dir.input("responses", &table)?;
+    let mut out = WithRuns {
+        counts: (runs.total, runs.cached, runs.incomplete()),
+        ..WithRuns::default()
+    };
+    if levels.one {
+        announce(pool, study, "level 1 (power laws, flow-rate curves)");
+        let level1 = level1_stage(dir, store, design, (&runs, &table_input), stages)?;
+        out.level1 = Some(level1);
+    }
+    if levels.two {
+        announce(pool, study, "level 2 (PCA)");
+        out.level2 = Some(level2_stage(dir, design, (&runs, &table_input), stages)?);
+    }
+    if study.verification.is_some() {
+        announce(pool, study, "named points with replicates");
+        let fits = out.level1.as_ref();
+        out.verification = verify_named(dir, design, fits, store, pool, runner)?;
+    }
+    Ok(out)
+}
+
+/// A level's outcome: read back from `sensitivity/<level>/<level>.json`
+/// when its stage directory holds what a computation with `lineage` wrote
+/// ([`cached`]), else the stage directory cleared, `compute` run (it writes
+/// the level's other outputs into the directory it is given) and its
+/// outcome written as `<level>.json`; `stages` gets whether it was cached.
+fn level_stage<T: Serialize + DeserializeOwned>(
+    dir: &StudyDir,
+    level: &str,
+    lineage: &Lineage,
+    stages: &mut Vec<StageState>,
+    compute: impl FnOnce(&Path) -> Result<T, StudyError>,
+) -> Result<T, StudyError> {
+    let stage = dir.create_stage(format!("sensitivity/{level}").as_str())?;
+    let json = stage.join(format!("{level}.json"));
+    let (outcome, was_cached) = match cached::<T>(&json, lineage) {
+        Some(l) => (l, true),
+        None => {
+            clear_stage(&stage)?;
+            let l = compute(&stage)?;
+            write_output(&json, &json_bytes(&l), lineage)?;
+            (l, false)
         }
     };
-    let root = dir.create_stage("sensitivity")?;
-    let factors = study.factor_names();
-    let labels: Vec<(String, String)> = study
-        .factors
-        .iter()
-        .map(|(n, f)| (n.clone(), f.display_name()))
-        .collect();
-    let actual = actual_design(study)?;
-    let points = design_points(study, &actual);
-    let scene = needed_scenes(study)
-        .into_iter()
-        .next()
-        .expect("a validated study has a response, hence a scene");
-    let experiment_at = |values: &[(String, f64)], index: u64| {
-        let values: Vec<(&str, f64)> = values.iter().map(|(a, v)| (a.as_str(), *v)).collect();
-        study
-            .experiment(&scene, &values, index, 0)
-            .map_err(|errors| StudyError::InvalidPoint {
-                point: index,
-                scene: scene.clone(),
-                errors,
-            })
+    stages.push(StageState {
+        stage: level.into(),
+        cached: was_cached,
+    });
+    Ok(outcome)
+}
+
+/// Level 3 over the design's experiments (no runs), or why it could not be
+/// computed; writes `norms.csv`, `cross_correlation.csv` (when computed)
+/// and `level3.md`.
+fn level3_stage(
+    dir: &StudyDir,
+    design: &Design<'_>,
+    stages: &mut Vec<StageState>,
+) -> Result<Result<Level3, String>, StudyError> {
+    let lineage = dir.lineage(
+        "sensitivity/level3",
+        serde_json::json!({ "states": "yan2015 a priori (81)", "parameters": ["e", "μs", "μr", "E"] }),
+    );
+    level_stage(dir, "level3", &lineage, stages, |stage| {
+        let base = design.experiment_at(&[], 0)?;
+        let experiments = design
+            .points
+            .iter()
+            .map(|p| design.experiment_at(&p.values, p.index))
+            .collect::<Result<Vec<_>, _>>()?;
+        let l = level3::level3(&base, &experiments);
+        if let Ok(l) = &l {
+            write_output(
+                &stage.join("norms.csv"),
+                level3::norms_csv(l).as_bytes(),
+                &lineage,
+            )?;
+            write_output(
+                &stage.join("cross_correlation.csv"),
+                level3::cross_correlation_csv(l).as_bytes(),
+                &lineage,
+            )?;
+        }
+        let section = match &l {
+            Ok(l) => level3::markdown(l),
+            Err(why) => format!("## Level 3\n\nNot computed: {why}\n"),
+        };
+        write_output(&stage.join("level3.md"), section.as_bytes(), &lineage)?;
+        Ok(l)
+    })
+}
+
+/// Level 1 over the design's runs (the response table `table_input` and
+/// every run's result); writes its tables, plots and `level1.md`.
+fn level1_stage(
+    dir: &StudyDir,
+    store: &Store,
+    design: &Design<'_>,
+    (runs, table_input): (&Runs, &InputRef),
+    stages: &mut Vec<StageState>,
+) -> Result<Level1, StudyError> {
+    let mut lineage = dir
+        .lineage(
+            "sensitivity/level1",
+            serde_json::json!({ "model": "power law, Levenberg–Marquardt from the log-linear fit", "flow_curve": "Eq. 20" }),
+        )
+        .with_input(table_input.clone());
+    for input in &runs.inputs {
+        lineage = lineage.with_input(input.clone());
+    }
+    level_stage(dir, "level1", &lineage, stages, |stage| {
+        let (obs, missing, curves_in) = gather(design.study, store, runs)?;
+        let l = level1::level1(&design.factors, &missing, &obs, &curves_in);
+        write_level1(stage, &l, &obs, &curves_in, &design.factors, &lineage)?;
+        write_output(
+            &stage.join("level1.md"),
+            level1::markdown(&l, &design.labels).as_bytes(),
+            &lineage,
+        )?;
+        Ok(l)
+    })
+}
+
+/// Level 2 over the design's runs (the response table `table_input`);
+/// writes `pca.csv` and `level2.md`.
+fn level2_stage(
+    dir: &StudyDir,
+    design: &Design<'_>,
+    (runs, table_input): (&Runs, &InputRef),
+    stages: &mut Vec<StageState>,
+) -> Result<Level2, StudyError> {
+    let lineage = dir
+        .lineage(
+            "sensitivity/level2",
+            serde_json::json!({ "state": "δn = δt = 1 % of d, vn = vt = 0.01 m/s, ω = 1 rad/s", "scaling": "auto (sample standard deviation)" }),
+        )
+        .with_input(table_input.clone());
+    level_stage(dir, "level2", &lineage, stages, |stage| {
+        let l = compute_level2(design, runs)?;
+        write_output(
+            &stage.join("pca.csv"),
+            level2::csv(&l, &design.factors).as_bytes(),
+            &lineage,
+        )?;
+        write_output(
+            &stage.join("level2.md"),
+            level2::markdown(&l, &design.labels).as_bytes(),
+            &lineage,
+        )?;
+        Ok(l)
+    })
+}
+
+/// The study's named points re-simulated with replicates
+/// ([`crate::study::verification`], stage `sensitivity/noise`), beside
+/// level 1's power law of each response where it was fitted.
+fn verify_named<E, F>(
+    dir: &StudyDir,
+    design: &Design<'_>,
+    fits: Option<&Level1>,
+    store: &Store,
+    pool: &Executor,
+    runner: &F,
+) -> Result<Option<Verification>, StudyError>
+where
+    E: std::error::Error + 'static,
+    F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
+{
+    let predict = |response: &str, x: &[f64]| {
+        let f = fits?
+            .fits
+            .iter()
+            .find(|r| r.response == response)?
+            .fit
+            .as_ref()?;
+        Some(
+            PowerLaw {
+                factors: design.factors.clone(),
+            }
+            .value(&f.estimates, x),
+        )
     };
-    let mut stages = Vec::new();
+    let responses: Vec<String> = design.study.responses.keys().cloned().collect();
+    let checked = Checked {
+        stage: "sensitivity/noise",
+        optimum: None,
+        responses: &responses,
+        predict: &predict,
+    };
+    verify_points(dir, design.study, &checked, store, pool, runner)
+}
+
+/// `sensitivity.md`: the computed levels' sections and, when the named
+/// points were verified, where their table is.
+fn summary_markdown(
+    study: &DesignStudy,
+    labels: &[(String, String)],
+    outcome: &SensitivityOutcome,
+) -> String {
     let mut md = format!(
         "# {} — parameter sensitivity (yan2015, three levels)\n\n",
         study.name
     );
-
-    let level3 = if levels.three {
-        announce("level 3 (contact-law sensitivities, no runs)");
-        let stage = dir.create_stage("sensitivity/level3")?;
-        let lineage = dir.lineage(
-            "sensitivity/level3",
-            serde_json::json!({ "states": "yan2015 a priori (81)", "parameters": ["e", "μs", "μr", "E"] }),
-        );
-        let json = stage.join("level3.json");
-        let (outcome, was_cached) = match cached::<Result<Level3, String>>(&json, &lineage) {
-            Some(l) => (l, true),
-            None => {
-                clear_stage(&stage)?;
-                let base = experiment_at(&[], 0)?;
-                let experiments = points
-                    .iter()
-                    .map(|p| experiment_at(&p.values, p.index))
-                    .collect::<Result<Vec<_>, _>>()?;
-                let l = level3::level3(&base, &experiments);
-                if let Ok(l) = &l {
-                    write_output(
-                        &stage.join("norms.csv"),
-                        level3::norms_csv(l).as_bytes(),
-                        &lineage,
-                    )?;
-                    write_output(
-                        &stage.join("cross_correlation.csv"),
-                        level3::cross_correlation_csv(l).as_bytes(),
-                        &lineage,
-                    )?;
-                }
-                let section = match &l {
-                    Ok(l) => level3::markdown(l),
-                    Err(why) => format!("## Level 3\n\nNot computed: {why}\n"),
-                };
-                write_output(&stage.join("level3.md"), section.as_bytes(), &lineage)?;
-                write_output(&json, &json_bytes(&l), &lineage)?;
-                (l, false)
-            }
-        };
-        stages.push(StageState {
-            stage: "level3".into(),
-            cached: was_cached,
-        });
-        Some(outcome)
-    } else {
-        None
-    };
-
-    let (mut level1_out, mut level2_out, mut verification) = (None, None, None);
-    let (mut runs_total, mut runs_cached, mut incomplete) = (0, 0, 0);
-    if levels.one || levels.two {
-        announce("design runs");
-        let runs = run_points(
-            study,
-            store,
-            pool,
-            runner,
-            SeedStage::Design,
-            factors.clone(),
-            points.clone(),
-            study.replicates,
-        )?;
-        (runs_total, runs_cached, incomplete) = (runs.total, runs.cached, runs.incomplete());
-        let table = root.join("responses.csv");
-        write_table(dir, "sensitivity", study, &runs, &table)?;
-        let table_input = dir.input("responses", &table)?;
-        let (obs, missing, curves_in) = gather(study, store, &runs)?;
-
-        if levels.one {
-            announce("level 1 (power laws, flow-rate curves)");
-            let stage = dir.create_stage("sensitivity/level1")?;
-            let mut lineage = dir
-                .lineage(
-                    "sensitivity/level1",
-                    serde_json::json!({ "model": "power law, Levenberg–Marquardt from the log-linear fit", "flow_curve": "Eq. 20" }),
-                )
-                .with_input(table_input.clone());
-            for input in &runs.inputs {
-                lineage = lineage.with_input(input.clone());
-            }
-            let json = stage.join("level1.json");
-            let (l, was_cached) = match cached::<Level1>(&json, &lineage) {
-                Some(l) => (l, true),
-                None => {
-                    clear_stage(&stage)?;
-                    let l = level1::level1(&factors, &missing, &obs, &curves_in);
-                    write_level1(&stage, &l, &obs, &curves_in, &factors, &lineage)?;
-                    write_output(
-                        &stage.join("level1.md"),
-                        level1::markdown(&l, &labels).as_bytes(),
-                        &lineage,
-                    )?;
-                    write_output(&json, &json_bytes(&l), &lineage)?;
-                    (l, false)
-                }
-            };
-            stages.push(StageState {
-                stage: "level1".into(),
-                cached: was_cached,
-            });
-            level1_out = Some(l);
-        }
-
-        if levels.two {
-            announce("level 2 (PCA)");
-            let stage = dir.create_stage("sensitivity/level2")?;
-            let lineage = dir
-                .lineage(
-                    "sensitivity/level2",
-                    serde_json::json!({ "state": "δn = δt = 1 % of d, vn = vt = 0.01 m/s, ω = 1 rad/s", "scaling": "auto (sample standard deviation)" }),
-                )
-                .with_input(table_input.clone());
-            let json = stage.join("level2.json");
-            let (l, was_cached) = match cached::<Level2>(&json, &lineage) {
-                Some(l) => (l, true),
-                None => {
-                    clear_stage(&stage)?;
-                    let l = compute_level2(study, &runs, &points, &experiment_at)?;
-                    write_output(
-                        &stage.join("pca.csv"),
-                        level2::csv(&l, &factors).as_bytes(),
-                        &lineage,
-                    )?;
-                    write_output(
-                        &stage.join("level2.md"),
-                        level2::markdown(&l, &labels).as_bytes(),
-                        &lineage,
-                    )?;
-                    write_output(&json, &json_bytes(&l), &lineage)?;
-                    (l, false)
-                }
-            };
-            stages.push(StageState {
-                stage: "level2".into(),
-                cached: was_cached,
-            });
-            level2_out = Some(l);
-        }
-
-        if study.verification.is_some() {
-            announce("named points with replicates");
-            let fits = level1_out.as_ref();
-            let predict = |response: &str, x: &[f64]| {
-                let f = fits?
-                    .fits
-                    .iter()
-                    .find(|r| r.response == response)?
-                    .fit
-                    .as_ref()?;
-                Some(
-                    PowerLaw {
-                        factors: factors.clone(),
-                    }
-                    .value(&f.estimates, x),
-                )
-            };
-            let responses: Vec<String> = study.responses.keys().cloned().collect();
-            verification = verify_points(
-                dir,
-                "sensitivity/noise",
-                study,
-                None,
-                &responses,
-                &predict,
-                store,
-                pool,
-                runner,
-            )?;
-        }
-    }
-
-    if let Some(l) = &level1_out {
-        md.push_str(&level1::markdown(l, &labels));
+    if let Some(l) = &outcome.level1 {
+        md.push_str(&level1::markdown(l, labels));
         md.push('\n');
     }
-    if let Some(l) = &level2_out {
-        md.push_str(&level2::markdown(l, &labels));
+    if let Some(l) = &outcome.level2 {
+        md.push_str(&level2::markdown(l, labels));
         md.push('\n');
     }
-    match &level3 {
+    match &outcome.level3 {
         Some(Ok(l)) => md.push_str(&level3::markdown(l)),
         Some(Err(why)) => md.push_str(&format!("## Level 3\n\nNot computed: {why}\n")),
         None => {}
     }
-    if verification.is_some() {
+    if outcome.verification.is_some() {
         md.push_str("\n## Named points with replicates\n\nSee `noise/verification.md`: each named point's mean ± 95 % CI over its packing seeds, beside the power law and the measured value.\n");
     }
-    let lineage = dir.lineage("sensitivity", serde_json::json!({ "summary": true }));
-    write_output(&root.join("sensitivity.md"), md.as_bytes(), &lineage)?;
-    Ok(SensitivityOutcome {
-        study: study.name.clone(),
-        study_id: study.id().to_string(),
-        dir: root,
-        runs: runs_total,
-        cached_runs: runs_cached,
-        incomplete,
-        level1: level1_out,
-        level2: level2_out,
-        level3,
-        verification,
-        stages,
-    })
+    md
 }
 
 /// The stored result of a run that completed.
@@ -539,19 +670,14 @@ fn write_level1(
     Ok(())
 }
 
-/// Builds the experiment of a design point from its (address, value) pairs
-/// and index.
-type ExperimentAt<'a> = dyn Fn(&[(String, f64)], u64) -> Result<Experiment, StudyError> + 'a;
-
-fn compute_level2(
-    study: &DesignStudy,
-    runs: &Runs,
-    points: &[crate::study::runs::Point],
-    experiment_at: &ExperimentAt,
-) -> Result<Level2, StudyError> {
+/// Level 2 from the design's experiments (their contact pairs) and the
+/// runs' per-point mean responses; a design whose pairs cannot be read
+/// gives a level 2 that says why.
+fn compute_level2(design: &Design<'_>, runs: &Runs) -> Result<Level2, StudyError> {
+    let study = design.study;
     let mut pairs = Vec::new();
-    for p in points {
-        let e = experiment_at(&p.values, p.index)?;
+    for p in &design.points {
+        let e = design.experiment_at(&p.values, p.index)?;
         match parameters::pair_spec(&e) {
             Ok(s) => pairs.push(s),
             Err(why) => {
