@@ -128,6 +128,43 @@ pub fn sample(
     let diagnostics = diagnose(&names, &unit, settings.strong_correlation);
     let points: Vec<Vec<f64>> = unit.iter().map(|u| to_physical(study, u)).collect();
 
+    let design = write_experiments(dir, study, &names, &points)?;
+    let lineage = dir.lineage(
+        Stage::Sample,
+        json!({ "design": kind_name, "size": n, "seed": study.design.seed, "settings": settings }),
+    );
+    let record = DiagnosticsRecord {
+        design: kind_name,
+        settings,
+        optimisation: optimisation.as_ref(),
+        diagnostics: &diagnostics,
+    };
+    let stage_dir = dir.stage(Stage::Sample);
+    write_output(
+        &stage_dir.join("diagnostics.json"),
+        &json_bytes(&record),
+        &lineage,
+    )?;
+    let design_file = dir.design_path();
+    write_output(&design_file, design.as_bytes(), &lineage)?;
+    Ok(SampleOutcome {
+        points,
+        parameters: names,
+        diagnostics,
+        optimisation,
+        design_file,
+    })
+}
+
+/// Writes every design point's experiment manifest (`experiments/NNNN.json`,
+/// those of an earlier, larger design removed) and returns the design table
+/// (index, the point in physical units, the experiment's id).
+fn write_experiments(
+    dir: &StudyDir,
+    study: &Study,
+    names: &[String],
+    points: &[Vec<f64>],
+) -> Result<String, StudyError> {
     dir.prepare_stage(study, Stage::Sample)?;
     let experiments_dir = dir.stage(Stage::Sample).join("experiments");
     create_dir(&experiments_dir)?;
@@ -135,7 +172,7 @@ pub fn sample(
     header.extend(names.iter().cloned());
     header.push("experiment_id".to_string());
     let mut design = CsvWriter::new(&header);
-    let mut written = Vec::with_capacity(n);
+    let mut written = Vec::with_capacity(points.len());
     for (index, point) in points.iter().enumerate() {
         let map: BTreeMap<String, f64> = names.iter().cloned().zip(point.iter().copied()).collect();
         let experiment = study
@@ -154,32 +191,7 @@ pub fn sample(
         design.row(&row);
     }
     remove_stale(&experiments_dir, &written)?;
-
-    let lineage = dir.lineage(
-        Stage::Sample,
-        json!({ "design": kind_name, "size": n, "seed": study.design.seed, "settings": settings }),
-    );
-    let record = DiagnosticsRecord {
-        design: kind_name,
-        settings,
-        optimisation: optimisation.as_ref(),
-        diagnostics: &diagnostics,
-    };
-    let stage_dir = dir.stage(Stage::Sample);
-    write_output(
-        &stage_dir.join("diagnostics.json"),
-        &json_bytes(&record),
-        &lineage,
-    )?;
-    let design_file = dir.design_path();
-    write_output(&design_file, design.finish().as_bytes(), &lineage)?;
-    Ok(SampleOutcome {
-        points,
-        parameters: names,
-        diagnostics,
-        optimisation,
-        design_file,
-    })
+    Ok(design.finish())
 }
 
 /// Removes manifests of an earlier, larger design (`NNNN.json` not just written).

@@ -13,7 +13,7 @@
 //! (default 0.3, scikit-learn's); both choices are recorded.
 
 use std::fmt::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 use serde_json::json;
@@ -88,6 +88,62 @@ pub fn search(
             ),
         });
     }
+    let found = find(study, &model, settings)?;
+    let Selection {
+        kept, bandwidth, ..
+    } = &found.selection;
+    let markdown = markdown(
+        study,
+        settings,
+        &names,
+        &found.clusters,
+        kept.len(),
+        *bandwidth,
+    );
+    let out_dir = write_outputs(
+        dir,
+        study,
+        settings,
+        (&model_file, &names),
+        &found,
+        &markdown,
+    )?;
+    let Found {
+        predicted,
+        selection:
+            Selection {
+                kept,
+                bandwidth,
+                clustering,
+                ..
+            },
+        clusters,
+        ..
+    } = found;
+    Ok(SearchOutcome {
+        parameters: names,
+        predicted,
+        kept,
+        bandwidth,
+        modes: clustering.modes,
+        clusters,
+        markdown,
+        out_dir,
+    })
+}
+
+/// Writes the search's outputs with their lineage (the settings, the
+/// bandwidth used, the target and the model file): `points.csv`,
+/// `scatter.svg`, `clusters.md` and `clusters.csv`; returns the stage
+/// directory.
+fn write_outputs(
+    dir: &StudyDir,
+    study: &Study,
+    settings: &SearchSettings,
+    (model_file, names): (&Path, &[String]),
+    found: &Found,
+    markdown: &str,
+) -> Result<PathBuf, StudyError> {
     let target = &study.calibration;
     let Found {
         physical,
@@ -100,9 +156,8 @@ pub fn search(
                 clustering,
             },
         clusters,
-    } = find(study, &model, settings)?;
-    let label = cluster_column(predicted.len(), &kept, &clustering.labels);
-
+    } = found;
+    let label = cluster_column(predicted.len(), kept, &clustering.labels);
     let out_dir = dir.stage(Stage::Search);
     dir.prepare_stage(study, Stage::Search)?;
     let lineage = dir
@@ -112,13 +167,12 @@ pub fn search(
                     "target_angle_deg": target.target_angle_deg,
                     "tolerance_fraction": target.tolerance_fraction }),
         )
-        .with_input(dir.input("model", &model_file)?);
-    let markdown = markdown(study, settings, &names, &clusters, kept.len(), bandwidth);
+        .with_input(dir.input("model", model_file)?);
     let ranges = crate::study::plan::calibration::ranges(study);
     let svg = scatter_matrix(
-        &names,
+        names,
         &ranges,
-        &kept_unit,
+        kept_unit,
         &clustering.labels,
         &clustering.centres,
         &format!(
@@ -131,26 +185,17 @@ pub fn search(
     );
     write_output(
         &out_dir.join("points.csv"),
-        points_csv(&names, &physical, &predicted, &label).as_bytes(),
+        points_csv(names, physical, predicted, &label).as_bytes(),
         &lineage,
     )?;
     write_output(&out_dir.join("scatter.svg"), svg.as_bytes(), &lineage)?;
     write_output(&out_dir.join("clusters.md"), markdown.as_bytes(), &lineage)?;
     write_output(
         &out_dir.join("clusters.csv"),
-        clusters_csv(&names, &clusters).as_bytes(),
+        clusters_csv(names, clusters).as_bytes(),
         &lineage,
     )?;
-    Ok(SearchOutcome {
-        parameters: names,
-        predicted,
-        kept,
-        bandwidth,
-        modes: clustering.modes,
-        clusters,
-        markdown,
-        out_dir,
-    })
+    Ok(out_dir)
 }
 
 /// The search without its outputs: the resampled points, their predicted
