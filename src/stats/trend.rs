@@ -195,11 +195,11 @@ impl LineFit {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// Three sizes × five runs; weights one over each level's variance.
-    fn data() -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    pub(crate) fn data() -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         let levels = [
             (0.064, [40.1, 44.3, 38.7, 42.9, 45.6]),
             (0.048, [43.0, 41.2, 44.8, 42.5, 43.9]),

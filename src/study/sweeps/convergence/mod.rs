@@ -702,28 +702,9 @@ fn cost_law(levels: &[LevelRow]) -> Option<CostLaw> {
 mod tests {
     use super::*;
 
-    /// stats::trend's fixture: three sizes × five runs, weights one over
-    /// each level's variance.
-    fn fixture() -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-        let levels = [
-            (0.064, [40.1, 44.3, 38.7, 42.9, 45.6]),
-            (0.048, [43.0, 41.2, 44.8, 42.5, 43.9]),
-            (0.032, [44.6, 45.1, 43.7, 45.9, 44.2]),
-        ];
-        let (mut x, mut y, mut w) = (vec![], vec![], vec![]);
-        for (xl, ys) in levels {
-            let m = ys.iter().sum::<f64>() / 5.0;
-            let v = ys.iter().map(|v| (v - m).powi(2)).sum::<f64>() / 4.0;
-            for yv in ys {
-                x.push(xl);
-                y.push(yv);
-                w.push(1.0 / v);
-            }
-        }
-        (x, y, w)
-    }
-
-    /// Against statsmodels 0.15.0 and scipy (scratch venv), on the fixture:
+    /// Against statsmodels 0.15.0 and scipy (scratch venv), on stats::trend's
+    /// fixture (three sizes × five runs, weights one over each level's
+    /// variance):
     /// ```python
     /// r = sm.WLS(y, sm.add_constant(x), weights=w).fit(); span = 0.064 - 0.032
     /// c, se, df = r.params[1]*span, r.bse[1]*span, r.df_resid
@@ -736,7 +717,7 @@ mod tests {
     /// neither at ±2 or ±1 (p 0.769, 0.947: inconclusive).
     #[test]
     fn the_size_effect_matches_scipy_and_follows_the_acceptance_rule() {
-        let (x, y, w) = fixture();
+        let (x, y, w) = crate::stats::trend::tests::data();
         let line = weighted_line(&x, &y, &w).unwrap();
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * b.abs().max(1e-3);
         for (margin, p, verdict) in [
