@@ -290,11 +290,17 @@ impl Grains {
                 );
             }
         }
-        let first = bodies.next_id() - inits.len() as u32;
+        // The relocation stream's key: next_id − batch + k, in wrapping u32
+        // arithmetic (the first batch wraps below zero). It is distinct per
+        // misfit of a batch and fixed by the packing seed; keying it by the
+        // body id `orient` uses (next_id + k) would move every relocated
+        // clump of the committed runs, so it is kept as it is.
+        let first = bodies.next_id().wrapping_sub(inits.len() as u32);
         for &(k, _) in &misfits {
             let init = &mut inits[k];
             let members = &bodies.shapes[init.shape].members;
-            let mut rng = self.stream(RELOCATION_STREAM, first + k as u32, WORDS_PER_RELOCATION);
+            let key = first.wrapping_add(k as u32);
+            let mut rng = self.stream(RELOCATION_STREAM, key, WORDS_PER_RELOCATION);
             let radius_m = placed[k].radius_m;
             let (depth, position, orientation) = space.relocate(members, init, radius_m, &mut rng);
             t.moved += 1;
