@@ -35,7 +35,9 @@ use crate::study::plan::{
 use crate::study::run::{CalibrationSettings, Env, Plan, StageOutcome, Upto};
 use crate::study::stages::design::{diagnose_table, SampleSettings};
 use crate::study::stages::fit_network::{train_table, TableSpec, TrainOptions};
+use crate::study::stages::transfer::TransferSettings;
 use crate::study::sweeps::convergence;
+use crate::study::sweeps::convergence::plan::{SurfaceEnergyRule, RULE_NAMES};
 use crate::study::sweeps::pilot::{self, PilotSpec};
 use crate::study::sweeps::tradeoff as tradeoff_sweep;
 use crate::study::sweeps::tradeoff::plan::{plan as plan_sweep, study_spec, Knob, PlanError};
@@ -718,7 +720,7 @@ pub fn learning_curve(
             store_root,
             &study,
             &dir,
-            settings,
+            settings.clone(),
             exec,
             Upto::Only("design"),
             out,
@@ -1013,6 +1015,12 @@ fn failures(
                     total: v.runs,
                 })
             }
+            StageOutcome::Transfer(t) if t.failed_runs > 0 => {
+                return Err(CommandError::BatchIncomplete {
+                    failed: t.failed_runs,
+                    total: t.runs,
+                })
+            }
             _ => {}
         }
     }
@@ -1203,6 +1211,52 @@ pub fn verify(
     }
     let set = |_: &Study, s: &mut CalibrationSettings| s.candidates = candidates;
     let stages = run_one_stage(store_root, study_path, exec, "verify", set, out)?;
+    failures(&stages, false, out)
+}
+
+/// `repose transfer [STUDY]`: the verified candidates again at finer
+/// particle sizes, in every scene, judged by the verification's rule
+/// ([`crate::study::stages::transfer`]). `sizes` and `rule` replace the
+/// study's `transfer` block; without either, the block's (a study without
+/// one needs `--sizes`; its rule is then the measured default,
+/// [`SurfaceEnergyRule::MEASURED`]). Without a study, the embedded default.
+pub fn transfer(
+    store_root: &Path,
+    study_path: Option<&Path>,
+    exec: &Executor,
+    sizes: Option<Vec<f64>>,
+    rule: Option<&str>,
+    out: &mut dyn Write,
+) -> Result<(), CommandError> {
+    let path = match study_path {
+        Some(p) => p.to_path_buf(),
+        None => write_default_study(store_root, false, out)?,
+    };
+    let rule = rule
+        .map(|name| {
+            SurfaceEnergyRule::parse(name).ok_or_else(|| {
+                CommandError::Usage(format!(
+                    "--rule {name}: allowed rules are {}",
+                    RULE_NAMES[..3].join(", ")
+                ))
+            })
+        })
+        .transpose()?;
+    let study = read_study(&path)?;
+    let own = TransferSettings::of_study(&study);
+    let Some(sizes) = sizes.or_else(|| own.as_ref().map(|t| t.sizes.clone())) else {
+        return Err(CommandError::Usage(format!(
+            "{} has no transfer block: give the sizes, e.g. --sizes 0.75,0.5",
+            path.display()
+        )));
+    };
+    let rule = rule
+        .or(own.map(|t| t.rule))
+        .unwrap_or(SurfaceEnergyRule::MEASURED);
+    let transfer = TransferSettings { sizes, rule };
+    transfer.check(&study)?;
+    let set = move |_: &Study, s: &mut CalibrationSettings| s.transfer = Some(transfer);
+    let stages = run_one_stage(store_root, &path, exec, "transfer", set, out)?;
     failures(&stages, false, out)
 }
 

@@ -157,6 +157,28 @@ enum Command {
         #[command(flatten)]
         exec: ExecArgs,
     },
+    /// The transfer test: every verified candidate again at finer particle
+    /// sizes, in every scene, with the verification's seeds, judged by its
+    /// acceptance rule. Needs `verify` (or `calibrate`) first.
+    Transfer {
+        /// Study manifest [default: the embedded he2019-quick study].
+        study: Option<PathBuf>,
+        /// Particle radius / the verified one, each in (0, 1), comma-separated
+        /// [default: the study's transfer block; required without one].
+        #[arg(long, value_delimiter = ',')]
+        sizes: Option<Vec<f64>>,
+        /// How the surface energy follows the radius: constant_bond (Γ ∝ R²),
+        /// proportional (Γ ∝ R) or cohesion_number (Γ ∝ R^0.4) [default: the
+        /// study's transfer block, else proportional, the rule the
+        /// convergence sweeps support].
+        #[arg(long)]
+        rule: Option<String>,
+        /// Runs at once, each single-threaded [default: the number of CPUs].
+        #[arg(long)]
+        jobs: Option<usize>,
+        #[command(flatten)]
+        exec: ExecArgs,
+    },
     /// The whole he2019 method: sample, batch, train, search, verify; for a
     /// noise-aware study, the noise floor first, replicates, a Gaussian-process
     /// search and multi-seed verification. Without a study, runs the embedded
@@ -1184,6 +1206,7 @@ fn dispatch(cli: Cli) -> Result<(), CommandError> {
         Command::Train(args) => train(s, args, out),
         Command::Search(args) => search(s, args, out),
         command @ (Command::Verify { .. }
+        | Command::Transfer { .. }
         | Command::Calibrate { .. }
         | Command::Fine { .. }
         | Command::Noise { .. }
@@ -1204,6 +1227,20 @@ fn run_calibration(c: &Ctx, command: Command, out: &mut dyn io::Write) -> Result
             candidates,
             exec,
         } => commands::verify(s, &study, &c.exec(&exec, jobs)?, candidates, out),
+        Command::Transfer {
+            study,
+            sizes,
+            rule,
+            jobs,
+            exec,
+        } => commands::transfer(
+            s,
+            study.as_deref(),
+            &c.exec(&exec, jobs)?,
+            sizes,
+            rule.as_deref(),
+            out,
+        ),
         Command::Calibrate {
             study,
             jobs,

@@ -79,6 +79,7 @@ fn options(study: &Study, adaptive: bool) -> CalibrationSettings {
         sample: SampleSettings::default(),
         train: TrainOptions::defaults(study),
         search: SearchSettings::with_seed(study.design.seed),
+        transfer: None,
     }
 }
 

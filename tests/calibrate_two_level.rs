@@ -94,6 +94,7 @@ fn calibrate(root: &Path, study: &Study, path: &Path, jobs: usize) -> Calibratio
         sample: SampleSettings::default(),
         train: TrainOptions::defaults(study),
         search: SearchSettings::with_seed(study.design.seed),
+        transfer: None,
     };
     calibrate_noise_aware(
         &dir,
@@ -386,6 +387,7 @@ fn the_fine_stage_says_what_is_wrong() {
         sample: SampleSettings::default(),
         train: TrainOptions::defaults(&study),
         search: SearchSettings::with_seed(study.design.seed),
+        transfer: None,
     };
     let err = calibrate_noise_aware(
         &dir,

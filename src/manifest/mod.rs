@@ -28,6 +28,7 @@ pub use experiment::{
 pub use scene::{PairMode, PairScene, Partner, Scene};
 pub use study::{
     Adaptive, Design, DesignKind, Fidelity, NoiseAware, ParameterRange, Slot, Study, TargetScene,
+    Transfer,
 };
 pub use validate::{validate_experiment, validate_study, FieldError, ValidationErrors};
 

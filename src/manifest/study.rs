@@ -12,8 +12,8 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use super::experiment::{
-    AtRest, CoarseGraining, Contact, ContactModel, Experiment, Material, PairParams, Profile,
-    Seeds, TimeStep, PAIR_PARAM_FIELDS,
+    AtRest, CoarseGraining, CoarseGrainingRule, Contact, ContactModel, Experiment, Material,
+    PairParams, Profile, Seeds, TimeStep, PAIR_PARAM_FIELDS,
 };
 use super::scene::Scene;
 use super::validate::{validate_experiment, FieldError, ValidationErrors};
@@ -80,6 +80,27 @@ pub struct Study {
         deserialize_with = "crate::manifest::study::spelled_stages"
     )]
     pub stages: Vec<String>,
+    /// The transfer test (absent: none): after verification, every verified
+    /// candidate is simulated again at each of these finer particle sizes,
+    /// with the acceptance record's seeds, and judged by the same rule
+    /// (`crate::study::stages::transfer`; `repose transfer` runs it on any
+    /// study).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transfer: Option<Box<Transfer>>,
+}
+
+/// Finer particle sizes a verified candidate must also pass at, and how the
+/// surface energy follows the radius there.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Transfer {
+    /// Particle radius / the verified one, each in (0, 1), distinct.
+    pub sizes: Vec<f64>,
+    /// How every surface energy follows the radius: Γ ∝ R² (`constant_bond`),
+    /// Γ ∝ R (`surface_energy_proportional`) or Γ ∝ R^0.4
+    /// (`cohesion_number`). A study with `coarse_graining` must name its
+    /// block's rule; a two-level study its fine level's (`constant_bond`).
+    pub rule: CoarseGrainingRule,
 }
 
 /// How a noise-aware calibration treats the packing noise of its runs.

@@ -225,6 +225,8 @@ pub enum Stage {
     Adaptive,
     /// `repose fine`: the fine level of a two-level study.
     Fine,
+    /// `repose transfer`: the verified candidates at finer sizes.
+    Transfer,
 }
 
 impl Stage {
@@ -240,6 +242,7 @@ impl Stage {
             Stage::Noise => "noise",
             Stage::Adaptive => "adaptive",
             Stage::Fine => "fine",
+            Stage::Transfer => "transfer",
         }
     }
 }
@@ -343,6 +346,22 @@ impl StudyDir {
     /// `verify/acceptance.json`: the acceptance record, written before the runs.
     pub fn acceptance_path(&self) -> PathBuf {
         self.stage(Stage::Verify).join("acceptance.json")
+    }
+
+    /// `verify/runs.csv`: every verified candidate's runs in every scene.
+    pub fn verify_runs_path(&self) -> PathBuf {
+        self.stage(Stage::Verify).join("runs.csv")
+    }
+
+    /// `transfer/plan.json`: the transfer test's sizes, rule and candidates,
+    /// written before its runs.
+    pub fn transfer_plan_path(&self) -> PathBuf {
+        self.stage(Stage::Transfer).join("plan.json")
+    }
+
+    /// `transfer/transfer.csv`: each candidate's verdict per scene and size.
+    pub fn transfer_path(&self) -> PathBuf {
+        self.stage(Stage::Transfer).join("transfer.csv")
     }
 }
 

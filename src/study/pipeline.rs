@@ -37,6 +37,7 @@ use super::stages::adaptive::AdaptiveOutcome;
 use super::stages::fine::TwoLevelRecord;
 use super::stages::fit_gp::SurrogateMetrics;
 use super::stages::search_probability::Candidate;
+use super::stages::transfer::TransferRecord;
 use super::stages::verify_candidates::VerifyRow;
 use super::StudyError;
 use crate::exec::Executor;
@@ -59,6 +60,10 @@ pub struct RunCounts {
     /// Fine points × fine replicates (a two-level study).
     #[serde(skip_serializing_if = "is_zero")]
     pub fine: usize,
+    /// The transfer test's finer sizes (the verified size's runs are
+    /// verification's).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub transfer: usize,
     /// Verification (candidates × scenes × seeds, less the adaptive
     /// candidate's calibration-scene runs, which `adaptive` counts).
     pub verification: usize,
@@ -101,6 +106,10 @@ pub struct CalibrationOutcome {
     pub calibrated: bool,
     /// Some candidate passes every scene.
     pub verified: bool,
+    /// The transfer test, when the study has one: every candidate's verdict
+    /// per scene and size, and the size each transfers to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transfer: Option<TransferRecord>,
 }
 
 impl CalibrationOutcome {
@@ -126,7 +135,25 @@ impl CalibrationOutcome {
             yes(self.calibrated),
             yes(self.verified),
             outcome_json.display()
-        )
+        ) + &self.transfer.as_ref().map_or(String::new(), |t| {
+            let each: Vec<String> = t
+                .candidates
+                .iter()
+                .map(|c| match c.transfers_to {
+                    Some(s) if c.every_size => format!("candidate {}: every size (x {s})", c.group),
+                    Some(1.0) => format!("candidate {}: verified size only", c.group),
+                    Some(s) => format!("candidate {}: down to x {s}", c.group),
+                    None => format!("candidate {}: none", c.group),
+                })
+                .collect();
+            format!(
+                "\n  transfer ({} runs, sizes {:?} of the verified, rule {}): {}",
+                self.runs.transfer,
+                t.sizes,
+                t.rule,
+                each.join("; ")
+            )
+        })
     }
 }
 
@@ -186,7 +213,7 @@ where
     E: std::error::Error + 'static,
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
-    let plan = Plan::calibration(study.clone(), *settings);
+    let plan = Plan::calibration(study.clone(), settings.clone());
     let env = Env {
         dir,
         store,
@@ -218,6 +245,7 @@ impl CalibrationOutcome {
         let mut fine = None;
         let mut found = None;
         let mut verified = None;
+        let mut transfer = None;
         for stage in stages {
             match stage {
                 StageOutcome::Noise(o) => floor = Some(o),
@@ -230,6 +258,7 @@ impl CalibrationOutcome {
                 StageOutcome::Fine(f) => fine = Some(f),
                 StageOutcome::ProbabilitySearch(f) => found = Some(f),
                 StageOutcome::VerifyCandidates(v) => verified = Some(v),
+                StageOutcome::Transfer(t) => transfer = Some(t.record()),
                 _ => {}
             }
         }
@@ -257,6 +286,7 @@ impl CalibrationOutcome {
                 design,
                 adaptive: adaptive.map_or(0, |a| a.runs),
                 fine: fine.map_or(0, |f| f.runs),
+                transfer: transfer.as_ref().map_or(0, |t| t.finer_runs),
                 // The adaptive candidate's calibration-scene runs are the
                 // adaptive stage's, counted there.
                 verification: v
@@ -280,6 +310,7 @@ impl CalibrationOutcome {
             verification: v.rows.clone(),
             calibrated,
             verified,
+            transfer,
         })
     }
 }

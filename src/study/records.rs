@@ -5,7 +5,9 @@
 //! - the noise floor (`noise/noise.json`, [`NoiseFloor`]);
 //! - the design's angles (`batch/angles.csv`, [`AngleRow`]);
 //! - the adaptive rounds' passing candidate (`adaptive/replicates.csv`
-//!   judged by the acceptance rule, [`Hit`]).
+//!   judged by the acceptance rule, [`Hit`]);
+//! - the acceptance record and the verified candidates (`verify/acceptance.json`,
+//!   `verify/runs.csv`: [`read_acceptance`], [`read_verified`]).
 
 use std::path::PathBuf;
 
@@ -137,4 +139,33 @@ pub fn passing_candidate(
     }
     let points = read_replicates_csv(&path, study)?;
     Ok(passing(&points, rule))
+}
+
+/// Candidates as (`sample_index`, physical point in parameter order).
+pub type Points = Vec<(u64, Vec<f64>)>;
+
+/// Reads `verify/acceptance.json`: the rule, α, seeds and bands the
+/// verification pre-registered.
+pub fn read_acceptance(dir: &StudyDir) -> Result<(PathBuf, Record), StudyError> {
+    let path = dir.require(dir.acceptance_path(), Stage::Verify)?;
+    let record = Store::read_json(&path).map_err(|e| StudyError::Inconsistent {
+        path: path.clone(),
+        message: format!("{e}: rerun `repose verify`"),
+    })?;
+    Ok((path, record))
+}
+
+/// The candidates the verification judged, in its order: (`sample_index`,
+/// physical point in parameter order), read from `verify/runs.csv` (whose
+/// numbers round-trip, so a candidate's experiments at the verified size
+/// are verification's own).
+pub fn read_verified(dir: &StudyDir, study: &Study) -> Result<(PathBuf, Points), StudyError> {
+    let path = dir.require(dir.verify_runs_path(), Stage::Verify)?;
+    let mut points: Vec<(u64, Vec<f64>)> = Vec::new();
+    for p in read_replicates_csv(&path, study)? {
+        if !points.iter().any(|(index, _)| *index == p.index) {
+            points.push((p.index, p.point));
+        }
+    }
+    Ok((path, points))
 }

@@ -6,7 +6,7 @@
 //! | command | [`Upto`] |
 //! | --- | --- |
 //! | `calibrate`, `rsm`, `sensitivity` | through the last stage |
-//! | `noise`, `sample`, `batch`, `train`, `fine`, `search`, `verify` (he2019) | only that stage (`noise`, `design`, `simulate`, `fit`, `fine`, `search`, `verify`) |
+//! | `noise`, `sample`, `batch`, `train`, `fine`, `search`, `verify`, `transfer` (he2019) | only that stage (`noise`, `design`, `simulate`, `fit`, `fine`, `search`, `verify`, `transfer`) |
 //! | `screen` | only `screen` |
 //! | `verify` (a design study) | the whole list (as `rsm`) |
 //!
@@ -31,6 +31,7 @@
 //! | search | [`tolerance_search`] | [`gp_search`] | [`rsm`] (design, runs, fits, desirability) | — |
 //! | sensitivity | — | — | — | [`sensitivity`] (with its verification) |
 //! | verify | [`verify_candidates`] | [`verify_candidates`] | [`verify_optimum`] | part of `sensitivity` |
+//! | transfer | [`transfer_stage`] | [`transfer_stage`] | — | — |
 //!
 //! The design studies' response-surface and sensitivity functions still run
 //! their design, runs and fits as one unit, so those stages of their lists
@@ -43,7 +44,7 @@ use crate::study::dir::StudyDir;
 use crate::study::plan::calibration::{noise_aware, SearchSettings};
 use crate::study::plan::design_study::DesignStudy;
 use crate::study::plan::{Analysis, Method, Stage, StudySpec};
-use crate::study::runs::replicated::{check_limits, check_response};
+use crate::study::runs::replicated::{check_limits, check_response, AtSize};
 use crate::study::stages::adaptive::{adaptive, AdaptiveOutcome};
 use crate::study::stages::design::{sample, SampleOutcome, SampleSettings};
 use crate::study::stages::fine::{fine, predictor, FineOutcome};
@@ -58,13 +59,16 @@ use crate::study::stages::search_tolerance::{
 };
 use crate::study::stages::sensitivity::{sensitivity, Levels, SensitivityOutcome};
 use crate::study::stages::simulate::{batch, BatchOutcome};
+use crate::study::stages::transfer::{
+    transfer as transfer_stage, TransferOutcome, TransferSettings,
+};
 use crate::study::stages::verify_candidates::{verify as verify_candidates, VerifyOutcome};
 use crate::study::stages::verify_optimum::{verify as verify_optimum, Surface, Verification};
 use crate::study::StudyError;
 
 /// Every stage's settings in a he2019 calibration, from the study and the
 /// command line.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct CalibrationSettings {
     /// Candidates (clusters, largest first) to verify.
     pub candidates: usize,
@@ -77,6 +81,9 @@ pub struct CalibrationSettings {
     pub train: TrainOptions,
     /// The search's resampling and clustering.
     pub search: SearchSettings,
+    /// The transfer test after verification (the study's `transfer` block,
+    /// or `repose transfer`'s flags); `None`: no transfer stage.
+    pub transfer: Option<TransferSettings>,
 }
 
 impl CalibrationSettings {
@@ -91,7 +98,16 @@ impl CalibrationSettings {
             sample: SampleSettings::default(),
             train: TrainOptions::defaults(study),
             search: SearchSettings::with_seed(study.design.seed),
+            transfer: TransferSettings::of_study(study),
         }
+    }
+
+    /// The transfer test's sizes as factors of the study's particle (none
+    /// without a transfer stage).
+    pub fn transfer_sizes(&self, study: &Study) -> Vec<AtSize> {
+        self.transfer
+            .as_ref()
+            .map_or_else(Vec::new, |t| t.at_sizes(study))
     }
 }
 
@@ -125,7 +141,9 @@ pub enum Plan {
 impl Plan {
     /// he2019's plan with `settings`.
     pub fn calibration(study: Study, settings: CalibrationSettings) -> Plan {
-        let spec = StudySpec::calibration(&study, settings.adaptive, settings.candidates);
+        let sizes = settings.transfer.as_ref().map(|t| t.sizes.as_slice());
+        let spec = StudySpec::calibration(&study, settings.adaptive, settings.candidates)
+            .with_transfer(sizes);
         Plan::Calibration {
             study,
             spec,
@@ -193,6 +211,8 @@ pub enum StageOutcome {
     ProbabilitySearch(GpSearchOutcome),
     /// he2019's candidates in every scene.
     VerifyCandidates(VerifyOutcome),
+    /// The verified candidates at finer particle sizes.
+    Transfer(TransferOutcome),
     /// A design study's one-factor screening.
     Screen(Screen),
     /// A design study's runs, surfaces and desirability optimum.
@@ -315,7 +335,7 @@ fn check_plan(plan: &Plan, pool: Option<&Executor>) -> Result<(), StudyError> {
         return Ok(());
     };
     if let Some(pool) = pool {
-        check_limits(study, &pool.limits)?;
+        check_limits(study, &settings.transfer_sizes(study), &pool.limits)?;
     }
     if plan.spec().method != Method::He2019NoiseAware {
         return Ok(());
@@ -348,6 +368,10 @@ fn heading(stage: &Stage, pool: &Executor) -> String {
         Stage::Verify { points, scenes, .. } => {
             format!(": {points} candidate(s) x {} scene(s)", scenes.len())
         }
+        Stage::Transfer { scenes, sizes, .. } => format!(
+            ": the verified candidates x {} scene(s) at particle size(s) {sizes:?} of the verified",
+            scenes.len()
+        ),
         _ => String::new(),
     };
     let place = match &pool.slurm {
@@ -443,6 +467,12 @@ where
             settings.candidates,
             runner,
         )?),
+        Stage::Transfer { .. } => {
+            let transfer = settings.transfer.as_ref().ok_or_else(|| {
+                StudyError::Settings("the transfer stage needs its sizes and rule".into())
+            })?;
+            StageOutcome::Transfer(transfer_stage(dir, study, transfer, (store, pool), runner)?)
+        }
         other => {
             return Err(StudyError::Unsupported(format!(
                 "stage `{}` is not part of he2019's method",
@@ -551,6 +581,9 @@ impl StageOutcome {
             ),
             StageOutcome::ProbabilitySearch(o) => o.markdown.clone(),
             StageOutcome::VerifyCandidates(o) => {
+                format!("{}  table: {}\n", o.markdown, o.table.display())
+            }
+            StageOutcome::Transfer(o) => {
                 format!("{}  table: {}\n", o.markdown, o.table.display())
             }
             StageOutcome::Screen(_)

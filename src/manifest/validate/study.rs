@@ -8,8 +8,10 @@ use super::experiment::{
     check_coarse_graining, check_material, check_pair_field, check_schema_version, check_time_step,
 };
 use super::scene::check_scene;
-use crate::manifest::experiment::PAIR_PARAM_FIELDS;
-use crate::manifest::study::{DesignKind, Fidelity, NoiseAware, Slot, Study, TargetScene};
+use crate::manifest::experiment::{CoarseGrainingRule, PAIR_PARAM_FIELDS};
+use crate::manifest::study::{
+    DesignKind, Fidelity, NoiseAware, Slot, Study, TargetScene, Transfer,
+};
 use crate::manifest::Scene;
 
 /// Checks every field of a study.
@@ -32,6 +34,49 @@ pub(crate) fn check_study(c: &mut Checker, s: &Study) {
         if let Some(f) = &n.fidelity {
             check_fidelity(c, s, f);
         }
+    }
+    if let Some(t) = &s.transfer {
+        check_transfer(c, s, t);
+    }
+}
+
+/// The transfer block: finer sizes, each once, under the rule the study's
+/// own size changes use.
+fn check_transfer(c: &mut Checker, s: &Study, t: &Transfer) {
+    if t.sizes.is_empty() {
+        c.fail(
+            "transfer.sizes",
+            "[]".into(),
+            "must list at least one size (particle radius / the verified one, in (0, 1))",
+        );
+    }
+    for (i, size) in t.sizes.iter().enumerate() {
+        let path = format!("transfer.sizes[{i}]");
+        c.within(&path, *size, Interval::open(0.0, 1.0));
+        if t.sizes[..i].contains(size) {
+            c.fail(&path, number(*size), "is listed twice");
+        }
+    }
+    let rule_name = |r: CoarseGrainingRule| {
+        serde_json::to_value(r).map_or_else(|_| format!("{r:?}"), |v| v.to_string())
+    };
+    let own = match (&s.coarse_graining, s.fidelity()) {
+        (Some(cg), _) => Some((cg.rule, "coarse_graining.rule")),
+        (None, Some(_)) => Some((
+            CoarseGrainingRule::ConstantBond,
+            "the fine level (noise_aware.fidelity scales Γ ∝ R²)",
+        )),
+        (None, None) => None,
+    };
+    if let Some((rule, whose)) = own.filter(|(r, _)| *r != t.rule) {
+        c.fail(
+            "transfer.rule",
+            rule_name(t.rule),
+            format!(
+                "must be {} here, the rule of {whose}: one study scales Γ one way",
+                rule_name(rule)
+            ),
+        );
     }
 }
 

@@ -371,6 +371,22 @@ pub enum Stage {
         #[serde(skip_serializing_if = "Option::is_none")]
         size: Option<f64>,
     },
+    /// The verified candidates at finer particle sizes, in every scene,
+    /// with the verification's seeds.
+    Transfer {
+        /// Scenes each candidate runs in.
+        scenes: Vec<String>,
+        /// Candidates, at most (as verified).
+        points: u64,
+        /// Packing seeds per candidate and scene (the fewest, as verified).
+        seeds: u32,
+        /// Most seeds the verification's power calculation may have given
+        /// the calibration scene.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        max_seeds: Option<u32>,
+        /// Particle radius / the verified one, each size.
+        sizes: Vec<f64>,
+    },
     /// Fidelity knobs swept with replicates.
     Tradeoff {
         /// Knobs swept.
@@ -404,6 +420,7 @@ impl Stage {
             Stage::Search { .. } => "search",
             Stage::Sensitivity => "sensitivity",
             Stage::Verify { .. } => "verify",
+            Stage::Transfer { .. } => "transfer",
             Stage::Tradeoff { .. } => "tradeoff",
             Stage::Convergence { .. } => "convergence",
         }
@@ -442,6 +459,16 @@ impl Stage {
             } => points
                 .saturating_mul(scenes.len() as u64)
                 .saturating_mul(u64::from((*seeds).max(max_seeds.unwrap_or(0)))),
+            Stage::Transfer {
+                scenes,
+                points,
+                seeds,
+                max_seeds,
+                sizes,
+            } => points
+                .saturating_mul(scenes.len() as u64)
+                .saturating_mul(u64::from((*seeds).max(max_seeds.unwrap_or(0))))
+                .saturating_mul(sizes.len() as u64),
             Stage::Tradeoff {
                 points, replicates, ..
             } => points.saturating_mul(*replicates),
@@ -571,6 +598,35 @@ impl StudySpec {
             method,
             stages,
         }
+        .with_transfer(study.transfer.as_ref().map(|t| t.sizes.as_slice()))
+    }
+
+    /// The list with its transfer stage at `sizes` (after verification, with
+    /// the verification's scenes, candidates and seeds), or without one.
+    pub fn with_transfer(mut self, sizes: Option<&[f64]>) -> StudySpec {
+        self.stages.retain(|s| !matches!(s, Stage::Transfer { .. }));
+        let verify = self.stages.iter().find_map(|s| match s {
+            Stage::Verify {
+                scenes,
+                points,
+                seeds,
+                max_seeds,
+                ..
+            } => Some((scenes.clone(), *points, *seeds, *max_seeds)),
+            _ => None,
+        });
+        if let (Some(sizes), Some((scenes, points, seeds, max_seeds))) = (sizes, verify) {
+            let mut sizes = sizes.to_vec();
+            sizes.sort_by(|a, b| b.total_cmp(a));
+            self.stages.push(Stage::Transfer {
+                scenes,
+                points,
+                seeds,
+                max_seeds,
+                sizes,
+            });
+        }
+        self
     }
 
     /// A design study's stage list for `analysis`.
@@ -788,6 +844,23 @@ impl StudySpec {
                         scenes.join(", ")
                     )
                 }
+                Stage::Transfer {
+                    scenes,
+                    points,
+                    seeds,
+                    sizes,
+                    ..
+                } => format!(
+                    "up to {points} verified candidate(s) x scenes {} at particle size(s) {} of \
+                     the verified, the verification's seeds ({seeds} or more per candidate and \
+                     scene) and rule",
+                    scenes.join(", "),
+                    sizes
+                        .iter()
+                        .map(|s| format!("x {s}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
                 Stage::Tradeoff {
                     knobs,
                     points,

@@ -131,12 +131,41 @@ where
         target,
         points,
         replicates,
-        1.0,
+        AtSize::STUDY,
         store,
         pool,
         runner,
         retry_failed,
     )
+}
+
+/// A particle size relative to the study's and how every surface energy
+/// follows it there ([`scaled`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AtSize {
+    /// Particle radius / the study's (1: the study's own experiments, same
+    /// ids).
+    pub factor: f64,
+    /// Γ ∝ R^p.
+    pub rule: SurfaceEnergyRule,
+}
+
+impl AtSize {
+    /// The study's own size.
+    pub const STUDY: AtSize = AtSize {
+        factor: 1.0,
+        rule: SurfaceEnergyRule::ConstantBond,
+    };
+
+    /// The size a study searches and verifies at: the fine level's, whose
+    /// surface energies follow Γ ∝ R² ([`crate::manifest::Fidelity`]), or
+    /// the study's own.
+    pub fn verified(study: &Study) -> AtSize {
+        AtSize {
+            factor: verified_size(study),
+            rule: SurfaceEnergyRule::ConstantBond,
+        }
+    }
 }
 
 /// Refuses a study any of whose stages would start a run beyond `limits`,
@@ -146,19 +175,25 @@ where
 /// not on the calibrated contact values, so one experiment per scene and
 /// size — at the centre of the ranges — stands for the stage's runs: the
 /// calibration scene at the study's size and at the verified size (the
-/// fine level's, [`crate::study::plan::calibration::verified_size`]), every
-/// verification scene at the verified size.
-pub fn check_limits(study: &Study, limits: &Limits) -> Result<(), StudyError> {
+/// fine level's, when the study has one), and every verification scene at
+/// the verified size and at each of `finer` (the transfer test's sizes).
+pub fn check_limits(study: &Study, finer: &[AtSize], limits: &Limits) -> Result<(), StudyError> {
     let names = crate::study::plan::calibration::parameter_names(study);
     let centre = to_physical(study, &vec![0.5; names.len()]);
     let values = names.into_iter().zip(centre).collect();
-    let verified = verified_size(study);
-    let mut cases = vec![(&study.calibration, 1.0)];
-    if verified != 1.0 {
+    let verified = AtSize::verified(study);
+    let mut cases = vec![(&study.calibration, AtSize::STUDY)];
+    if verified.factor != 1.0 {
         cases.push((&study.calibration, verified));
     }
-    cases.extend(study.verification.iter().map(|t| (t, verified)));
-    for (target, size) in cases {
+    for at in std::iter::once(&verified).chain(finer) {
+        if at.factor != 1.0 && at != &verified {
+            cases.push((&study.calibration, *at));
+        }
+        cases.extend(study.verification.iter().map(|t| (t, *at)));
+    }
+    for (target, at) in cases {
+        let size = at.factor;
         let refuse = |why: String| {
             StudyError::Settings(format!(
                 "scene {} at particle size x {size}: {why}; refused before the study's first \
@@ -170,8 +205,7 @@ pub fn check_limits(study: &Study, limits: &Limits) -> Result<(), StudyError> {
         let e = study
             .replicate_experiment(&target.scene, &values, 0, 0)
             .map_err(|errors| refuse(errors.to_string()))?;
-        let e = scaled(&e, size, Some(SurfaceEnergyRule::ConstantBond))
-            .map_err(|errors| refuse(errors.to_string()))?;
+        let e = scaled(&e, size, Some(at.rule)).map_err(|errors| refuse(errors.to_string()))?;
         plan(&e)
             .map_err(|errors| refuse(errors.to_string()))?
             .check(limits)
@@ -180,16 +214,15 @@ pub fn check_limits(study: &Study, limits: &Limits) -> Result<(), StudyError> {
     Ok(())
 }
 
-/// [`run_replicated`] at particle size `size` × the study's (Γ ∝ R²: the
-/// fine level of a two-level study, [`crate::manifest::Fidelity`]); 1 is
-/// the study's own experiments, same ids.
+/// [`run_replicated`] at particle size `at` (the fine level of a two-level
+/// study, [`AtSize::verified`]; a transfer test's finer size).
 #[allow(clippy::too_many_arguments)]
 pub fn run_replicated_at<E, F>(
     study: &Study,
     target: &TargetScene,
     points: &[(u64, Vec<f64>)],
     replicates: u32,
-    size: f64,
+    at: AtSize,
     store: &Store,
     pool: &Executor,
     runner: &F,
@@ -214,8 +247,7 @@ where
                 .replicate_experiment(&target.scene, &values, *index, r)
                 .map_err(invalid)?;
             // Size 1 leaves the experiment as it is (same id).
-            experiments
-                .push(scaled(&e, size, Some(SurfaceEnergyRule::ConstantBond)).map_err(invalid)?);
+            experiments.push(scaled(&e, at.factor, Some(at.rule)).map_err(invalid)?);
         }
     }
     let retry = if retry_failed {

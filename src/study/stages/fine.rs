@@ -70,7 +70,7 @@ use crate::study::dir::Stage;
 use crate::study::dir::{json_bytes, write_output, StudyDir};
 use crate::study::plan::calibration::{parameter_names, to_unit};
 use crate::study::runs::replicated::{
-    pooled_variance, read_replicates_csv, replicates_csv, run_replicated_at, Replicated,
+    pooled_variance, read_replicates_csv, replicates_csv, run_replicated_at, AtSize, Replicated,
 };
 use crate::study::StudyError;
 
@@ -345,7 +345,7 @@ where
             &study.calibration,
             &batch,
             spec.fine_replicates,
-            spec.fine_size,
+            AtSize::verified(study),
             store,
             pool,
             runner,

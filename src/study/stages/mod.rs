@@ -16,6 +16,7 @@
 //! | search | [`search_tolerance`], [`search_probability`], desirability in [`rsm`] | all |
 //! | sensitivity | [`sensitivity`] | yan2015 |
 //! | verify | [`verify_candidates`] (he2019's candidates), [`verify_optimum`] (a design study's optimum) | all |
+//! | transfer | [`transfer`] | he2019 |
 
 pub mod adaptive;
 pub mod design;
@@ -29,5 +30,6 @@ pub mod search_probability;
 pub mod search_tolerance;
 pub mod sensitivity;
 pub mod simulate;
+pub mod transfer;
 pub mod verify_candidates;
 pub mod verify_optimum;

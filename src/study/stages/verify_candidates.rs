@@ -75,11 +75,10 @@ use crate::study::dir::write_output;
 use crate::study::dir::Stage;
 use crate::study::dir::StudyDir;
 use crate::study::plan::calibration::parameter_names;
-use crate::study::plan::calibration::verified_size;
 use crate::study::plan::calibration::VERIFY_INDEX;
 use crate::study::plan::calibration::{acceptance, comparisons};
 use crate::study::records::{passing_candidate, read_noise};
-use crate::study::runs::replicated::{replicates_csv, run_replicated_at, Replicated};
+use crate::study::runs::replicated::{replicates_csv, run_replicated_at, AtSize, Replicated};
 use crate::study::StudyError;
 
 /// One candidate in one scene.
@@ -178,7 +177,7 @@ where
     F: Fn(&Experiment, &RunDir) -> Result<RunResult, E> + Sync,
 {
     // A two-level study verifies at the fine size.
-    let size = verified_size(study);
+    let size = AtSize::verified(study);
     let rule = acceptance_rule(dir, study, candidates);
     let (clusters_file, centres) = read_candidates(dir, study, candidates)?;
     let mut points: Vec<(u64, Vec<f64>)> = centres
@@ -350,7 +349,7 @@ fn write_outputs(
         .map(|(t, runs)| (t.name.as_str(), runs.as_slice()))
         .collect();
     write_output(
-        &out.join("runs.csv"),
+        &dir.verify_runs_path(),
         replicates_csv(study, &blocks).as_bytes(),
         &lineage,
     )?;

@@ -22,7 +22,9 @@
 
 use serde::Serialize;
 
-use crate::manifest::{validate_experiment, Experiment, SizeDistribution, ValidationErrors};
+use crate::manifest::{
+    validate_experiment, CoarseGrainingRule, Experiment, SizeDistribution, ValidationErrors,
+};
 use crate::study::sweeps::tradeoff::plan::{replicate, Point};
 
 /// How the surface energy follows the particle radius R when a base without
@@ -46,6 +48,12 @@ pub enum SurfaceEnergyRule {
 pub const RULE_NAMES: [&str; 4] = ["constant_bond", "proportional", "cohesion_number", "fixed"];
 
 impl SurfaceEnergyRule {
+    /// The rule the project's convergence sweeps support best (Γ ∝ R: the
+    /// funnel's angle moves least across sizes under it; evidence and
+    /// sources in experiments/funnel_pile/README.md): the default wherever a
+    /// size changes and no rule is stated.
+    pub const MEASURED: SurfaceEnergyRule = SurfaceEnergyRule::Proportional;
+
     /// The rule named `name` (one of [`RULE_NAMES`]).
     pub fn parse(name: &str) -> Option<SurfaceEnergyRule> {
         Some(match name {
@@ -64,6 +72,16 @@ impl SurfaceEnergyRule {
             SurfaceEnergyRule::Proportional => 1.0,
             SurfaceEnergyRule::CohesionNumber => 0.4,
             SurfaceEnergyRule::Fixed => 0.0,
+        }
+    }
+
+    /// The rule of a manifest's `coarse_graining.rule` (or a study's
+    /// `transfer.rule`), which names the same three scalings.
+    pub fn of_manifest(rule: CoarseGrainingRule) -> SurfaceEnergyRule {
+        match rule {
+            CoarseGrainingRule::ConstantBond => SurfaceEnergyRule::ConstantBond,
+            CoarseGrainingRule::SurfaceEnergyProportional => SurfaceEnergyRule::Proportional,
+            CoarseGrainingRule::CohesionNumber => SurfaceEnergyRule::CohesionNumber,
         }
     }
 
