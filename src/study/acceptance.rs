@@ -117,6 +117,16 @@ impl Judgement {
         self.tost.map(|t| t.ci95_half_width)
     }
 
+    /// The simulated mean as a table cell: `mean ± 95 % half-width` (°, two
+    /// decimals), the mean alone for one seed, `not measurable` for none.
+    pub fn mean_text(&self) -> String {
+        match (self.mean, self.ci95_half_width()) {
+            (Some(m), Some(h)) => format!("{m:.2} ± {h:.2}"),
+            (Some(m), None) => format!("{m:.2}"),
+            _ => "not measurable".into(),
+        }
+    }
+
     /// The TOST p-value (n ≥ 2).
     pub fn p(&self) -> Option<f64> {
         self.tost.map(|t| t.p)

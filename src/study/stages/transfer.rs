@@ -490,11 +490,7 @@ fn size_label(size: f64) -> String {
 /// One cell of the Markdown table: mean ± 95 % CI, verdict, TOST p.
 fn cell_text(c: &SizeCell) -> String {
     let j = &c.judgement;
-    let value = match (j.mean, j.ci95_half_width()) {
-        (Some(m), Some(h)) => format!("{m:.2} ± {h:.2}"),
-        (Some(m), None) => format!("{m:.2}"),
-        _ => "not measurable".into(),
-    };
+    let value = j.mean_text();
     match j.p() {
         Some(p) => format!("{value}: {} (p {p:.3})", j.verdict_text()),
         None => format!("{value}: {}", j.verdict_text()),

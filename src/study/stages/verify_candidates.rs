@@ -433,11 +433,7 @@ fn markdown(rule: &Record, rows: &[VerifyRow]) -> String {
             r.group.to_string(),
             r.scene.clone(),
             format!("{} ({})", r.seeds, r.measured),
-            match (r.mean_deg, r.ci95_half_width_deg) {
-                (Some(m), Some(h)) => format!("{m:.2} ± {h:.2}"),
-                (Some(m), None) => format!("{m:.2}"),
-                _ => "not measurable".into(),
-            },
+            r.judgement.mean_text(),
             r.sd_deg.map_or("—".into(), |s| format!("{s:.2}")),
             format!("{:.2}", r.target_deg),
             r.relative_error
