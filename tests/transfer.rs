@@ -77,11 +77,15 @@ fn fake(e: &Experiment, _: &RunDir) -> Result<RunResult, std::io::Error> {
     Ok(r)
 }
 
+/// The noise-aware block of every study here.
+fn noise_aware() -> Value {
+    json!({ "replicates": 2, "noise_seeds": 8, "min_probability": 0.5,
+        "verification_seeds": 5, "adaptive": { "batch": 2, "max_runs": 8 } })
+}
+
 fn study(dir: &Path, transfer: Option<Value>) -> (Study, std::path::PathBuf) {
     let mut v = common::example("calibrate-smoke/study.json");
-    let block = json!({ "replicates": 2, "noise_seeds": 8, "min_probability": 0.5,
-        "verification_seeds": 5, "adaptive": { "batch": 2, "max_runs": 8 } });
-    v = common::edit(v, "/noise_aware", Some(block));
+    v = common::edit(v, "/noise_aware", Some(noise_aware()));
     v = common::edit(v, "/transfer", transfer);
     let path = dir.join("study.json");
     std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
@@ -205,9 +209,7 @@ fn the_rule_reaches_the_finer_experiments() {
     // A cohesive copy of the smoke study: JKR, Γ = 0.04 J/m² between
     // particles.
     let mut v = common::example("calibrate-smoke/study.json");
-    let block = json!({ "replicates": 2, "noise_seeds": 8, "min_probability": 0.5,
-        "verification_seeds": 5, "adaptive": { "batch": 2, "max_runs": 8 } });
-    v = common::edit(v, "/noise_aware", Some(block));
+    v = common::edit(v, "/noise_aware", Some(noise_aware()));
     v = common::edit(v, "/contact_model/normal", Some(json!("jkr")));
     v = common::edit(
         v,
